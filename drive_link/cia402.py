@@ -1,0 +1,186 @@
+"""A thin CiA 402 (IEC 61800-7-201) power drive state machine, host side.
+
+The drive owns the state machine; the host writes controlword commands and watches the
+statusword until the requested state is reached or a timeout expires. States and commands follow
+CiA 402-2 §7.1 (figure 7, tables 3 and 4).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+from .errors import DriveTimeout, StateError
+
+NOT_READY = "NOT READY TO SWITCH ON"
+SWITCH_ON_DISABLED = "SWITCH ON DISABLED"
+READY_TO_SWITCH_ON = "READY TO SWITCH ON"
+SWITCHED_ON = "SWITCHED ON"
+OPERATION_ENABLED = "OPERATION ENABLED"
+QUICK_STOP_ACTIVE = "QUICK STOP ACTIVE"
+FAULT_REACTION_ACTIVE = "FAULT REACTION ACTIVE"
+FAULT = "FAULT"
+
+# (mask, value) on the statusword, CiA 402-2 table 4.
+_STATES: tuple[tuple[int, int, str], ...] = (
+    (0x4F, 0x00, NOT_READY),
+    (0x4F, 0x40, SWITCH_ON_DISABLED),
+    (0x6F, 0x21, READY_TO_SWITCH_ON),
+    (0x6F, 0x23, SWITCHED_ON),
+    (0x6F, 0x27, OPERATION_ENABLED),
+    (0x6F, 0x07, QUICK_STOP_ACTIVE),
+    (0x4F, 0x0F, FAULT_REACTION_ACTIVE),
+    (0x4F, 0x08, FAULT),
+)
+
+# Controlword commands, CiA 402-2 table 3 (bits 7, 3..0).
+CW_SHUTDOWN = 0x0006
+CW_SWITCH_ON = 0x0007
+CW_ENABLE_OPERATION = 0x000F
+CW_DISABLE_VOLTAGE = 0x0000
+CW_QUICK_STOP = 0x0002
+CW_DISABLE_OPERATION = 0x0007
+CW_FAULT_RESET = 0x0080
+
+SW_WARNING = 1 << 7
+SW_REMOTE = 1 << 9
+SW_TARGET_REACHED = 1 << 10
+SW_INTERNAL_LIMIT = 1 << 11
+
+#: modes_of_operation (0x6060) values by host name.
+MODES: dict[str, int] = {"speed": 3, "torque": 4, "current": -1}
+MODE_NAMES: dict[int, str] = {v: k for k, v in MODES.items()}
+
+
+def state_from_statusword(statusword: int) -> str:
+    """CiA 402 state name encoded in a statusword (0x6041)."""
+    for mask, value, name in _STATES:
+        if statusword & mask == value:
+            return name
+    return f"UNKNOWN (statusword 0x{statusword:04X})"
+
+
+def mode_name(value: int) -> str:
+    """Host name of a modes_of_operation value ("speed", "torque", "current" or "mode N")."""
+    return MODE_NAMES.get(value, f"mode {value}")
+
+
+class StateMachine:
+    """Drive the 402 state machine through ``read_statusword()`` / ``write_controlword(cw)``.
+
+    ``poll_s`` is the statusword polling period in s.
+    """
+
+    def __init__(
+        self,
+        read_statusword: Callable[[], int],
+        write_controlword: Callable[[int], None],
+        poll_s: float = 0.005,
+    ):
+        self.read_statusword = read_statusword
+        self.write_controlword = write_controlword
+        self.poll_s = poll_s
+
+    @property
+    def state(self) -> str:
+        """Present state name, read from the drive."""
+        return state_from_statusword(self.read_statusword())
+
+    def _wait(
+        self, targets: tuple[str, ...], timeout: float, what: str, fail_on_fault: bool = True
+    ) -> str:
+        deadline = time.monotonic() + timeout
+        while True:
+            state = self.state
+            if state in targets:
+                return state
+            if fail_on_fault and state in (FAULT, FAULT_REACTION_ACTIVE) and FAULT not in targets:
+                raise StateError(f"{what} failed: the drive is in {state} (run fault-reset)")
+            if time.monotonic() >= deadline:
+                raise DriveTimeout(
+                    f"{what}: drive stayed in {state} for {timeout:g} s "
+                    f"(expected {' or '.join(targets)})"
+                )
+            time.sleep(self.poll_s)
+
+    def _step(self, cw: int, targets: tuple[str, ...], timeout: float, what: str) -> str:
+        self.write_controlword(cw)
+        return self._wait(targets, timeout, what)
+
+    def enable(self, timeout: float = 1.0) -> str:
+        """Go to OPERATION ENABLED via the shortest legal path (transitions 2, 3, 4 / 16)."""
+        deadline = time.monotonic() + timeout
+        what = "enable"
+        for _ in range(6):
+            left = max(deadline - time.monotonic(), 0.0)
+            state = self.state
+            if state == OPERATION_ENABLED:
+                return state
+            if state in (FAULT, FAULT_REACTION_ACTIVE):
+                raise StateError(f"enable refused: the drive is in {state} (run fault-reset first)")
+            if left <= 0:
+                break
+            if state == NOT_READY:
+                self._wait((SWITCH_ON_DISABLED,), left, what)
+            elif state == QUICK_STOP_ACTIVE:
+                self._step(CW_ENABLE_OPERATION, (OPERATION_ENABLED, SWITCH_ON_DISABLED), left, what)
+            elif state == SWITCH_ON_DISABLED:
+                self._step(CW_SHUTDOWN, (READY_TO_SWITCH_ON,), left, what)
+            elif state == READY_TO_SWITCH_ON:
+                self._step(CW_SWITCH_ON, (SWITCHED_ON,), left, what)
+            elif state == SWITCHED_ON:
+                self._step(CW_ENABLE_OPERATION, (OPERATION_ENABLED,), left, what)
+            else:
+                raise StateError(f"enable: drive reports {state}")
+        state = self.state
+        if state == OPERATION_ENABLED:
+            return state
+        raise DriveTimeout(f"enable: drive stayed in {state} for {timeout:g} s")
+
+    def disable(self, timeout: float = 1.0) -> str:
+        """Disable the power stage: OPERATION ENABLED → SWITCHED ON (transition 5).
+
+        From QUICK STOP ACTIVE the voltage is disabled instead (transition 12).
+        """
+        state = self.state
+        if state in (SWITCHED_ON, READY_TO_SWITCH_ON, SWITCH_ON_DISABLED, FAULT, NOT_READY):
+            return state
+        if state == QUICK_STOP_ACTIVE:
+            return self._step(CW_DISABLE_VOLTAGE, (SWITCH_ON_DISABLED,), timeout, "disable")
+        return self._step(
+            CW_DISABLE_OPERATION, (SWITCHED_ON, SWITCH_ON_DISABLED), timeout, "disable"
+        )
+
+    def disable_voltage(self, timeout: float = 1.0) -> str:
+        """Go to SWITCH ON DISABLED (transitions 7, 9, 10, 12)."""
+        if self.state in (SWITCH_ON_DISABLED, FAULT):
+            return self.state
+        return self._step(CW_DISABLE_VOLTAGE, (SWITCH_ON_DISABLED,), timeout, "disable voltage")
+
+    def quick_stop(self, timeout: float = 1.0) -> str:
+        """Quick stop (transition 11); returns QUICK STOP ACTIVE or, after the stop,
+        SWITCH ON DISABLED (quick_stop_option_code 0..4)."""
+        state = self.state
+        if state != OPERATION_ENABLED:
+            return self.disable_voltage(timeout)
+        return self._step(
+            CW_QUICK_STOP, (QUICK_STOP_ACTIVE, SWITCH_ON_DISABLED), timeout, "quick stop"
+        )
+
+    def fault_reset(self, timeout: float = 1.0) -> str:
+        """Reset a fault (transition 15: rising edge of controlword bit 7) to SWITCH ON DISABLED."""
+        state = self.state
+        if state not in (FAULT, FAULT_REACTION_ACTIVE):
+            return state
+        if state == FAULT_REACTION_ACTIVE:
+            self._wait((FAULT,), timeout, "fault reset")
+        self.write_controlword(CW_DISABLE_VOLTAGE)
+        self.write_controlword(CW_FAULT_RESET)
+        try:
+            return self._wait((SWITCH_ON_DISABLED,), timeout, "fault reset", fail_on_fault=False)
+        except DriveTimeout:
+            raise StateError(
+                f"fault reset refused: drive still in {self.state} (fault condition persists?)"
+            ) from None
+        finally:
+            self.write_controlword(CW_DISABLE_VOLTAGE)

@@ -1,0 +1,510 @@
+"""The :class:`Drive`: one CANopen CiA 402 drive on a python-can bus.
+
+It does not know (nor ask) whether the node is the DSP or the virtual drive: everything goes
+through the object dictionary of docs/contracts.md §1.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from dataclasses import asdict, dataclass, fields
+from typing import Any
+
+import can
+
+from . import cia402, connection
+from .emcy import Emcy, EmcyListener
+from .errors import DriveError, DriveTimeout, InvalidValue, NodeNotFound, StateError
+from .live import LiveStreams, MappedField, TpdoConfig
+from .nmt import HeartbeatMonitor, HeartbeatProducer, send_nmt
+from .objects import ObjectInfo, ObjectTable, default_table
+from .sdo import SdoChannel
+from .trace import Recorder
+
+SAVE_SIGNATURE = 0x65766173  # "save"
+LOAD_SIGNATURE = 0x64616F6C  # "load"
+
+#: Gains field → (current/speed set, OD name of the active value, OD name of the staged value).
+_GAIN_OBJECTS: dict[str, tuple[int, str, str]] = {
+    **{
+        f: (1, f"current_controller.{f}", f"gain_set.{f}")
+        for f in (
+            "type",
+            "L_c",
+            "R_c",
+            "k_p",
+            "k_i",
+            "T_BT",
+            "T_DD",
+            "T_SD",
+            "V_G",
+            "emf_feedforward",
+        )
+    },
+    "speed_k_p": (2, "speed_controller.k_p", "gain_set.speed_k_p"),
+    "speed_k_i": (2, "speed_controller.k_i", "gain_set.speed_k_i"),
+    "speed_current_limit": (2, "speed_controller.current_limit", "gain_set.speed_current_limit"),
+}
+
+_L_C_NAMES = ("current_controller.L_c", "gain_set.L_c")
+
+
+@dataclass(frozen=True)
+class Gains:
+    """Controller gains as the drive holds them (SI units).
+
+    Current loop (0x2010): ``type`` (0 deadbeat eq. 15, 1 PI eq. 22, 2 predictive eq. 23/25),
+    ``L_c`` (H), ``R_c`` (Ω), ``k_p``/``k_i`` (V/A, PI), ``T_BT``/``T_DD``/``T_SD`` (s),
+    ``V_G`` (V), ``emf_feedforward`` (0/1). Speed loop (0x2020): ``speed_k_p`` (A/rpm),
+    ``speed_k_i`` (1/sample), ``speed_current_limit`` (A).
+    """
+
+    type: int
+    L_c: float
+    R_c: float
+    k_p: float
+    k_i: float
+    T_BT: float
+    T_DD: float
+    T_SD: float
+    V_G: float
+    emf_feedforward: int
+    speed_k_p: float
+    speed_k_i: float
+    speed_current_limit: float
+
+    def to_dict(self) -> dict[str, float | int]:
+        """Plain dict of every field."""
+        return asdict(self)
+
+
+GAIN_FIELDS: tuple[str, ...] = tuple(f.name for f in fields(Gains))
+
+
+def _f32(x: float) -> float:
+    import struct
+
+    return struct.unpack("<f", struct.pack("<f", x))[0]
+
+
+class Drive:
+    """One drive. Create with :meth:`connect`; thread-safe; close with :meth:`close`.
+
+    Two SDO channels, each with its own lock: ``sdo`` (server 0x1200: parameters, status) and
+    ``sdo_trace`` (server 0x1201: trace uploads), so an upload never blocks status reads.
+    """
+
+    def __init__(
+        self,
+        conn: connection.Connection,
+        node_id: int,
+        table: ObjectTable | None = None,
+        sdo_timeout: float = 0.3,
+        retries: int = 2,
+    ):
+        if not 1 <= node_id <= 127:
+            raise InvalidValue(f"node-ID {node_id} outside 1..127")
+        self._conn = conn
+        self.node_id = node_id
+        self.table = table or default_table()
+        net = conn.network
+        self.sdo = SdoChannel(net, node_id, 0x600 + node_id, 0x580 + node_id, sdo_timeout, retries)
+        self.sdo_trace: SdoChannel = self.sdo
+        self.heartbeat = HeartbeatMonitor(net, node_id)
+        self._emcy = EmcyListener(net, 0x80 + node_id)
+        self._producer: HeartbeatProducer | None = None
+        self._consumer_configured = False
+        self._live: LiveStreams | None = None
+        self._live_lock = threading.Lock()
+        self._closed = False
+        self.host_id: int | None = None
+        self.sm = cia402.StateMachine(
+            lambda: int(self.read("statusword")), lambda cw: self.write("controlword", cw)
+        )
+        self.trace = Recorder(self)
+
+    # ------------------------------------------------------------------ lifecycle
+    @classmethod
+    def connect(
+        cls,
+        interface: str | None = None,
+        channel: str | int | None = None,
+        bitrate: int | None = None,
+        node_id: int = 1,
+        bus: can.BusABC | None = None,
+        heartbeat_ms: int | None = 100,
+        host: str | None = None,
+        port: int | None = None,
+        host_id: int = 0x7F,
+        sdo_timeout: float = 0.3,
+        retries: int = 2,
+        **bus_kwargs: Any,
+    ) -> Drive:
+        """Connect to node ``node_id`` on a bus opened from python-can settings (``None`` =
+        python-can config/env), on the loopback hub (``host``/``port``) or on ``bus``.
+
+        Checks the node answers (device_type 0x1000) and sets up the trace SDO channel
+        (0x1201). ``heartbeat_ms``: period of the host heartbeat (0x700 + ``host_id``) sent for
+        the drive's consumer (None = none); configure the consumer with
+        :meth:`configure_heartbeat_consumer`. Raises :class:`NodeNotFound` if nobody answers.
+        """
+        conn = connection.acquire(
+            bus=bus,
+            interface=interface,
+            channel=channel,
+            bitrate=bitrate,
+            host=host,
+            port=port,
+            **bus_kwargs,
+        )
+        try:
+            drive = cls(conn, node_id, sdo_timeout=sdo_timeout, retries=retries)
+        except Exception:
+            connection.release(conn)
+            raise
+        try:
+            drive._probe()
+            drive._setup_trace_channel()
+            if heartbeat_ms:
+                drive.host_id = host_id
+                drive._producer = HeartbeatProducer(conn.bus, host_id, int(heartbeat_ms))
+        except BaseException:
+            drive.close()
+            raise
+        return drive
+
+    def _probe(self) -> None:
+        try:
+            self.device_type = int(self.read("device_type"))
+        except DriveTimeout:
+            raise NodeNotFound(
+                f"no answer from node {self.node_id} (SDO to 0x{0x600 + self.node_id:03X})"
+            ) from None
+
+    def _setup_trace_channel(self) -> None:
+        """Use the drive's second SDO server (0x1201) for uploads if it has a valid one."""
+        try:
+            rx = int(self.read("sdo_server_2.cob_id_client_to_server"))
+            tx = int(self.read("sdo_server_2.cob_id_server_to_client"))
+        except DriveError:
+            return  # no second server: uploads share the first channel (still locked)
+        if rx & 0x80000000 or tx & 0x80000000:
+            return
+        self.sdo_trace = SdoChannel(
+            self._conn.network,
+            self.node_id,
+            rx & 0x7FF,
+            tx & 0x7FF,
+            self.sdo.client.RESPONSE_TIMEOUT,
+            self.sdo.retries,
+        )
+
+    def close(self) -> None:
+        """Stop the host heartbeat (unconfiguring the drive's consumer if this host set it),
+        stop listening, and release the bus (shut down if this drive opened it)."""
+        if self._closed:
+            return
+        self._closed = True
+        if self._consumer_configured:
+            try:
+                self.write("consumer_heartbeat_time.consumer_1", 0)
+            except DriveError:
+                pass
+        if self._producer:
+            self._producer.stop()
+        if self._live:
+            self._live.close()
+        self.heartbeat.close()
+        self._emcy.close()
+        self.sdo.close()
+        if self.sdo_trace is not self.sdo:
+            self.sdo_trace.close()
+        connection.release(self._conn)
+
+    def __enter__(self) -> Drive:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    @property
+    def bus(self) -> can.BusABC:
+        """The python-can bus."""
+        return self._conn.bus
+
+    # ------------------------------------------------------------------ OD access
+    def info(self, name: str) -> ObjectInfo:
+        """Type, unit and limits of an object."""
+        return self.table[name]
+
+    def read(self, name: str) -> float | int | str | bytes:
+        """Read an object by name (SI units per the OD; REAL32 → float, integers → int)."""
+        obj = self.table[name]
+        if not obj.readable:
+            raise InvalidValue(f"{name} is write-only")
+        raw = self.sdo.upload(obj.index, obj.subindex, name)
+        return obj.decode(raw)
+
+    def read_many(self, names: list[str]) -> dict[str, float | int | str | bytes]:
+        """Read several objects (one SDO each)."""
+        return {n: self.read(n) for n in names}
+
+    def write(self, name: str, value: float | int | str | bytes) -> None:
+        """Write an object by name after a client-side type and limit check (the drive
+        re-checks and may abort: :class:`SdoAbort`)."""
+        obj = self.table[name]
+        if not obj.writable:
+            raise InvalidValue(f"{name} is read-only")
+        data = obj.encode(value)
+        if name in _L_C_NAMES:
+            self._check_L_c(float(obj.check(value)))
+        self.sdo.download(obj.index, obj.subindex, data, name)
+
+    def _check_L_c(self, L_c: float) -> None:
+        L = float(self.read("motor.L"))
+        if not 0.0 < L_c < 2.0 * L:
+            raise InvalidValue(
+                f"L_c = {L_c:.4g} H outside the deadbeat stability range "
+                f"(0, 2L) = (0, {2 * L:.4g}) H"
+            )
+
+    # ------------------------------------------------------------------ NMT / heartbeat
+    @property
+    def nmt_state(self) -> str:
+        """NMT state from the drive's last heartbeat ("OPERATIONAL", "PRE-OPERATIONAL",
+        "STOPPED", "INITIALISING") or "OFFLINE" if heartbeats stopped."""
+        return self.heartbeat.state
+
+    def nmt(self, command: str) -> None:
+        """Send an NMT command to this node: "start", "stop", "pre-operational",
+        "reset node", "reset communication"."""
+        send_nmt(self._conn.network, command, self.node_id)
+
+    def reset(self, communication_only: bool = False, timeout: float = 3.0) -> None:
+        """NMT reset node (or communication) and wait for the boot-up message."""
+        before = self.heartbeat.boot_count
+        self.nmt("reset communication" if communication_only else "reset node")
+        self.heartbeat.wait_boot(timeout, before)
+
+    def configure_heartbeat_consumer(self, timeout_ms: int | None = None) -> None:
+        """Make the drive watch this host's heartbeat (0x1016 sub1): on loss it reacts per
+        abort_connection_option_code (0x6007). ``timeout_ms`` defaults to 3 × the host period."""
+        if self._producer is None or self.host_id is None:
+            raise StateError("no host heartbeat is produced (connect with heartbeat_ms)")
+        t = int(timeout_ms if timeout_ms is not None else 3 * self._producer.period_ms)
+        if not 0 < t <= 0xFFFF:
+            raise InvalidValue(f"heartbeat consumer time {t} ms outside 1..65535")
+        self.write("consumer_heartbeat_time.consumer_1", (self.host_id << 16) | t)
+        self._consumer_configured = True
+
+    def stop_host_heartbeat(self) -> None:
+        """Stop sending the host heartbeat (e.g. to test the drive's consumer reaction)."""
+        if self._producer:
+            self._producer.stop()
+            self._producer = None
+
+    # ------------------------------------------------------------------ CiA 402
+    @property
+    def statusword(self) -> int:
+        """Statusword 0x6041."""
+        return int(self.read("statusword"))
+
+    @property
+    def state(self) -> str:
+        """CiA 402 state name (e.g. "OPERATION ENABLED")."""
+        return self.sm.state
+
+    @property
+    def mode(self) -> str:
+        """Active mode: "speed", "current", "torque" (or "mode N")."""
+        return cia402.mode_name(int(self.read("modes_of_operation_display")))
+
+    def enable(self, timeout: float = 1.0) -> str:
+        """Go to OPERATION ENABLED; :class:`DriveTimeout` / :class:`StateError` otherwise."""
+        return self.sm.enable(timeout)
+
+    def disable(self, timeout: float = 1.0) -> str:
+        """Disable operation (power stage off, OPERATION ENABLED → SWITCHED ON)."""
+        return self.sm.disable(timeout)
+
+    def quick_stop(self, timeout: float = 1.0) -> str:
+        """Quick stop (ramp down per quick_stop_option_code)."""
+        return self.sm.quick_stop(timeout)
+
+    def fault_reset(self, timeout: float = 1.0) -> str:
+        """Reset a fault (→ SWITCH ON DISABLED); :class:`StateError` if the fault persists."""
+        return self.sm.fault_reset(timeout)
+
+    def set_mode(self, mode: str, timeout: float = 0.5) -> None:
+        """Select "speed" (3, profile velocity), "current" (-1, pseudo-current) or "torque" (4)
+        and wait until modes_of_operation_display confirms it."""
+        if mode not in cia402.MODES:
+            raise InvalidValue(f"mode {mode!r}: one of {', '.join(cia402.MODES)}")
+        value = cia402.MODES[mode]
+        self.write("modes_of_operation", value)
+        deadline = time.monotonic() + timeout
+        while True:
+            shown = int(self.read("modes_of_operation_display"))
+            if shown == value:
+                return
+            if time.monotonic() >= deadline:
+                raise DriveTimeout(
+                    f"mode {mode} not confirmed within {timeout:g} s "
+                    f"(drive shows {cia402.mode_name(shown)})"
+                )
+            time.sleep(0.005)
+
+    def set_speed(self, rpm: float) -> None:
+        """Speed setpoint target_velocity (0x60FF) in rpm (rounded to an integer)."""
+        self.write("target_velocity", round(float(rpm)))
+
+    def set_current(self, amps: float) -> None:
+        """Pseudo-current setpoint setpoints.i_p_ref (0x2030:1) in A (used in "current" mode)."""
+        self.write("setpoints.i_p_ref", float(amps))
+
+    # ------------------------------------------------------------------ gains
+    def read_gains(self) -> Gains:
+        """The active controller gains (0x2010, 0x2020)."""
+        return Gains(**{f: self.read(_GAIN_OBJECTS[f][1]) for f in GAIN_FIELDS})
+
+    def apply_gains(self, **changes: float | int) -> Gains:
+        """Change gains atomically: stage the whole set in gain_set (0x20F0), apply with
+        gain_set_apply (0x20F1: 1 current set, 2 speed set, 3 both), return the read-back.
+
+        The drive validates the set as a whole and aborts with nothing changed if any value is
+        refused (:class:`SdoAbort`).
+        """
+        unknown = [k for k in changes if k not in _GAIN_OBJECTS]
+        if unknown:
+            raise InvalidValue(
+                f"unknown gain(s) {', '.join(unknown)}; known: {', '.join(GAIN_FIELDS)}"
+            )
+        if not changes:
+            return self.read_gains()
+        for k, v in changes.items():
+            self.table[_GAIN_OBJECTS[k][2]].check(v)
+        if "L_c" in changes:
+            self._check_L_c(float(changes["L_c"]))
+        sets = 0
+        for k in changes:
+            sets |= _GAIN_OBJECTS[k][0]
+        current = self.read_gains().to_dict()
+        merged = {**current, **changes}
+        for f in GAIN_FIELDS:
+            if _GAIN_OBJECTS[f][0] & sets:
+                staged = _GAIN_OBJECTS[f][2]
+                obj = self.table[staged]
+                self.sdo.download(obj.index, obj.subindex, obj.encode(merged[f]), staged)
+        self.write("gain_set_apply", sets)
+        back = self.read_gains()
+        for k, v in changes.items():
+            got = getattr(back, k)
+            want = _f32(float(v)) if isinstance(got, float) else int(v)
+            if got != want:
+                raise DriveError(f"gain {k}: drive reads back {got!r} after applying {v!r}")
+        return back
+
+    # ------------------------------------------------------------------ store / restore
+    def store(self) -> None:
+        """Store all parameters in the drive's non-volatile memory (0x1010:1 = "save")."""
+        self.write("store_parameters.save_all", SAVE_SIGNATURE)
+
+    def restore_defaults(self, reset: bool = False, timeout: float = 3.0) -> None:
+        """Restore factory defaults (0x1011:1 = "load"); they apply after the next reset node,
+        which ``reset=True`` sends (waiting for the boot-up)."""
+        self.write("restore_default_parameters.restore_all", LOAD_SIGNATURE)
+        if reset:
+            self.reset(timeout=timeout)
+
+    # ------------------------------------------------------------------ EMCY / faults
+    @property
+    def emcy_history(self) -> list[Emcy]:
+        """EMCY messages received from this drive since connect, oldest first."""
+        with self._emcy._lock:
+            return list(self._emcy.history)
+
+    def on_emcy(self, callback) -> None:
+        """Call ``callback(Emcy)`` for every EMCY (runs on the bus thread: keep it short)."""
+        self._emcy.subscribe(callback)
+
+    def error_history(self) -> list[Emcy]:
+        """The drive's pre-defined error field 0x1003, newest first."""
+        n = int(self.read("pre_defined_error_field.number_of_errors"))
+        out = []
+        for i in range(1, min(n, 8) + 1):
+            v = int(self.read(f"pre_defined_error_field.standard_error_field_{i}"))
+            out.append(Emcy(code=v & 0xFFFF, data=(v >> 16).to_bytes(2, "little")))
+        return out
+
+    def clear_error_history(self) -> None:
+        """Clear 0x1003 (write 0 to sub0)."""
+        self.write("pre_defined_error_field.number_of_errors", 0)
+
+    # ------------------------------------------------------------------ live streams
+    def read_tpdo_config(self) -> list[TpdoConfig]:
+        """The drive's TPDO communication and mapping parameters (0x1800–, 0x1A00–) by SDO."""
+        out = []
+        for k in range(1, 513):
+            comm = f"tpdo{k}_communication"
+            if f"{comm}.cob_id" not in self.table:
+                break
+            cob = int(self.read(f"{comm}.cob_id"))
+            ttype = int(self.read(f"{comm}.transmission_type"))
+            timer = int(self.read(f"{comm}.event_timer"))
+            count = int(self.read(f"tpdo{k}_mapping.number_of_mapped_objects"))
+            flds = []
+            offset = 0
+            for i in range(1, count + 1):
+                ref = int(self.read(f"tpdo{k}_mapping.mapped_object_{i}"))
+                index, sub, bits = ref >> 16, (ref >> 8) & 0xFF, ref & 0xFF
+                obj = self.table.by_index(index, sub)
+                if obj is not None and obj.bits == bits:
+                    flds.append(MappedField(obj.name, index, sub, offset, bits, obj.fmt, obj.unit))
+                else:
+                    flds.append(
+                        MappedField(f"0x{index:04X}:{sub:02X}", index, sub, offset, bits, "")
+                    )
+                offset += bits
+            out.append(TpdoConfig(k, cob & 0x7FF, ttype, timer, flds, valid=not cob & 0x80000000))
+        return out
+
+    @property
+    def live(self) -> LiveStreams:
+        """Live TPDO streams (built on first use from the drive's actual PDO mapping)."""
+        with self._live_lock:
+            if self._live is None:
+                self._live = LiveStreams(
+                    self._conn.network,
+                    self.read_tpdo_config(),
+                    self._conn.monitor,
+                    self._conn.bitrate,
+                )
+            return self._live
+
+    def refresh_live(self) -> LiveStreams:
+        """Re-read the PDO mapping (after it was changed) and restart the streams."""
+        with self._live_lock:
+            if self._live is not None:
+                self._live.close()
+                self._live = None
+        return self.live
+
+    # ------------------------------------------------------------------ summary
+    def status(self) -> dict[str, Any]:
+        """A snapshot for displays: NMT and 402 state, mode, key measurements, error register."""
+        sw = self.statusword
+        return {
+            "node_id": self.node_id,
+            "nmt_state": self.nmt_state,
+            "state": cia402.state_from_statusword(sw),
+            "statusword": sw,
+            "mode": self.mode,
+            "error_register": int(self.read("error_register")),
+            "error_code": int(self.read("error_code")),
+            "speed_rpm": float(self.read("measurements.speed")),
+            "i_p_A": float(self.read("measurements.i_p")),
+            "i_p_ref_A": float(self.read("measurements.i_p_ref")),
+            "speed_ref_rpm": float(self.read("measurements.speed_ref")),
+            "V_dc_V": float(self.read("measurements.V_dc")),
+        }

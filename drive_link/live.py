@@ -1,0 +1,237 @@
+"""Live values from the drive's TPDOs as timestamped numpy ring buffers.
+
+Each TPDO is decoded with the mapping the drive reports (0x1800+k / 0x1A00+k read by SDO), so the
+host follows whatever mapping the drive really has. Per TPDO the stream counts received frames,
+estimates dropped frames from gaps in the expected event-timer cadence (a gap of n periods
+counts n − 1 drops), and measures its rate; the bus monitor gives the bus load.
+"""
+
+from __future__ import annotations
+
+import struct
+import threading
+import time
+from dataclasses import dataclass, field
+
+import canopen
+import numpy as np
+
+from .connection import BusMonitor
+
+
+@dataclass(frozen=True)
+class MappedField:
+    """One mapped object inside a PDO: ``name`` (OD name), bit ``offset`` and ``bits``,
+    struct ``fmt`` ("<f", "<h", ...; "" for unsupported types), ``unit``."""
+
+    name: str
+    index: int
+    subindex: int
+    offset: int
+    bits: int
+    fmt: str
+    unit: str = ""
+
+
+@dataclass
+class TpdoConfig:
+    """A TPDO as configured on the drive: number (1-based), COB-ID, transmission type,
+    event timer (ms), mapped fields, valid flag (COB-ID bit 31 clear)."""
+
+    number: int
+    cob_id: int
+    transmission_type: int
+    event_timer_ms: int
+    fields: list[MappedField] = field(default_factory=list)
+    valid: bool = True
+
+
+class _Stream:
+    def __init__(self, cfg: TpdoConfig, capacity: int):
+        self.cfg = cfg
+        self.capacity = capacity
+        self.t = np.zeros(capacity, dtype=np.float64)
+        self.values = {f.name: np.zeros(capacity, dtype=np.float64) for f in cfg.fields if f.fmt}
+        self.n = 0  # total frames written
+        self.frames = 0
+        self.dropped = 0
+        self.bad_length = 0
+        self.last_t: float | None = None
+        self.recent: list[float] = []  # monotonic arrival times in the last second
+
+
+class LiveStreams:
+    """Ring buffers for every valid TPDO of one node.
+
+    ``seconds`` × the fastest expected rate sets each buffer's length (at least 1000 samples).
+    Thread-safe: frames arrive on the notifier thread, readers take a snapshot under a lock.
+    """
+
+    def __init__(
+        self,
+        network: canopen.Network,
+        tpdos: list[TpdoConfig],
+        monitor: BusMonitor | None = None,
+        bitrate: int | None = None,
+        seconds: float = 30.0,
+    ):
+        self._network = network
+        self._lock = threading.Lock()
+        self._monitor = monitor
+        self._bitrate = bitrate
+        self._streams: dict[int, _Stream] = {}
+        self.tpdos = [t for t in tpdos if t.valid and t.fields]
+        for cfg in self.tpdos:
+            rate = 1000.0 / cfg.event_timer_ms if cfg.event_timer_ms > 0 else 1000.0
+            self._streams[cfg.cob_id] = _Stream(cfg, max(1000, int(rate * seconds)))
+            network.subscribe(cfg.cob_id, self._on_frame)
+
+    def close(self) -> None:
+        """Stop listening."""
+        for cob_id in self._streams:
+            try:
+                self._network.unsubscribe(cob_id, self._on_frame)
+            except (KeyError, ValueError):
+                pass
+
+    @property
+    def signals(self) -> list[str]:
+        """Names of every decoded signal."""
+        return [f.name for c in self.tpdos for f in c.fields if f.fmt]
+
+    @property
+    def units(self) -> dict[str, str]:
+        """Unit of every decoded signal."""
+        return {f.name: f.unit for c in self.tpdos for f in c.fields if f.fmt}
+
+    def _on_frame(self, can_id: int, data: bytearray, timestamp: float) -> None:
+        s = self._streams.get(can_id)
+        if s is None:
+            return
+        cfg = s.cfg
+        need = sum(f.bits for f in cfg.fields) // 8
+        now_mono = time.monotonic()
+        t = timestamp if timestamp else time.time()
+        with self._lock:
+            if len(data) < need:
+                s.bad_length += 1
+                return
+            i = s.n % s.capacity
+            s.t[i] = t
+            for f in cfg.fields:
+                if f.fmt:
+                    s.values[f.name][i] = struct.unpack_from(f.fmt, data, f.offset // 8)[0]
+            if s.last_t is not None and cfg.event_timer_ms > 0:
+                period = cfg.event_timer_ms / 1000.0
+                gap = t - s.last_t
+                if gap > 1.5 * period:
+                    s.dropped += round(gap / period) - 1
+            s.last_t = t
+            s.n += 1
+            s.frames += 1
+            s.recent.append(now_mono)
+            if len(s.recent) > 4 * s.capacity or (s.recent and now_mono - s.recent[0] > 2.0):
+                cut = now_mono - 1.0
+                s.recent = [x for x in s.recent if x >= cut]
+
+    def _snapshot(
+        self, s: _Stream, seconds: float | None
+    ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        n = min(s.n, s.capacity)
+        start = s.n - n
+        idx = np.arange(start, s.n) % s.capacity
+        t = s.t[idx].copy()
+        vals = {k: v[idx].copy() for k, v in s.values.items()}
+        if seconds is not None and n:
+            keep = t >= t[-1] - seconds
+            t = t[keep]
+            vals = {k: v[keep] for k, v in vals.items()}
+        return t, vals
+
+    def streams(self, seconds: float | None = None) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """Every signal with its own time base: ``{name: (t, values)}`` (t in s, host clock)."""
+        out: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        with self._lock:
+            for s in self._streams.values():
+                t, vals = self._snapshot(s, seconds)
+                for k, v in vals.items():
+                    out[k] = (t, v)
+        return out
+
+    def window(self, seconds: float, signals: list[str] | None = None) -> dict[str, np.ndarray]:
+        """The last ``seconds`` s of live data on one time base.
+
+        ``"t"`` (s, host clock, float64) is the time base of the fastest stream holding a
+        requested signal; every other signal is sampled on it with zero-order hold (NaN before
+        its first frame). Empty arrays before any frame.
+        """
+        with self._lock:
+            snaps = {cob: self._snapshot(s, seconds) for cob, s in self._streams.items()}
+        wanted = signals or self.signals
+        unknown = [w for w in wanted if not any(w in v for _, v in snaps.values())]
+        if unknown:
+            raise KeyError(
+                f"not a live signal: {', '.join(unknown)} (live: {', '.join(self.signals)})"
+            )
+        candidates = [snap for snap in snaps.values() if any(w in snap[1] for w in wanted)]
+        base_t = max(candidates, key=lambda snap: len(snap[0]))[0] if candidates else np.zeros(0)
+        out: dict[str, np.ndarray] = {"t": base_t}
+        for name in wanted:
+            for t, vals in snaps.values():
+                if name in vals:
+                    v = vals[name]
+                    if t is base_t:
+                        out[name] = v
+                    elif len(t) == 0:
+                        out[name] = np.full(len(base_t), np.nan)
+                    else:
+                        j = np.searchsorted(t, base_t, side="right") - 1
+                        res = np.where(j >= 0, v[np.clip(j, 0, None)], np.nan)
+                        out[name] = res
+                    break
+        return out
+
+    def latest(self) -> dict[str, float]:
+        """Most recent value of every signal (NaN before the first frame)."""
+        out: dict[str, float] = {}
+        with self._lock:
+            for s in self._streams.values():
+                for k, v in s.values.items():
+                    out[k] = float(v[(s.n - 1) % s.capacity]) if s.n else float("nan")
+        return out
+
+    @property
+    def stats(self) -> dict:
+        """Counters: per TPDO frames, dropped (estimated from cadence gaps), rate_hz (measured,
+        last second), expected_hz; totals; bus frames/s and bus load (fraction of bitrate)."""
+        now = time.monotonic()
+        per: dict[str, dict] = {}
+        with self._lock:
+            for s in self._streams.values():
+                recent = [x for x in s.recent if x >= now - 1.0]
+                per[f"TPDO{s.cfg.number}"] = {
+                    "cob_id": s.cfg.cob_id,
+                    "signals": list(s.values),
+                    "frames": s.frames,
+                    "dropped": s.dropped,
+                    "bad_length": s.bad_length,
+                    "rate_hz": float(len(recent)),
+                    "expected_hz": 1000.0 / s.cfg.event_timer_ms if s.cfg.event_timer_ms else None,
+                }
+        out: dict = {
+            "tpdo": per,
+            "frames": sum(p["frames"] for p in per.values()),
+            "dropped": sum(p["dropped"] for p in per.values()),
+        }
+        if self._monitor is not None:
+            fps, bps = self._monitor.rates()
+            out["bus_frames_per_s"] = fps
+            out["bus_load"] = bps / self._bitrate if self._bitrate else None
+        return out
+
+    def reset_counters(self) -> None:
+        """Zero the frame and drop counters (buffers are kept)."""
+        with self._lock:
+            for s in self._streams.values():
+                s.frames = s.dropped = s.bad_length = 0
+                s.last_t = None

@@ -1,0 +1,106 @@
+"""Finding nodes on a bus: heartbeats / boot-ups, and an SDO probe of 0x1000 on 1..127."""
+
+from __future__ import annotations
+
+import struct
+import threading
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import can
+
+from . import connection
+from .errors import BusError
+from .nmt import NMT_STATES
+
+
+@dataclass
+class NodeInfo:
+    """A node found on the bus: ``node_id``, ``device_type`` (0x1000, None if it did not
+    answer SDO), ``nmt_state`` (from its heartbeat, None if none seen), ``abort_code`` (if
+    the probe was aborted)."""
+
+    node_id: int
+    device_type: int | None = None
+    nmt_state: str | None = None
+    abort_code: int | None = None
+
+    @property
+    def profile(self) -> str:
+        """Device profile from device_type bits 15..0 (e.g. "CiA 402")."""
+        if self.device_type is None:
+            return ""
+        return f"CiA {self.device_type & 0xFFFF}"
+
+
+_PROBE = bytes([0x40, 0x00, 0x10, 0x00, 0, 0, 0, 0])  # upload request 0x1000:00
+
+
+def scan(
+    bus: can.BusABC | None = None,
+    timeout: float = 0.3,
+    node_ids: range | list[int] = range(1, 128),
+    skip: tuple[int, ...] = (),
+    **settings: Any,
+) -> list[NodeInfo]:
+    """Find nodes: probe device_type (0x1000) by SDO on every ID in ``node_ids`` (sent back to
+    back), and listen ``timeout`` s for SDO answers and heartbeats. Nodes with an open
+    :class:`Drive` on the same bus can be passed in ``skip`` (their SDO channel is not probed,
+    so an ongoing transfer is not disturbed) — they are still found by heartbeat.
+
+    ``bus`` or python-can settings (``interface``, ``channel``, ``bitrate``, ``host``, ``port``).
+    """
+    conn = connection.acquire(bus=bus, **settings)
+    found: dict[int, NodeInfo] = {}
+    lock = threading.Lock()
+
+    def on_sdo(can_id: int, data: bytearray, ts: float) -> None:
+        nid = can_id - 0x580
+        if len(data) < 8:
+            return
+        cs, index, sub = struct.unpack_from("<BHB", data)
+        if index != 0x1000 or sub != 0:
+            return
+        with lock:
+            info = found.setdefault(nid, NodeInfo(nid))
+            if cs == 0x80:
+                info.abort_code = struct.unpack_from("<I", data, 4)[0]
+            elif cs & 0xE0 == 0x40:
+                info.device_type = struct.unpack_from("<I", data, 4)[0]
+
+    def on_hb(can_id: int, data: bytearray, ts: float) -> None:
+        nid = can_id - 0x700
+        if not data:
+            return
+        with lock:
+            info = found.setdefault(nid, NodeInfo(nid))
+            info.nmt_state = NMT_STATES.get(data[0] & 0x7F, f"0x{data[0]:02X}")
+
+    net = conn.network
+    subs = [(0x580 + n, on_sdo) for n in range(1, 128)] + [
+        (0x700 + n, on_hb) for n in range(1, 128)
+    ]
+    try:
+        for cob, cb in subs:
+            net.subscribe(cob, cb)
+        try:
+            for nid in node_ids:
+                if nid not in skip:
+                    net.send_message(0x600 + nid, _PROBE)
+        except (can.CanError, RuntimeError, OSError) as exc:
+            raise BusError(f"CAN send failed while scanning: {exc}") from None
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            time.sleep(0.01)
+        # Heartbeats are slower than SDO answers: wait a little longer for nodes seen only so far
+        # by heartbeat to report their state.
+    finally:
+        for cob, cb in subs:
+            try:
+                net.unsubscribe(cob, cb)
+            except (KeyError, ValueError):
+                pass
+        connection.release(conn)
+    with lock:
+        return [found[k] for k in sorted(found)]

@@ -1,0 +1,134 @@
+"""A locked SDO client channel with retries and one-line errors.
+
+canopen's :class:`~canopen.sdo.SdoClient` has no lock: two threads on one channel corrupt each
+other's transfers. :class:`SdoChannel` serialises every transfer on its channel; a drive uses one
+channel per SDO server (0x1200 for status and parameters, 0x1201 for trace uploads) so a long
+upload never blocks status reads.
+
+Retries: a transfer that times out (lost frame) is repeated up to ``retries`` times. Expedited
+reads and writes of one object are idempotent, so a repeat is allowed by the protocol; an abort
+from the drive is never retried.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable
+
+import can
+import canopen
+from canopen.sdo.client import SdoClient
+from canopen.sdo.exceptions import SdoAbortedError, SdoCommunicationError
+
+from .errors import BusError, DriveTimeout, SdoAbort
+
+#: progress(bytes_done, bytes_total_or_None)
+Progress = Callable[[int, "int | None"], None]
+
+
+class SdoChannel:
+    """One SDO client channel (request COB-ID ``rx_cobid``, response COB-ID ``tx_cobid``).
+
+    ``timeout`` is the per-frame response timeout in s; ``retries`` the number of repeats after
+    a timeout.
+    """
+
+    def __init__(
+        self,
+        network: canopen.Network,
+        node_id: int,
+        rx_cobid: int,
+        tx_cobid: int,
+        timeout: float = 0.3,
+        retries: int = 2,
+    ):
+        self.node_id = node_id
+        self.rx_cobid = rx_cobid
+        self.tx_cobid = tx_cobid
+        self.retries = retries
+        self.lock = threading.RLock()
+        self._network = network
+        self.client = SdoClient(rx_cobid, tx_cobid, canopen.ObjectDictionary())
+        self.client.network = network
+        self.client.RESPONSE_TIMEOUT = timeout
+        self.client.MAX_RETRIES = 1
+        network.subscribe(tx_cobid, self.client.on_response)
+
+    def close(self) -> None:
+        """Stop listening for responses."""
+        try:
+            self._network.unsubscribe(self.tx_cobid, self.client.on_response)
+        except (KeyError, ValueError):
+            pass
+
+    def _run(self, what: str, index: int, subindex: int, name: str, fn):
+        attempts = self.retries + 1
+        for attempt in range(attempts):
+            try:
+                with self.lock:
+                    return fn()
+            except SdoAbortedError as exc:
+                if exc.code == 0x05040000 and attempt + 1 < attempts:
+                    continue  # the server timed out a transfer whose frames were lost
+                raise SdoAbort(exc.code, index, subindex, name, what) from None
+            except SdoCommunicationError as exc:
+                if attempt + 1 < attempts:
+                    continue
+                where = name or f"0x{index:04X}:{subindex:02X}"
+                raise DriveTimeout(
+                    f"node {self.node_id} did not answer SDO {what} of {where} "
+                    f"({attempts} attempts): {exc}"
+                ) from None
+            except can.CanError as exc:
+                raise BusError(f"CAN send failed: {exc}") from None
+            except RuntimeError as exc:  # canopen: "Not connected to CAN bus"
+                raise BusError(f"CAN bus not usable: {exc}") from None
+        raise AssertionError("unreachable")
+
+    def upload(self, index: int, subindex: int, name: str = "") -> bytes:
+        """Read an object (expedited or segmented) and return its raw bytes."""
+
+        def go() -> bytes:
+            with self.client.open(index, subindex, buffering=0) as fp:
+                return fp.read()
+
+        return self._run("read", index, subindex, name, go)
+
+    def download(self, index: int, subindex: int, data: bytes, name: str = "") -> None:
+        """Write raw bytes to an object (expedited if ≤ 4 bytes, else segmented)."""
+
+        def go() -> None:
+            self.client.download(index, subindex, bytes(data))
+
+        self._run("write", index, subindex, name, go)
+
+    def upload_block(
+        self,
+        index: int,
+        subindex: int,
+        name: str = "",
+        progress: Progress | None = None,
+        chunk: int = 7 * 127,
+    ) -> bytes:
+        """Read a large object with SDO block upload (CiA 301 §7.2.4.3.10), reporting progress."""
+
+        def go() -> bytes:
+            parts: list[bytes] = []
+            done = 0
+            with self.client.open(
+                index, subindex, mode="rb", buffering=0, block_transfer=True
+            ) as fp:
+                total = fp.size
+                if progress:
+                    progress(0, total)
+                while True:
+                    piece = fp.read(7)
+                    if not piece:
+                        break
+                    parts.append(piece)
+                    done += len(piece)
+                    if progress and (done % chunk < 7 or (total and done >= total)):
+                        progress(done, total)
+            return b"".join(parts)
+
+        return self._run("block upload", index, subindex, name, go)

@@ -1,0 +1,268 @@
+"""The drive's trace recorder (0x2100 trace_config, 0x2101 trace_channels, 0x2102 trace_data).
+
+Configure, arm, trigger, wait, upload (SDO block upload on the drive's second SDO server so
+status reads continue meanwhile) and return a :class:`Trace`: numpy arrays with a time base in s,
+units, and the trigger position.
+"""
+
+from __future__ import annotations
+
+import csv
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .errors import DriveTimeout, InvalidValue, StateError
+
+if TYPE_CHECKING:
+    from .drive import Drive
+
+#: Control-loop sampling period of the drive, s (fs = 50 kHz; overview "control law").
+TS = 20e-6
+
+TRIGGER_MODES: dict[str, int] = {"immediate": 0, "signal": 1, "setpoint_step": 2, "fault": 3}
+TRIGGER_EDGES: dict[str, int] = {"rising": 0, "falling": 1, "either": 2}
+STATES: dict[int, str] = {0: "idle", 1: "armed", 2: "recording", 3: "done"}
+
+TRACE_DATA = (0x2102, 0x00)
+
+
+@dataclass
+class Trigger:
+    """Trigger settings: ``mode`` ("immediate", "signal", "setpoint_step", "fault"); for
+    "signal": ``source`` (OD name), ``level`` (unit of the source), ``edge``
+    ("rising", "falling", "either")."""
+
+    mode: str = "immediate"
+    source: str = "measurements.i_p"
+    level: float = 0.0
+    edge: str = "rising"
+
+    def __post_init__(self) -> None:
+        if self.mode not in TRIGGER_MODES:
+            raise InvalidValue(f"trigger mode {self.mode!r}: one of {', '.join(TRIGGER_MODES)}")
+        if self.edge not in TRIGGER_EDGES:
+            raise InvalidValue(f"trigger edge {self.edge!r}: one of {', '.join(TRIGGER_EDGES)}")
+
+
+@dataclass
+class Trace:
+    """A recorded trace.
+
+    ``t``: time in s relative to the trigger (0 at ``trigger_index``); ``signals``: name →
+    float32 array; ``units``: name → unit; ``divider``: loop samples per trace sample;
+    ``Ts``: loop period in s.
+    """
+
+    t: np.ndarray
+    signals: dict[str, np.ndarray]
+    units: dict[str, str]
+    trigger_index: int
+    divider: int = 1
+    Ts: float = TS
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def dt(self) -> float:
+        """Trace sample period in s."""
+        return self.divider * self.Ts
+
+    def to_csv(self, path: str | Path) -> Path:
+        """Write ``t`` and every signal as CSV with a unit row in the header names."""
+        path = Path(path)
+        names = list(self.signals)
+        with path.open("w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(["t [s]"] + [f"{n} [{self.units.get(n, '')}]" for n in names])
+            cols = [self.t] + [self.signals[n] for n in names]
+            for row in zip(*cols, strict=True):
+                w.writerow([f"{x:.9g}" for x in row])
+        return path
+
+    def to_png(
+        self, path: str | Path, title: str = "", overlay: dict[str, np.ndarray] | None = None
+    ) -> Path:
+        """Plot every signal (one axis per unit) against t in ms with matplotlib's Agg backend.
+
+        ``overlay``: extra curves on the same time base (e.g. a model prediction), plotted dashed.
+        """
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        path = Path(path)
+        by_unit: dict[str, list[str]] = {}
+        for n in self.signals:
+            by_unit.setdefault(self.units.get(n, ""), []).append(n)
+        fig, axes = plt.subplots(
+            len(by_unit) or 1, 1, sharex=True, figsize=(8, 2.6 * max(1, len(by_unit)))
+        )
+        axes = np.atleast_1d(axes)
+        t_ms = self.t * 1e3
+        for ax, (unit, names) in zip(axes, by_unit.items(), strict=False):
+            for n in names:
+                ax.plot(t_ms, self.signals[n], label=n, lw=1)
+            for n, v in (overlay or {}).items():
+                if n.split(" ")[0] in names or len(by_unit) == 1:
+                    ax.plot(t_ms[: len(v)], v, "--", label=n, lw=1)
+            ax.set_ylabel(unit)
+            ax.axvline(0.0, color="k", lw=0.5, alpha=0.5)
+            ax.grid(True, alpha=0.3)
+            ax.legend(loc="best", fontsize=8)
+        axes[-1].set_xlabel("t [ms] (0 = trigger)")
+        if title:
+            axes[0].set_title(title)
+        fig.tight_layout()
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        return path
+
+
+def od_reference(index: int, subindex: int, bits: int = 32) -> int:
+    """Trace / PDO mapping entry: index<<16 | subindex<<8 | bit length."""
+    return (index << 16) | (subindex << 8) | bits
+
+
+class Recorder:
+    """The trace recorder of one drive (use ``drive.trace``)."""
+
+    def __init__(self, drive: Drive):
+        self._drive = drive
+        self._channels: list[str] = []
+        self._divider = 1
+
+    @property
+    def state(self) -> str:
+        """Recorder state: "idle", "armed", "recording" or "done"."""
+        v = int(self._drive.read("trace_config.state"))
+        return STATES.get(v, f"state {v}")
+
+    @property
+    def capacity(self) -> int:
+        """REAL32 samples the recorder holds over all channels."""
+        return int(self._drive.read("trace_config.capacity"))
+
+    def resolve(self, name: str) -> str:
+        """OD name of a channel; bare measurement names ("i_p") are accepted."""
+        table = self._drive.table
+        if name in table:
+            return name
+        if f"measurements.{name}" in table:
+            return f"measurements.{name}"
+        raise InvalidValue(f"unknown trace channel {name!r}")
+
+    def configure(
+        self,
+        channels: list[str],
+        divider: int = 1,
+        length: int | None = None,
+        pre_trigger: int = 0,
+        trigger: Trigger | str | None = None,
+    ) -> None:
+        """Stop the recorder and write a new configuration (every value checked by the drive).
+
+        ``divider``: loop samples (20 µs) per trace sample; ``length``: samples per channel
+        (default: the capacity shared by the channels); ``pre_trigger``: samples before the
+        trigger.
+        """
+        d = self._drive
+        if not channels:
+            raise InvalidValue("at least one trace channel is needed")
+        if len(channels) > 8:
+            raise InvalidValue("at most 8 trace channels")
+        names = [self.resolve(c) for c in channels]
+        trig = Trigger(mode=trigger) if isinstance(trigger, str) else (trigger or Trigger())
+        if length is None:
+            length = self.capacity // len(names)
+        d.write("trace_config.command", 0)
+        d.write("trace_config.channel_count", len(names))
+        d.write("trace_config.divider", int(divider))
+        d.write("trace_config.length", int(length))
+        d.write("trace_config.pre_trigger", int(pre_trigger))
+        for i, n in enumerate(names, start=1):
+            obj = d.table[n]
+            d.write(f"trace_channels.channel_{i}", od_reference(obj.index, obj.subindex, 32))
+        src = d.table[self.resolve(trig.source)]
+        d.write("trace_config.trigger_source", od_reference(src.index, src.subindex, 32))
+        d.write("trace_config.trigger_level", float(trig.level))
+        d.write("trace_config.trigger_edge", TRIGGER_EDGES[trig.edge])
+        d.write("trace_config.trigger_mode", TRIGGER_MODES[trig.mode])
+        self._channels = names
+        self._divider = int(divider)
+
+    def arm(self) -> None:
+        """Arm (command 1); an "immediate" trigger starts recording at once."""
+        self._drive.write("trace_config.command", 1)
+
+    def force_trigger(self) -> None:
+        """Trigger now (command 2)."""
+        self._drive.write("trace_config.command", 2)
+
+    def stop(self) -> None:
+        """Stop (command 0)."""
+        self._drive.write("trace_config.command", 0)
+
+    def wait(self, timeout: float, poll_s: float = 0.02) -> None:
+        """Wait until the recorder is "done"; :class:`DriveTimeout` naming the state otherwise."""
+        deadline = time.monotonic() + timeout
+        state = self.state
+        while state != "done":
+            if state == "idle":
+                raise StateError(
+                    "trace recorder went idle before it was done (stopped or reconfigured)"
+                )
+            if time.monotonic() >= deadline:
+                raise DriveTimeout(f"trace not done after {timeout:g} s (recorder {state})")
+            time.sleep(poll_s)
+            state = self.state
+
+    def upload(self, progress: Callable[[int, int | None], None] | None = None) -> Trace:
+        """Upload the recorded data by SDO block upload on the second SDO channel."""
+        d = self._drive
+        count = int(d.read("trace_config.channel_count"))
+        length = int(d.read("trace_config.length"))
+        divider = int(d.read("trace_config.divider"))
+        trig = int(d.read("trace_config.trigger_position"))
+        if not self._channels or len(self._channels) != count:
+            names = []
+            for i in range(1, count + 1):
+                ref = int(d.read(f"trace_channels.channel_{i}"))
+                obj = d.table.by_index(ref >> 16, (ref >> 8) & 0xFF)
+                names.append(obj.name if obj else f"0x{ref >> 16:04X}:{(ref >> 8) & 0xFF:02X}")
+            self._channels = names
+        raw = d.sdo_trace.upload_block(*TRACE_DATA, name="trace_data", progress=progress)
+        expected = length * count * 4
+        if len(raw) != expected:
+            raise StateError(f"trace upload returned {len(raw)} bytes, expected {expected}")
+        data = np.frombuffer(raw, dtype="<f4").reshape(length, count)
+        t = (np.arange(length, dtype=np.float64) - trig) * divider * TS
+        signals = {n: data[:, i].copy() for i, n in enumerate(self._channels)}
+        units = {n: (d.table[n].unit if n in d.table else "") for n in self._channels}
+        return Trace(t=t, signals=signals, units=units, trigger_index=trig, divider=divider)
+
+    def capture(
+        self,
+        channels: list[str],
+        divider: int = 1,
+        length: int | None = None,
+        pre_trigger: int = 0,
+        trigger: Trigger | str | None = None,
+        timeout: float | None = None,
+        progress: Callable[[int, int | None], None] | None = None,
+    ) -> Trace:
+        """Configure, arm, wait for the trigger and the recording, upload; returns a :class:`Trace`.
+
+        ``timeout`` (s) defaults to 2 s plus 3 × the recording duration.
+        """
+        self.configure(channels, divider, length, pre_trigger, trigger)
+        length = int(self._drive.read("trace_config.length"))
+        if timeout is None:
+            timeout = 2.0 + 3.0 * length * divider * TS
+        self.arm()
+        self.wait(timeout)
+        return self.upload(progress)
