@@ -1,0 +1,183 @@
+"""Least-squares identification of the speed model ``G(z) = b / (z - a)`` (eq. 26, Fig. 16).
+
+From a current-step trace (i_p [A] and speed [rpm] sampled every ``Ts``) fit
+``w[n+1] = A w[n] + B i[n] + c`` with numpy ``lstsq``; ``c`` absorbs offsets (a constant load
+torque, a current-sensor offset). A trace sampled every D loop samples (trace divider D, each
+loop sample Ts_model = 20 µs) with the current held over the D samples gives
+``A = a^D`` and ``B = b (1 - a^D) / (1 - a)``; the 50 kHz model is recovered as
+``a = A^(1/D)``, ``b = B (1 - a) / (1 - A)``. Fit quality is reported both for the one-step
+prediction and for a free-run simulation of the identified model from the first measured speed
+(the comparison of Fig. 16).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+TS_MODEL = 20e-6
+"""Loop sampling period of the model [s] (fs = 50 kHz)."""
+
+
+@dataclass(frozen=True)
+class FirstOrderFit:
+    """Result of :func:`fit_first_order`.
+
+    Attributes:
+        a: pole of ``b/(z - a)`` per loop sample Ts_model (dimensionless).
+        b: gain [rpm/A per loop sample].
+        offset: constant term c of the decimated regression [rpm per trace sample].
+        a_D, b_D: the fitted decimated model (per trace sample of D loop samples).
+        D: decimation (trace samples are D loop samples apart).
+        Ts: trace sample period [s]; Ts_model: loop sample period [s].
+        r2: coefficient of determination of the free-run simulation against the measured speed.
+        rms: RMS error of the free-run simulation [rpm].
+        one_step_rms: RMS of the one-step-ahead residuals [rpm].
+        n_samples: number of trace samples used.
+    """
+
+    a: float
+    b: float
+    offset: float
+    a_D: float
+    b_D: float
+    D: int
+    Ts: float
+    Ts_model: float
+    r2: float
+    rms: float
+    one_step_rms: float
+    n_samples: int
+
+    @property
+    def time_constant(self) -> float:
+        """Mechanical time constant ``-Ts_model / ln(a)`` [s] (inf if a >= 1)."""
+        return -self.Ts_model / math.log(self.a) if 0.0 < self.a < 1.0 else math.inf
+
+    @property
+    def dc_gain(self) -> float:
+        """Steady-state speed per ampere ``b / (1 - a)`` [rpm/A] (inf if a >= 1)."""
+        return self.b / (1.0 - self.a) if self.a < 1.0 else math.inf
+
+    def as_dict(self) -> dict[str, float]:
+        """Plain ``dict`` (JSON-friendly) including time_constant and dc_gain."""
+        d = asdict(self)
+        d["time_constant"] = self.time_constant
+        d["dc_gain"] = self.dc_gain
+        return d
+
+
+def _decimation(Ts: float, Ts_model: float) -> int:
+    if not (math.isfinite(Ts) and Ts > 0):
+        raise ValueError(f"Ts must be a finite period > 0 s (got {Ts!r})")
+    if not (math.isfinite(Ts_model) and Ts_model > 0):
+        raise ValueError(f"Ts_model must be a finite period > 0 s (got {Ts_model!r})")
+    D = round(Ts / Ts_model)
+    if D < 1 or abs(D * Ts_model - Ts) > 1e-6 * Ts:
+        raise ValueError(f"Ts = {Ts:g} s is not a whole multiple of the loop period {Ts_model:g} s")
+    return D
+
+
+def simulate_first_order(
+    a: float, b: float, i_p: np.ndarray, w0: float, offset: float = 0.0
+) -> np.ndarray:
+    """Free-run ``w[n+1] = a w[n] + b i_p[n] + offset`` from ``w[0] = w0`` (units of w0)."""
+    i_p = np.asarray(i_p, dtype=float)
+    w = np.empty(i_p.size)
+    x = float(w0)
+    for n in range(i_p.size):
+        w[n] = x
+        x = a * x + b * i_p[n] + offset
+    return w
+
+
+def fit_first_order(
+    i_p: np.ndarray,
+    speed: np.ndarray,
+    Ts: float = TS_MODEL,
+    *,
+    Ts_model: float = TS_MODEL,
+    offset: bool = True,
+) -> FirstOrderFit:
+    """Fit ``b/(z - a)`` at the loop rate to a trace sampled every ``Ts``.
+
+    Args:
+        i_p: pseudo current [A] (the model input), one value per trace sample.
+        speed: speed [rpm], same length.
+        Ts: trace sample period [s]; must be a whole multiple D of ``Ts_model``.
+        Ts_model: loop sample period of the model [s] (20 µs).
+        offset: also fit a constant term (recommended; handles load torque and sensor offsets).
+
+    Returns:
+        :class:`FirstOrderFit`. Raises ValueError for malformed data, a trace without excitation
+        (the regression is rank-deficient) or a fitted pole outside (0, 1) that cannot be turned
+        into a loop-rate model.
+    """
+    i = np.asarray(i_p, dtype=float).ravel()
+    w = np.asarray(speed, dtype=float).ravel()
+    if i.size != w.size:
+        raise ValueError(f"i_p and speed differ in length ({i.size} vs {w.size})")
+    n_par = 3 if offset else 2
+    if i.size < n_par + 2:
+        raise ValueError(f"need at least {n_par + 2} samples (got {i.size})")
+    if not (np.all(np.isfinite(i)) and np.all(np.isfinite(w))):
+        raise ValueError("i_p and speed must be finite (no NaN/inf)")
+    D = _decimation(float(Ts), float(Ts_model))
+    cols = [w[:-1], i[:-1]]
+    if offset:
+        cols.append(np.ones(i.size - 1))
+    X = np.column_stack(cols)
+    y = w[1:]
+    # scale columns for conditioning, then solve
+    scale = np.maximum(np.max(np.abs(X), axis=0), 1e-300)
+    theta, _, rank, _ = np.linalg.lstsq(X / scale, y, rcond=None)
+    if rank < n_par:
+        raise ValueError(
+            "the trace does not excite the model (constant current or speed): "
+            "capture a current step"
+        )
+    theta = theta / scale
+    a_D, b_D = float(theta[0]), float(theta[1])
+    c = float(theta[2]) if offset else 0.0
+    if not 0.0 < a_D < 1.0:
+        raise ValueError(
+            f"fitted pole a^D = {a_D:.6g} is outside (0, 1): no stable first-order model fits"
+        )
+    a = a_D ** (1.0 / D)
+    # b = b_D (1 - a) / (1 - a^D), computed without cancellation
+    b = b_D * math.expm1(math.log(a)) / math.expm1(D * math.log(a))
+    resid = y - X @ theta
+    one_step_rms = float(np.sqrt(np.mean(resid**2)))
+    w_sim = simulate_first_order(a_D, b_D, i, w[0], c)
+    err = w - w_sim
+    rms = float(np.sqrt(np.mean(err**2)))
+    ss = float(np.sum((w - np.mean(w)) ** 2))
+    r2 = 1.0 - float(np.sum(err**2)) / ss if ss > 0 else math.nan
+    return FirstOrderFit(
+        a=a,
+        b=b,
+        offset=c,
+        a_D=a_D,
+        b_D=b_D,
+        D=D,
+        Ts=float(Ts),
+        Ts_model=float(Ts_model),
+        r2=r2,
+        rms=rms,
+        one_step_rms=one_step_rms,
+        n_samples=int(i.size),
+    )
+
+
+def identify_first_order(
+    i_p: np.ndarray, speed: np.ndarray, Ts: float = TS_MODEL, *, Ts_model: float = TS_MODEL
+) -> tuple[float, float]:
+    """``(a, b)`` of ``G(z) = b/(z - a)`` at the loop rate (eq. 26) from a current-step trace.
+
+    ``i_p`` [A] and ``speed`` [rpm] sampled every ``Ts`` [s] (a multiple of ``Ts_model``); see
+    :func:`fit_first_order` for the fit quality and the details. ``b`` is in rpm/A per loop sample.
+    """
+    fit = fit_first_order(i_p, speed, Ts, Ts_model=Ts_model)
+    return fit.a, fit.b
