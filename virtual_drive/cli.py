@@ -1,0 +1,46 @@
+"""The ``virtual-drive`` command: one argparse program, one sub-command per module.
+
+Each sub-command lives in its own module, which provides ``add_parser(subparsers)``: it registers
+its parser and sets ``func`` (a callable ``func(args) -> int`` returning the exit code) with
+``parser.set_defaults(func=...)``. Adding a sub-command is one entry in ``_SUBCOMMANDS``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+from collections.abc import Sequence
+
+#: Modules providing ``add_parser(subparsers)``, in the order shown by ``--help``.
+_SUBCOMMANDS: tuple[str, ...] = ("virtual_drive.hub",)
+
+
+class _OneLineErrorParser(argparse.ArgumentParser):
+    """Reports bad arguments as one line on stderr and exit status 2."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``virtual-drive`` argument parser with every sub-command registered."""
+    parser = _OneLineErrorParser(
+        prog="virtual-drive",
+        description="Virtual BLDC drive tools: loopback CAN hub and the virtual drive node.",
+    )
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for module_name in _SUBCOMMANDS:
+        importlib.import_module(module_name).add_parser(subparsers)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``virtual-drive``; returns the process exit status."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    return int(args.func(args))
+
+
+if __name__ == "__main__":
+    sys.exit(main())

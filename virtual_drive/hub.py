@@ -1,0 +1,728 @@
+"""Loopback CAN hub: a shared, bit-rate-paced CAN bus between processes, without SocketCAN.
+
+Any number of processes join with python-can's built-in ``socketcand`` interface::
+
+    with Hub(port=0, bitrate=1_000_000) as hub:
+        bus = can.Bus(interface="socketcand", host="127.0.0.1", port=hub.port,
+                      channel="vcan0", tcp_tune=True)
+
+The hub speaks socketcand "rawmode" (see :mod:`virtual_drive.hub_protocol`) on 127.0.0.1 only.
+Each ``< open NAME >`` channel is its own bus. On a bus, every frame is forwarded to every OTHER
+client in one global order. Frames are paced like a real CAN bus: a frame waiting for the bus
+competes in arbitration (lowest identifier wins among the oldest pending frame of each client,
+so each sender's order is kept), occupies the bus for ``frame_bits(...) / bitrate`` seconds
+(exact bit stuffing), and is delivered when the bus has finished it (plus an optional injected
+delay). Frames can be dropped with a seeded RNG for fault tests.
+
+One background thread runs a ``select`` loop over all sockets; no locks are needed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import errno
+import math
+import random
+import re
+import select
+import signal
+import socket
+import sys
+import threading
+import time
+from collections import deque
+from dataclasses import dataclass
+
+from virtual_drive.hub_protocol import (
+    CommandSplitter,
+    ProtocolError,
+    format_error,
+    format_frame,
+    parse_channel,
+    parse_send,
+)
+
+__all__ = ["DEFAULT_PORT", "Hub", "HubStats", "add_parser", "crc15", "frame_bits"]
+
+#: Port used by ``virtual-drive hub`` when none is given.
+DEFAULT_PORT = 29536
+
+_LOOPBACK_NAMES = ("127.0.0.1", "localhost")
+_BIND_ADDRESS = "127.0.0.1"
+
+# --------------------------------------------------------------------------------------------
+# CAN 2.0 frame length (bit level)
+# --------------------------------------------------------------------------------------------
+
+_CRC15_POLY = 0x4599  # x^15 + x^14 + x^10 + x^8 + x^7 + x^4 + x^3 + 1 (CAN 2.0 spec §3.1.1.6)
+
+
+def _crc15_table() -> tuple[int, ...]:
+    table = []
+    for byte in range(256):
+        crc = byte << 7
+        for _ in range(8):
+            crc = ((crc << 1) ^ _CRC15_POLY) if crc & 0x4000 else (crc << 1)
+            crc &= 0x7FFF
+        table.append(crc)
+    return tuple(table)
+
+
+_CRC15_TABLE = _crc15_table()
+
+
+def crc15(bits: int, n_bits: int) -> int:
+    """CAN CRC-15 of the ``n_bits`` most significant-first bits held in the integer ``bits``.
+
+    Same result as the bit-serial register of the CAN 2.0 spec (init 0, no final xor). Leading
+    zero bits do not change a CRC with init 0, so the bits are padded on the left to whole bytes.
+    """
+    if n_bits < 0 or bits < 0 or bits >> n_bits:
+        raise ValueError("bits must be a non-negative integer of at most n_bits bits")
+    crc = 0
+    for byte in bits.to_bytes((n_bits + 7) // 8, "big"):
+        crc = ((crc << 8) & 0x7FFF) ^ _CRC15_TABLE[((crc >> 7) ^ byte) & 0xFF]
+    return crc
+
+
+_RUN_OF_FIVE = re.compile("00000|11111")
+
+
+def _stuff_bit_count(bits: str) -> int:
+    """Stuff bits the transmitter inserts into ``bits`` (a '0'/'1' string, SOF .. CRC end).
+
+    After five equal bits a complementary bit is inserted; the inserted bit starts the next run.
+    """
+    count = 0
+    match = _RUN_OF_FIVE.search(bits)
+    while match:
+        count += 1
+        bits = ("1" if bits[match.start()] == "0" else "0") + bits[match.end() :]
+        match = _RUN_OF_FIVE.search(bits)
+    return count
+
+
+# CRC delimiter 1 + ACK slot 1 + ACK delimiter 1 + EOF 7 + intermission (IFS) 3
+_TRAILER_BITS = 13
+
+
+def frame_bits(arbitration_id: int, data: bytes, is_extended: bool = False) -> int:
+    """Bits a classical CAN data frame occupies on the bus, with its exact bit stuffing.
+
+    Counts SOF, arbitration and control fields, data, CRC-15 (all stuffed, stuff bits computed on
+    the real bit pattern), then CRC delimiter, ACK slot and delimiter, EOF (7) and the 3-bit
+    intermission. Standard frame: 47 + 8·n bits before stuffing; extended: 67 + 8·n.
+    Unit: bits (divide by the bit rate in bit/s for seconds).
+
+    Raises ValueError for an identifier out of range or more than 8 data bytes.
+    """
+    n = len(data)
+    if n > 8:
+        raise ValueError(f"classical CAN carries at most 8 data bytes, got {n}")
+    dlc = n
+    if is_extended:
+        if not 0 <= arbitration_id <= 0x1FFFFFFF:
+            raise ValueError(f"extended identifier {arbitration_id:#x} out of 0..0x1FFFFFFF")
+        base, ext = arbitration_id >> 18, arbitration_id & 0x3FFFF
+        # SOF 0 | base 11 | SRR 1 | IDE 1 | ext 18 | RTR 0 | r1 0 | r0 0 | DLC 4  -> 39 bits
+        header = (((((base << 1 | 1) << 1 | 1) << 18 | ext) << 3) << 4) | dlc
+        header_bits = 39
+    else:
+        if not 0 <= arbitration_id <= 0x7FF:
+            raise ValueError(f"standard identifier {arbitration_id:#x} out of 0..0x7FF")
+        # SOF 0 | id 11 | RTR 0 | IDE 0 | r0 0 | DLC 4  -> 19 bits
+        header = ((arbitration_id << 3) << 4) | dlc
+        header_bits = 19
+    n_bits = header_bits + 8 * n
+    value = (header << (8 * n)) | int.from_bytes(data, "big")
+    stuffed_region = (value << 15) | crc15(value, n_bits)
+    region_bits = n_bits + 15
+    stuff = _stuff_bit_count(format(stuffed_region, f"0{region_bits}b"))
+    return region_bits + stuff + _TRAILER_BITS
+
+
+def _arbitration_key(arbitration_id: int, is_extended: bool) -> int:
+    """Bits sent during arbitration as one integer: the lower one wins the bus."""
+    if is_extended:
+        return (arbitration_id >> 18) << 20 | 0b11 << 18 | (arbitration_id & 0x3FFFF)
+    return arbitration_id << 20  # RTR 0 and IDE 0 beat an extended frame's SRR 1
+
+
+# --------------------------------------------------------------------------------------------
+# Hub state
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class HubStats:
+    """Counters of a running hub (a snapshot; all counts since start)."""
+
+    clients: int  #: clients connected now
+    clients_total: int  #: connections accepted
+    clients_dropped: int  #: clients the hub disconnected for bad input
+    frames_received: int  #: valid frames received from clients
+    frames_forwarded: int  #: frames that completed on the bus and went to the other clients
+    frames_dropped: int  #: frames lost by fault injection (drop_rate)
+    frames_overrun: int  #: frame copies not queued because a client's output buffer was full
+    frames_pending: int  #: frames received, not yet forwarded or dropped
+    protocol_errors: int  #: bad elements answered with ``< error ... >``
+    bus_busy_s: float  #: emulated bus time used by frames, s (all channels)
+
+
+_WAIT_OPEN, _WAIT_MODE, _RAW, _CLOSED = range(4)
+
+
+class _Client:
+    __slots__ = (
+        "bus",
+        "errors",
+        "outbuf",
+        "peer",
+        "queue",
+        "ready_at",
+        "sock",
+        "splitter",
+        "state",
+    )
+
+    def __init__(self, sock: socket.socket, peer: tuple) -> None:
+        self.sock = sock
+        self.peer = peer
+        self.state = _WAIT_OPEN
+        self.splitter = CommandSplitter()
+        self.outbuf = bytearray()
+        self.ready_at = 0.0  # monotonic time before which frames are held back (see Hub)
+        self.queue: deque = deque()  # (arrival, key, seq, frame, bits) waiting for the bus
+        self.bus: _Bus | None = None
+        self.errors = 0
+
+
+class _Bus:
+    """One emulated CAN bus (one socketcand channel)."""
+
+    __slots__ = ("deliveries", "free_at", "last_due", "name", "receivers", "senders")
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self.receivers: list[_Client] = []  # clients in rawmode
+        self.senders: list[_Client] = []  # clients with frames waiting for the bus
+        self.free_at = 0.0  # monotonic time the bus becomes idle
+        self.deliveries: deque = deque()  # (due, sender, frame), due non-decreasing
+        self.last_due = 0.0
+
+    def next_start(self) -> float | None:
+        """Monotonic time of the next arbitration, or None if nothing waits."""
+        if not self.senders:
+            return None
+        return max(self.free_at, min(c.queue[0][0] for c in self.senders))
+
+
+class Hub:
+    """A loopback CAN hub speaking socketcand rawmode on 127.0.0.1.
+
+    host: must be "127.0.0.1" or "localhost" (anything else raises ValueError).
+    port: TCP port, 0 for an ephemeral one (read :attr:`port` after :meth:`start`).
+    bitrate: emulated bit rate, bit/s (1 .. 1e9; real classical CAN is at most 1e6).
+    drop_rate: probability 0..1 that a frame is lost for all receivers (it still uses bus time).
+    delay_s: extra delivery delay, s (≥ 0), added after the frame completed on the bus.
+    seed: seed of the drop RNG (reproducible fault patterns).
+    """
+
+    #: After ``< rawmode >`` is acknowledged, frames for that client wait this long (s), so
+    #: python-can's handshake ``recv`` sees ``< ok >`` alone and not glued to a frame.
+    handshake_hold_s = 0.05
+    #: Frames one client may have waiting for the bus before the hub stops reading it
+    #: (its TCP send then blocks: back-pressure like a full CAN controller TX queue).
+    max_pending_per_client = 1024
+    #: Output bytes buffered per client before frames for it are counted as overrun and lost.
+    max_outbuf_bytes = 4 << 20
+    #: Bad elements a client may send before the hub disconnects it.
+    max_errors_per_client = 100
+
+    def __init__(
+        self,
+        host: str = "127.0.0.1",
+        port: int = 0,
+        bitrate: int = 1_000_000,
+        drop_rate: float = 0.0,
+        delay_s: float = 0.0,
+        seed: int | None = 0,
+    ) -> None:
+        if host not in _LOOPBACK_NAMES:
+            raise ValueError(f"the hub binds 127.0.0.1 only; refusing host {host!r}")
+        if isinstance(port, bool) or not isinstance(port, int) or not 0 <= port <= 65535:
+            raise ValueError(f"port must be an integer 0..65535, got {port!r}")
+        if isinstance(bitrate, bool) or not isinstance(bitrate, int):
+            raise ValueError(f"bitrate must be an integer in bit/s, got {bitrate!r}")
+        if not 1 <= bitrate <= 1_000_000_000:
+            raise ValueError(f"bitrate must be 1 .. 1e9 bit/s, got {bitrate}")
+        self._check_faults(drop_rate, delay_s)
+        self._requested_port = port
+        self._bitrate = bitrate
+        self._drop_rate = float(drop_rate)
+        self._delay_s = float(delay_s)
+        self._rng = random.Random(seed)
+        self._listener: socket.socket | None = None
+        self._wake_r: socket.socket | None = None
+        self._wake_w: socket.socket | None = None
+        self._thread: threading.Thread | None = None
+        self._stopping = False
+        self._clients: dict[socket.socket, _Client] = {}
+        self._buses: dict[str, _Bus] = {}
+        self._mono0 = time.monotonic()
+        self._wall0 = time.time()
+        self._seq = 0
+        self._failure: BaseException | None = None
+        # counters (written by the hub thread only)
+        self._n_clients_total = 0
+        self._n_clients_dropped = 0
+        self._n_received = 0
+        self._n_forwarded = 0
+        self._n_dropped = 0
+        self._n_overrun = 0
+        self._n_errors = 0
+        self._busy_s = 0.0
+
+    # ---------------------------------------------------------------- public API
+
+    @property
+    def port(self) -> int:
+        """The TCP port the hub listens on (valid after :meth:`start`)."""
+        if self._listener is None:
+            raise RuntimeError("hub not started")
+        return self._listener.getsockname()[1]
+
+    @property
+    def host(self) -> str:
+        """Always "127.0.0.1"."""
+        return _BIND_ADDRESS
+
+    @property
+    def bitrate(self) -> int:
+        """Emulated bit rate, bit/s."""
+        return self._bitrate
+
+    @property
+    def drop_rate(self) -> float:
+        """Current drop probability (0..1)."""
+        return self._drop_rate
+
+    @property
+    def delay_s(self) -> float:
+        """Current extra delivery delay, s."""
+        return self._delay_s
+
+    @property
+    def running(self) -> bool:
+        """True while the hub thread serves clients."""
+        return self._thread is not None and self._thread.is_alive()
+
+    @property
+    def stats(self) -> HubStats:
+        """A snapshot of the hub's counters."""
+        pending = sum(len(c.queue) for c in list(self._clients.values()))
+        pending += sum(len(b.deliveries) for b in list(self._buses.values()))
+        return HubStats(
+            clients=len(self._clients),
+            clients_total=self._n_clients_total,
+            clients_dropped=self._n_clients_dropped,
+            frames_received=self._n_received,
+            frames_forwarded=self._n_forwarded,
+            frames_dropped=self._n_dropped,
+            frames_overrun=self._n_overrun,
+            frames_pending=pending,
+            protocol_errors=self._n_errors,
+            bus_busy_s=self._busy_s,
+        )
+
+    def join_kwargs(self, channel: str = "vcan0", tcp_tune: bool = True) -> dict:
+        """Keyword arguments for ``can.Bus(**hub.join_kwargs())`` to join this hub."""
+        return {
+            "interface": "socketcand",
+            "host": _BIND_ADDRESS,
+            "port": self.port,
+            "channel": channel,
+            "tcp_tune": tcp_tune,
+        }
+
+    def join_line(self, channel: str = "vcan0") -> str:
+        """The python-can line that joins this hub, as text."""
+        return (
+            f'can.Bus(interface="socketcand", host="{_BIND_ADDRESS}", port={self.port}, '
+            f'channel="{channel}", tcp_tune=True)'
+        )
+
+    def set_faults(self, drop_rate: float | None = None, delay_s: float | None = None) -> None:
+        """Change fault injection at run time; applies to frames not yet on the bus.
+
+        drop_rate: probability 0..1 that a frame is lost. delay_s: extra delay, s (≥ 0).
+        Raises ValueError (and changes nothing) for out-of-range values.
+        """
+        new_drop = self._drop_rate if drop_rate is None else drop_rate
+        new_delay = self._delay_s if delay_s is None else delay_s
+        self._check_faults(new_drop, new_delay)
+        self._drop_rate = float(new_drop)
+        self._delay_s = float(new_delay)
+
+    def start(self) -> Hub:
+        """Bind 127.0.0.1:port and start serving in a background thread.
+
+        Raises OSError (errno EADDRINUSE) if the port is busy, RuntimeError if already started.
+        """
+        if self._listener is not None:
+            raise RuntimeError("hub already started")
+        listener = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        try:
+            listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            listener.bind((_BIND_ADDRESS, self._requested_port))
+            listener.listen(64)
+            listener.setblocking(False)
+        except OSError:
+            listener.close()
+            raise
+        self._listener = listener
+        self._wake_r, self._wake_w = socket.socketpair()
+        self._wake_r.setblocking(False)
+        self._stopping = False
+        self._thread = threading.Thread(target=self._serve, name="can-hub", daemon=True)
+        self._thread.start()
+        return self
+
+    def stop(self, timeout: float = 5.0) -> None:
+        """Stop serving, close every client connection and the listening socket."""
+        if self._listener is None:
+            return
+        self._stopping = True
+        if self._wake_w is not None:
+            try:
+                self._wake_w.send(b"x")
+            except OSError:
+                pass
+        if self._thread is not None:
+            self._thread.join(timeout)
+        for client in list(self._clients.values()):
+            self._close(client)
+        for s in (self._listener, self._wake_r, self._wake_w):
+            if s is not None:
+                s.close()
+        self._listener = self._wake_r = self._wake_w = None
+        self._thread = None
+
+    def __enter__(self) -> Hub:
+        if self._listener is None:
+            self.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+    # ---------------------------------------------------------------- internals
+
+    @staticmethod
+    def _check_faults(drop_rate: float, delay_s: float) -> None:
+        for name, v in (("drop_rate", drop_rate), ("delay_s", delay_s)):
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                raise ValueError(f"{name} must be a finite number, got {v!r}")
+        if not 0.0 <= drop_rate <= 1.0:
+            raise ValueError(f"drop_rate must be in 0..1, got {drop_rate}")
+        if not 0.0 <= delay_s <= 3600.0:
+            raise ValueError(f"delay_s must be in 0..3600 s, got {delay_s}")
+
+    def _wall(self, mono: float) -> float:
+        return self._wall0 + (mono - self._mono0)
+
+    def _serve(self) -> None:
+        try:
+            while not self._stopping:
+                self._iterate()
+        except BaseException as exc:  # keep the reason for whoever looks at the hub
+            self._failure = exc
+            raise
+
+    def _iterate(self) -> None:
+        now = time.monotonic()
+        deadline = self._next_deadline(now)
+        timeout = None if deadline is None else max(0.0, deadline - now)
+        rlist: list[socket.socket] = [self._listener, self._wake_r]
+        wlist: list[socket.socket] = []
+        for sock, c in self._clients.items():
+            if len(c.queue) < self.max_pending_per_client:
+                rlist.append(sock)
+            if c.outbuf and c.ready_at <= now:
+                wlist.append(sock)
+        readable, writable, _ = select.select(rlist, wlist, [], timeout)
+        now = time.monotonic()
+        for sock in readable:
+            if sock is self._listener:
+                self._accept(now)
+            elif sock is self._wake_r:
+                try:
+                    self._wake_r.recv(4096)
+                except OSError:
+                    pass
+            else:
+                client = self._clients.get(sock)
+                if client is not None:
+                    self._read(client, now)
+        now = time.monotonic()
+        for bus in list(self._buses.values()):
+            self._advance(bus, now)
+        for sock in writable:
+            client = self._clients.get(sock)
+            if client is not None:
+                self._flush(client, now)
+
+    def _next_deadline(self, now: float) -> float | None:
+        deadline = None
+        for bus in self._buses.values():
+            t = bus.next_start()
+            if bus.deliveries:
+                due = bus.deliveries[0][0]
+                t = due if t is None else min(t, due)
+            if t is not None and (deadline is None or t < deadline):
+                deadline = t
+        for c in self._clients.values():
+            if c.outbuf and c.ready_at > now and (deadline is None or c.ready_at < deadline):
+                deadline = c.ready_at
+        return deadline
+
+    def _accept(self, now: float) -> None:
+        while True:
+            try:
+                sock, peer = self._listener.accept()
+            except (BlockingIOError, InterruptedError):
+                return
+            except OSError:
+                return
+            sock.setblocking(False)
+            sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            client = _Client(sock, peer)
+            self._clients[sock] = client
+            self._n_clients_total += 1
+            client.outbuf += b"< hi >"
+            self._flush(client, now)
+
+    def _read(self, client: _Client, now: float) -> None:
+        try:
+            chunk = client.sock.recv(65536)
+        except (BlockingIOError, InterruptedError):
+            return
+        except OSError:
+            self._close(client)
+            return
+        if not chunk:  # peer closed; an unfinished element is discarded
+            self._close(client)
+            return
+        for item in client.splitter.feed(chunk):
+            if isinstance(item, ProtocolError):
+                self._reject(client, str(item), now)
+            else:
+                try:
+                    self._handle(client, item, now)
+                except ProtocolError as exc:
+                    self._reject(client, str(exc), now)
+            if client.state == _CLOSED:
+                return
+        if client.splitter.overflow:
+            self._reject(client, "element too long", now)
+            self._drop(client)
+            return
+        self._flush(client, now)
+
+    def _handle(self, client: _Client, words: list[str], now: float) -> None:
+        cmd = words[0]
+        if client.state == _RAW and cmd == "send":
+            frame = parse_send(words)
+            bits = frame_bits(frame.arbitration_id, frame.data, frame.is_extended)
+            key = _arbitration_key(frame.arbitration_id, frame.is_extended)
+            bus = client.bus
+            if not client.queue:
+                bus.senders.append(client)
+            self._seq += 1
+            client.queue.append((now, key, self._seq, frame, bits))
+            self._n_received += 1
+        elif cmd == "echo":
+            client.outbuf += b"< echo >"
+        elif client.state == _WAIT_OPEN:
+            if cmd != "open":
+                raise ProtocolError(f"expected '< open BUS >', got {cmd!r}")
+            name = parse_channel(words)
+            bus = self._buses.get(name)
+            if bus is None:
+                bus = self._buses[name] = _Bus(name)
+            client.bus = bus
+            client.state = _WAIT_MODE
+            client.outbuf += b"< ok >"
+        elif client.state == _WAIT_MODE:
+            if cmd != "rawmode":
+                raise ProtocolError(f"only rawmode is supported, got {cmd!r}")
+            client.outbuf += b"< ok >"
+            self._flush(client, now)
+            client.state = _RAW
+            client.ready_at = now + self.handshake_hold_s
+            client.bus.receivers.append(client)
+        elif cmd == "rawmode":
+            client.outbuf += b"< ok >"
+        else:
+            raise ProtocolError(f"unknown or unsupported command {cmd!r}")
+
+    def _reject(self, client: _Client, reason: str, now: float) -> None:
+        self._n_errors += 1
+        client.errors += 1
+        if len(client.outbuf) < self.max_outbuf_bytes:
+            client.outbuf += format_error(reason, self._wall(now))
+        if client.errors > self.max_errors_per_client:
+            self._drop(client)
+
+    def _drop(self, client: _Client) -> None:
+        if client.state == _CLOSED:
+            return
+        self._n_clients_dropped += 1
+        try:  # best effort: let it see why
+            client.sock.send(bytes(client.outbuf))
+        except OSError:
+            pass
+        self._close(client)
+
+    def _close(self, client: _Client) -> None:
+        if client.state == _CLOSED:
+            return
+        client.state = _CLOSED
+        self._clients.pop(client.sock, None)
+        bus = client.bus
+        if bus is not None and client in bus.receivers:
+            bus.receivers.remove(client)
+        # frames it already sent stay queued: they were on their way to the bus
+        try:
+            client.sock.close()
+        except OSError:
+            pass
+
+    def _flush(self, client: _Client, now: float) -> None:
+        if not client.outbuf or client.ready_at > now or client.state == _CLOSED:
+            return
+        try:
+            sent = client.sock.send(client.outbuf)
+        except (BlockingIOError, InterruptedError):
+            return
+        except OSError:
+            self._close(client)
+            return
+        del client.outbuf[:sent]
+
+    def _advance(self, bus: _Bus, now: float) -> None:
+        """Run the bus up to ``now``: arbitrate, occupy, schedule delivery, deliver what is due."""
+        senders = bus.senders
+        while senders:
+            start = max(bus.free_at, min(c.queue[0][0] for c in senders))
+            if start > now:
+                break
+            winner = None
+            best = None
+            for c in senders:
+                arrival, key, seq, _, _ = c.queue[0]
+                if arrival <= start and (best is None or (key, seq) < best):
+                    best = (key, seq)
+                    winner = c
+            _, _, _, frame, bits = winner.queue.popleft()
+            if not winner.queue:
+                senders.remove(winner)
+            duration = bits / self._bitrate
+            end = start + duration
+            bus.free_at = end
+            self._busy_s += duration
+            if self._drop_rate > 0.0 and self._rng.random() < self._drop_rate:
+                self._n_dropped += 1
+                continue
+            due = max(end + self._delay_s, bus.last_due)
+            bus.last_due = due
+            bus.deliveries.append((due, winner, frame))
+        deliveries = bus.deliveries
+        touched: list[_Client] = []
+        while deliveries and deliveries[0][0] <= now:
+            due, sender, frame = deliveries.popleft()
+            line = format_frame(frame, self._wall(due))
+            for c in bus.receivers:
+                if c is sender:
+                    continue
+                if len(c.outbuf) >= self.max_outbuf_bytes:
+                    self._n_overrun += 1
+                    continue
+                if not c.outbuf:
+                    touched.append(c)
+                c.outbuf += line
+            self._n_forwarded += 1
+        for c in touched:
+            self._flush(c, now)
+
+
+# --------------------------------------------------------------------------------------------
+# `virtual-drive hub` sub-command
+# --------------------------------------------------------------------------------------------
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Register the ``hub`` sub-command on a ``virtual-drive`` argparse sub-parser set."""
+    p = subparsers.add_parser(
+        "hub",
+        help="run the loopback CAN hub (socketcand rawmode on 127.0.0.1)",
+        description="Loopback CAN hub: processes join it with python-can's socketcand "
+        "interface. Binds 127.0.0.1 only. Stop with Ctrl-C or SIGTERM.",
+    )
+    p.add_argument("--host", default="127.0.0.1", help="must be 127.0.0.1 or localhost")
+    p.add_argument("--port", type=int, default=DEFAULT_PORT, help="TCP port, 0 = any free port")
+    p.add_argument("--bitrate", type=int, default=1_000_000, help="emulated bit rate, bit/s")
+    p.add_argument("--drop-rate", type=float, default=0.0, help="probability 0..1 a frame is lost")
+    p.add_argument("--delay-ms", type=float, default=0.0, help="extra delivery delay, ms")
+    p.add_argument("--seed", type=int, default=0, help="seed of the drop RNG")
+    p.add_argument("--channel", default="vcan0", help="channel shown in the join line")
+    p.set_defaults(func=run_hub_command)
+    return p
+
+
+def run_hub_command(args: argparse.Namespace) -> int:
+    """Run the hub until SIGINT/SIGTERM. Returns the process exit code."""
+    try:
+        hub = Hub(
+            host=args.host,
+            port=args.port,
+            bitrate=args.bitrate,
+            drop_rate=args.drop_rate,
+            delay_s=args.delay_ms / 1000.0,
+            seed=args.seed,
+        )
+    except ValueError as exc:
+        print(f"virtual-drive hub: error: {exc}", file=sys.stderr)
+        return 2
+    try:
+        hub.start()
+    except OSError as exc:
+        if exc.errno == errno.EADDRINUSE:
+            msg = f"port {args.port} on 127.0.0.1 is already in use"
+        else:
+            msg = f"cannot listen on 127.0.0.1:{args.port}: {exc.strerror or exc}"
+        print(f"virtual-drive hub: error: {msg}", file=sys.stderr)
+        return 1
+    stop = threading.Event()
+
+    def _on_signal(signum: int, frame: object) -> None:
+        stop.set()
+
+    previous = {s: signal.signal(s, _on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        print(hub.join_line(args.channel), flush=True)
+        while not stop.wait(0.2):
+            if not hub.running:
+                print("virtual-drive hub: error: hub thread stopped", file=sys.stderr)
+                return 1
+    finally:
+        hub.stop()
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+    st = hub.stats
+    print(
+        f"virtual-drive hub: stopped; {st.frames_forwarded} frames forwarded, "
+        f"{st.frames_dropped} dropped, {st.clients_total} clients",
+        file=sys.stderr,
+    )
+    return 0

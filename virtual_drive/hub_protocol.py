@@ -1,0 +1,201 @@
+"""socketcand "rawmode" text protocol: parsing what clients send, formatting what the hub sends.
+
+This is the protocol spoken by python-can's built-in ``socketcand`` interface
+(``can/interfaces/socketcand/socketcand.py``) and by the socketcand daemon:
+
+* server greets ``< hi >``; client ``< open <bus> >`` -> ``< ok >``;
+  client ``< rawmode >`` -> ``< ok >``
+* client -> server: ``< send <id> <len> <b0> <b1> ... >``, id in hex (3 digits standard, 8 digits
+  extended), len in hex, each byte 1-2 hex digits
+* server -> client: ``< frame <id> <secs>.<usecs> <HEXDATA> >`` (id 3 or 8 hex digits, data one
+  contiguous hex string) and ``< error <id> <secs>.<usecs> [text] >`` for error frames
+
+Pure functions only (no I/O), so they can be tested and reused on their own.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = [
+    "CAN_ERR_FLAG",
+    "CAN_ERR_PROT",
+    "LINE_BYTES",
+    "MAX_ELEMENT_BYTES",
+    "CommandSplitter",
+    "Frame",
+    "ProtocolError",
+    "format_error",
+    "format_frame",
+    "parse_channel",
+    "parse_send",
+]
+
+#: SocketCAN error-frame flag and "protocol violation" error class (linux/can/error.h).
+CAN_ERR_FLAG = 0x20000000
+CAN_ERR_PROT = 0x00000008
+
+#: Frame and error lines are padded with spaces (inside the element) to a multiple of this many
+#: bytes. python-can's client reads 1024 bytes at a time and logs a warning for every element cut
+#: in two; with elements of 64 bytes a 1024-byte read ends on an element boundary.
+LINE_BYTES = 64
+
+#: Longest ``< ... >`` element the hub accepts (a maximal ``send`` is about 45 characters).
+MAX_ELEMENT_BYTES = 256
+
+_HEX = frozenset("0123456789abcdefABCDEF")
+_CHANNEL_CHARS = frozenset("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_.-")
+
+
+class ProtocolError(ValueError):
+    """A client sent something that is not a valid socketcand element or command."""
+
+
+@dataclass(frozen=True)
+class Frame:
+    """One classical CAN data frame.
+
+    arbitration_id: 11-bit (standard) or 29-bit (extended) identifier.
+    data: 0..8 payload bytes.
+    is_extended: True for a 29-bit identifier.
+    """
+
+    arbitration_id: int
+    data: bytes
+    is_extended: bool = False
+
+
+class CommandSplitter:
+    """Cuts a TCP byte stream into ``< ... >`` elements.
+
+    ``feed(chunk)`` returns the complete elements, each as the list of its whitespace-separated
+    words without the angle brackets (e.g. ``["send", "123", "2", "1", "ff"]``), or a
+    :class:`ProtocolError` instance in place of an element that is not well formed. Bytes of an
+    unfinished element are kept for the next call. :attr:`overflow` turns True when an unfinished
+    element grows past :data:`MAX_ELEMENT_BYTES` (the caller should drop the client).
+    """
+
+    __slots__ = ("_partial", "overflow")
+
+    def __init__(self) -> None:
+        self._partial = b""
+        self.overflow = False
+
+    def feed(self, chunk: bytes) -> list[list[str] | ProtocolError]:
+        buf = self._partial + chunk if self._partial else chunk
+        parts = buf.split(b">")
+        self._partial = parts.pop()
+        if len(self._partial) > MAX_ELEMENT_BYTES:
+            self.overflow = True
+        out: list[list[str] | ProtocolError] = []
+        for raw in parts:
+            try:
+                text = raw.decode("ascii")
+            except UnicodeDecodeError:
+                out.append(ProtocolError("non-ASCII bytes in element"))
+                continue
+            words = text.split()
+            if not words or words[0] != "<":
+                if words and words[0].startswith("<"):
+                    words = ["<", words[0][1:], *words[1:]]
+                else:
+                    out.append(ProtocolError("garbage outside '< ... >'"))
+                    continue
+            words = words[1:]
+            if not words:
+                out.append(ProtocolError("empty element"))
+            elif "<" in text[text.index("<") + 1 :]:
+                out.append(ProtocolError("'<' inside element"))
+            else:
+                out.append(words)
+        return out
+
+    @property
+    def pending_bytes(self) -> int:
+        """Number of bytes of an unfinished element held back."""
+        return len(self._partial)
+
+
+def _hex_value(word: str, what: str) -> int:
+    if not word or not _HEX.issuperset(word):
+        raise ProtocolError(f"{what} {word!r} is not hexadecimal")
+    return int(word, 16)
+
+
+def parse_send(words: list[str]) -> Frame:
+    """Parse the words of a ``send`` element (``["send", id, len, b0, ...]``) into a :class:`Frame`.
+
+    Raises ProtocolError for a malformed id, a length above 8, a byte count that differs from
+    the length, or a byte value above 0xFF.
+    """
+    if len(words) < 3:
+        raise ProtocolError("send needs an id and a length")
+    id_word = words[1]
+    can_id = _hex_value(id_word, "id")
+    if len(id_word) == 8:
+        is_extended = True
+        if can_id > 0x1FFFFFFF:
+            raise ProtocolError(f"extended id {id_word} above 1FFFFFFF")
+    elif len(id_word) <= 3:
+        is_extended = False
+        if can_id > 0x7FF:
+            raise ProtocolError(f"standard id {id_word} above 7FF")
+    else:
+        raise ProtocolError(f"id {id_word!r} must have 1-3 (standard) or 8 (extended) hex digits")
+    length = _hex_value(words[2], "length")
+    if length > 8:
+        raise ProtocolError(f"length {length} above 8")
+    byte_words = words[3:]
+    if len(byte_words) != length:
+        raise ProtocolError(f"length {length} but {len(byte_words)} data bytes")
+    values = []
+    for w in byte_words:
+        if len(w) > 2:
+            raise ProtocolError(f"data byte {w!r} above FF")
+        values.append(_hex_value(w, "data byte"))
+    return Frame(can_id, bytes(values), is_extended)
+
+
+def parse_channel(words: list[str]) -> str:
+    """Parse the words of an ``open`` element into the bus name (letters, digits, ``_.-``, ≤ 15)."""
+    if len(words) != 2:
+        raise ProtocolError("open needs exactly one bus name")
+    name = words[1]
+    if len(name) > 15 or not _CHANNEL_CHARS.issuperset(name):
+        raise ProtocolError(f"bad bus name {name!r}")
+    return name
+
+
+def _stamp(timestamp: float) -> str:
+    usecs_total = round(timestamp * 1e6)
+    return f"{usecs_total // 1_000_000}.{usecs_total % 1_000_000:06d}"
+
+
+def _padded(body: str) -> bytes:
+    """``body + " >"`` with spaces before the ``>`` up to a multiple of LINE_BYTES bytes."""
+    pad = -(len(body) + 2) % LINE_BYTES
+    return (body + " " * pad + " >").encode("ascii", "replace")
+
+
+def format_frame(frame: Frame, timestamp: float) -> bytes:
+    """``< frame <id> <secs>.<usecs> <HEXDATA> >`` as bytes; timestamp in seconds (Unix time).
+
+    The id has 3 hex digits (standard) or 8 (extended), as python-can tells them apart by length.
+    The line is space-padded inside the element to LINE_BYTES bytes.
+    """
+    if frame.is_extended:
+        id_str = f"{frame.arbitration_id:08X}"
+    else:
+        id_str = f"{frame.arbitration_id:03X}"
+    return _padded(f"< frame {id_str} {_stamp(timestamp)} {frame.data.hex().upper()}")
+
+
+def format_error(reason: str, timestamp: float, error_class: int = CAN_ERR_PROT) -> bytes:
+    """An error frame ``< error <id> <secs>.<usecs> <reason> >`` that python-can parses.
+
+    The id is CAN_ERR_FLAG | error_class (8 hex digits, as socketcand sends); the reason is a
+    human-readable text with any angle brackets removed, space-padded like frames.
+    Timestamp in seconds (Unix time).
+    """
+    text = " ".join(reason.replace("<", "(").replace(">", ")").split())
+    return _padded(f"< error {CAN_ERR_FLAG | error_class:08X} {_stamp(timestamp)} {text}")
