@@ -376,9 +376,15 @@ class ObjectDictionaryView:
         node_id: int,
         entries: list[Entry],
         constraints: tuple[Constraint, ...],
+        device_info: Mapping[str, str] | None = None,
+        file_info: Mapping[str, str] | None = None,
     ) -> None:
         self.path = path
         self.node_id = node_id
+        #: Raw ``[DeviceInfo]`` keys of the EDS (e.g. ``"NrOfTXPDO"``, ``"BaudRate_1000"``).
+        self.device_info: Mapping[str, str] = MappingProxyType(dict(device_info or {}))
+        #: Raw ``[FileInfo]`` keys of the EDS.
+        self.file_info: Mapping[str, str] = MappingProxyType(dict(file_info or {}))
         self._entries = tuple(sorted(entries, key=lambda e: (e.index, e.subindex)))
         self._by_name = {e.name: e for e in self._entries}
         self._by_index = {(e.index, e.subindex): e for e in self._entries}
@@ -580,4 +586,11 @@ def _load_cached(eds_path: Path, node_id: int, mtime_ns: int, size: int) -> Obje
                     sections[(obj.index, var.subindex)],
                 )
             )
-    return ObjectDictionaryView(eds_path, node_id, entries, CONSTRAINTS)
+    return ObjectDictionaryView(
+        eds_path,
+        node_id,
+        entries,
+        CONSTRAINTS,
+        device_info=dict(raw["DeviceInfo"]) if raw.has_section("DeviceInfo") else None,
+        file_info=dict(raw["FileInfo"]) if raw.has_section("FileInfo") else None,
+    )
