@@ -1,0 +1,234 @@
+"""REST routes (/api/...): the GUI's functions for scripts. Drive calls run in the threadpool."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Annotated, Any, TypeVar
+
+from fastapi import APIRouter, Depends, Header, HTTPException, Request, Response
+
+from dashboard import experiments, tuning
+from dashboard.bench import Bench, jsonable
+from dashboard.errors import http_error
+from dashboard.export import capture_csv, capture_png
+from dashboard.models import (
+    CommandIn,
+    ControlIn,
+    ControlOut,
+    CurrentIn,
+    CurrentStepIn,
+    GainsIn,
+    IdentifyIn,
+    IPDesignIn,
+    LoadIn,
+    ModeIn,
+    SequenceIn,
+    SpeedIn,
+    SpeedStepIn,
+    TraceIn,
+)
+from dashboard.security import LeaseError
+
+router = APIRouter(prefix="/api")
+T = TypeVar("T")
+
+
+def get_bench(request: Request) -> Bench:
+    return request.app.state.bench
+
+
+BenchDep = Annotated[Bench, Depends(get_bench)]
+
+
+def require_control(
+    bench: BenchDep,
+    x_control_token: Annotated[
+        str | None, Header(description="token from POST /api/control")
+    ] = None,
+) -> Bench:
+    """Only the client in control may change the drive; the others watch (409)."""
+    try:
+        bench.lease.check(x_control_token)
+    except LeaseError as exc:
+        raise HTTPException(409, str(exc)) from exc
+    return bench
+
+
+ControlDep = Annotated[Bench, Depends(require_control)]
+
+
+def run(fn: Callable[[], T]) -> T:
+    """Run a bench operation; map its failure onto an HTTP error."""
+    try:
+        return fn()
+    except HTTPException:
+        raise
+    except Exception as exc:
+        raise http_error(exc) from exc
+
+
+# ------------------------------------------------------------------ state and control
+@router.get("/state", tags=["state"], summary="Connection and drive state")
+def get_state(bench: BenchDep) -> dict[str, Any]:
+    return jsonable(bench.state())
+
+
+@router.get("/control", tags=["control"], summary="Who controls the bench")
+def get_control(bench: BenchDep) -> ControlOut:
+    h = bench.lease.holder
+    return ControlOut(client=h.client if h else None, since=h.since if h else None)
+
+
+@router.post(
+    "/control", tags=["control"], summary="Take control (take_over=true steals it, visibly)"
+)
+def post_control(body: ControlIn, bench: BenchDep) -> ControlOut:
+    h = run(lambda: bench.lease.acquire(body.client, take_over=body.take_over))
+    return ControlOut(token=h.token, client=h.client, since=h.since)
+
+
+@router.delete("/control", tags=["control"], summary="Give control back")
+def delete_control(
+    bench: BenchDep, x_control_token: Annotated[str | None, Header()] = None
+) -> ControlOut:
+    run(lambda: bench.lease.release(x_control_token))
+    return ControlOut(client=None)
+
+
+@router.post("/command", tags=["drive"], summary="enable / disable / quick_stop / fault_reset")
+def post_command(body: CommandIn, bench: ControlDep) -> dict[str, Any]:
+    run(lambda: bench.command(body.command))
+    return {"state": bench.drive.state}
+
+
+@router.put("/mode", tags=["drive"], summary="Operating mode: speed (IP loop) or current (i_p*)")
+def put_mode(body: ModeIn, bench: ControlDep) -> dict[str, Any]:
+    run(lambda: bench.set_mode(body.mode))
+    return {"mode": bench.drive.mode}
+
+
+# ------------------------------------------------------------------ setpoints and steps
+@router.put("/setpoints/speed", tags=["setpoints"], summary="Speed setpoint, rpm")
+def put_speed(body: SpeedIn, bench: ControlDep) -> dict[str, float]:
+    run(lambda: bench.set_speed(body.rpm))
+    return {"rpm": bench.speed_setpoint}
+
+
+@router.put("/setpoints/current", tags=["setpoints"], summary="Pseudo-current setpoint i_p*, A")
+def put_current(body: CurrentIn, bench: ControlDep) -> dict[str, float]:
+    run(lambda: bench.set_current(body.i_p_ref))
+    return {"i_p_ref": bench.current_setpoint}
+
+
+@router.post("/steps/speed", tags=["steps"], summary="Speed step: setpoint += delta_rpm")
+def post_speed_step(body: SpeedStepIn, bench: ControlDep) -> dict[str, float]:
+    rpm = run(lambda: bench.step_speed(body.delta_rpm))
+    return {"rpm": rpm}
+
+
+@router.post("/steps/sequence", tags=["steps"], summary="Scripted speed setpoint sequence")
+def post_sequence(body: SequenceIn, bench: ControlDep) -> dict[str, Any]:
+    steps = [(s.at_s, s.rpm) for s in body.steps]
+    run(lambda: bench.start_sequence(steps))
+    return {"started": True, "steps": len(steps)}
+
+
+@router.delete("/steps/sequence", tags=["steps"], summary="Stop a running sequence")
+def delete_sequence(bench: ControlDep) -> dict[str, Any]:
+    bench.stop_sequence()
+    return {"stopped": True}
+
+
+@router.post("/steps/load", tags=["steps"], summary="Load torque step (virtual drive), N·m")
+def post_load(body: LoadIn, bench: ControlDep) -> dict[str, float]:
+    run(lambda: bench.set_load(body.T_load))
+    return {"T_load": bench.T_load}
+
+
+@router.post("/steps/current", tags=["steps"], summary="Current step test with metrics and model")
+def post_current_step(body: CurrentStepIn, bench: ControlDep) -> dict[str, Any]:
+    return jsonable(run(lambda: experiments.current_step(bench, body)))
+
+
+# ------------------------------------------------------------------ gains
+@router.get("/gains", tags=["gains"], summary="Live gains read back from the drive")
+def get_gains(bench: BenchDep) -> dict[str, Any]:
+    return jsonable(run(lambda: tuning.read_gains(bench)))
+
+
+@router.put("/gains", tags=["gains"], summary="Apply a gain set atomically; returns the read-back")
+def put_gains(body: GainsIn, bench: ControlDep) -> dict[str, Any]:
+    return jsonable(run(lambda: tuning.apply(bench, body.changes())))
+
+
+@router.post("/gains/preview", tags=["gains"], summary="Stability, margins and ‖S‖∞ of a gain set")
+def post_gains_preview(body: GainsIn, bench: BenchDep) -> dict[str, Any]:
+    return jsonable(run(lambda: tuning.preview(bench, body.changes())))
+
+
+@router.post("/gains/ip_design", tags=["gains"], summary="IP gains from ξ, ω_n, a, b (eqs. 28–31)")
+def post_ip_design(body: IPDesignIn, bench: BenchDep) -> dict[str, Any]:
+    return jsonable(run(lambda: tuning.design_ip(bench, body.xi, body.omega_n, body.a, body.b)))
+
+
+@router.post("/gains/store", tags=["gains"], summary="Store the live gains in the drive (0x1010)")
+def post_store(bench: ControlDep) -> dict[str, Any]:
+    run(lambda: tuning.store(bench))
+    return {"stored": True}
+
+
+@router.get("/gains/diff", tags=["gains"], summary="Live vs stored gains")
+def get_gains_diff(bench: BenchDep) -> dict[str, Any]:
+    return jsonable(run(lambda: tuning.stored_diff(bench)))
+
+
+# ------------------------------------------------------------------ traces and identification
+@router.post("/trace/capture", tags=["trace"], summary="Configure, arm and read one trace (50 kHz)")
+def post_capture(body: TraceIn, bench: ControlDep) -> dict[str, Any]:
+    cap = run(lambda: experiments.capture(bench, body))
+    return jsonable(cap.summary())
+
+
+@router.get("/trace", tags=["trace"], summary="Captures kept for download")
+def list_captures(bench: BenchDep) -> list[dict[str, Any]]:
+    return [jsonable(c.summary()) for c in bench.captures.values()]
+
+
+@router.get("/trace/{cap_id}", tags=["trace"], summary="One capture's columns as JSON")
+def get_capture(cap_id: int, bench: BenchDep) -> dict[str, Any]:
+    cap = _capture(bench, cap_id)
+    return jsonable({**cap.summary(), "data": cap.columns})
+
+
+@router.get("/trace/{cap_id}/csv", tags=["trace"], summary="Download a capture as CSV")
+def get_capture_csv(cap_id: int, bench: BenchDep) -> Response:
+    cap = _capture(bench, cap_id)
+    return Response(
+        capture_csv(cap),
+        media_type="text/csv",
+        headers={"Content-Disposition": f'attachment; filename="capture_{cap.id}.csv"'},
+    )
+
+
+@router.get("/trace/{cap_id}/png", tags=["trace"], summary="Download a capture as PNG")
+def get_capture_png(cap_id: int, bench: BenchDep) -> Response:
+    cap = _capture(bench, cap_id)
+    return Response(
+        capture_png(cap),
+        media_type="image/png",
+        headers={"Content-Disposition": f'attachment; filename="capture_{cap.id}.png"'},
+    )
+
+
+@router.post(
+    "/identify", tags=["identify"], summary="Current step → fit G(z) = b/(z − a) (Fig. 16)"
+)
+def post_identify(body: IdentifyIn, bench: ControlDep) -> dict[str, Any]:
+    return jsonable(run(lambda: experiments.identify(bench, body)))
+
+
+def _capture(bench: Bench, cap_id: int):
+    cap = bench.captures.get(cap_id)
+    if cap is None:
+        raise HTTPException(404, f"no capture {cap_id}")
+    return cap

@@ -1,0 +1,116 @@
+"""The FastAPI application: lifespan (bench + viser GUI), middleware, docs page, routes."""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import AsyncIterator, Callable
+from importlib import resources
+from typing import Any
+
+from fastapi import FastAPI, Request
+from fastapi.responses import HTMLResponse, JSONResponse, RedirectResponse
+from starlette.concurrency import run_in_threadpool
+
+from dashboard import api, stream
+from dashboard.bench import Bench
+from dashboard.config import BenchConfig
+from dashboard.security import allowed_origins, token_ok
+
+BenchOpener = Callable[[BenchConfig], contextlib.AbstractContextManager[Bench]]
+
+STATE_CHANGING = {"POST", "PUT", "PATCH", "DELETE"}
+
+
+def create_app(
+    config: BenchConfig,
+    *,
+    open_bench: BenchOpener | None = None,
+    gui: bool = True,
+    on_ready: Callable[[FastAPI], None] | None = None,
+) -> FastAPI:
+    """Build the app. The lifespan opens the bench (``open_bench``, default
+    :func:`dashboard.virtual.open_bench`) and starts the viser GUI on ``config.gui_port``."""
+    config.validate()
+    if open_bench is None:
+        from dashboard.virtual import open_bench as default_open
+
+        open_bench = default_open
+
+    @contextlib.asynccontextmanager
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        with contextlib.ExitStack() as stack:
+            try:
+                bench = await run_in_threadpool(lambda: stack.enter_context(open_bench(config)))
+            except Exception as exc:
+                app.state.startup_error = f"cannot open the bench: {exc}"
+                raise
+            stack.callback(bench.close)
+            app.state.bench = bench
+            app.state.gui = None
+            if gui:
+                from dashboard.gui import BenchGui
+
+                g = BenchGui(bench, config)
+                await run_in_threadpool(g.start)
+                stack.callback(g.stop)
+                app.state.gui = g
+            ports = [config.api_port] + ([app.state.gui.port] if app.state.gui else [])
+            app.state.origins = allowed_origins(config.host, ports, config.extra_origins)
+            if app.state.gui is not None:
+                app.state.gui.origins = app.state.origins
+            if on_ready is not None:
+                on_ready(app)
+            yield
+
+    app = FastAPI(
+        title="drive-dashboard",
+        version="0.1.0",
+        description=(
+            "Browser bench for the 14.8 µH BLDC drive (Valle et al. 2020): REST mirror of the GUI."
+        ),
+        lifespan=lifespan,
+        docs_url=None,
+        redoc_url=None,
+    )
+    app.state.config = config
+    app.state.origins = allowed_origins(config.host, [config.api_port], config.extra_origins)
+
+    @app.middleware("http")
+    async def guard(request: Request, call_next: Any):
+        path = request.url.path
+        if config.token is not None:
+            given = request.headers.get("authorization", "").removeprefix("Bearer ").strip() or None
+            given = given or request.query_params.get("token")
+            if not token_ok(config.token, given):
+                return JSONResponse({"detail": "access token required"}, status_code=401)
+        if request.method in STATE_CHANGING and path.startswith("/api/"):
+            ctype = request.headers.get("content-type", "").split(";")[0].strip().lower()
+            if ctype != "application/json":
+                return JSONResponse(
+                    {
+                        "detail": "state-changing calls take a JSON body "
+                        "(Content-Type: application/json)"
+                    },
+                    status_code=415,
+                )
+            origin = request.headers.get("origin")
+            if origin is not None and origin.rstrip("/") not in app.state.origins:
+                return JSONResponse({"detail": f"origin {origin} not allowed"}, status_code=403)
+        return await call_next(request)
+
+    @app.get("/", include_in_schema=False)
+    def index(request: Request) -> Any:
+        g = getattr(request.app.state, "gui", None)
+        if g is None:
+            return RedirectResponse("/docs")
+        host = request.url.hostname or config.host
+        return RedirectResponse(f"http://{host}:{g.port}/")
+
+    @app.get("/docs", include_in_schema=False)
+    def docs() -> HTMLResponse:
+        page = resources.files("dashboard").joinpath("static/docs.html").read_text("utf-8")
+        return HTMLResponse(page)
+
+    app.include_router(api.router)
+    app.include_router(stream.router)
+    return app

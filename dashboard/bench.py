@@ -1,0 +1,266 @@
+"""The bench: one drive (through drive_link only), the control lease and the bench's own state.
+
+The REST API and the viser GUI both call this class; it serialises drive commands with one lock so
+that two clients never interleave a half-applied gain set or a capture. Units: rpm, A, s, H, Ω.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from dashboard.security import ControlLease
+
+#: The staged gain-set names (0x20F0) → the live object each one mirrors (docs/contracts.md §1).
+LIVE_NAMES: dict[str, str] = {
+    "type": "current_controller.type",
+    "L_c": "current_controller.L_c",
+    "R_c": "current_controller.R_c",
+    "k_p": "current_controller.k_p",
+    "k_i": "current_controller.k_i",
+    "T_BT": "current_controller.T_BT",
+    "T_DD": "current_controller.T_DD",
+    "T_SD": "current_controller.T_SD",
+    "V_G": "current_controller.V_G",
+    "emf_feedforward": "current_controller.emf_feedforward",
+    "speed_k_p": "speed_controller.k_p",
+    "speed_k_i": "speed_controller.k_i",
+    "speed_current_limit": "speed_controller.current_limit",
+}
+
+#: Live plot signals in drive_link.live.window(), keyed as the drive names them.
+LIVE_SIGNALS = ("speed", "speed_ref", "i_p", "i_p_ref")
+
+
+def as_dict(obj: Any) -> dict[str, Any]:
+    """A plain dict of a dataclass / mapping / object with attributes (for JSON)."""
+    if obj is None:
+        return {}
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        return dataclasses.asdict(obj)
+    if isinstance(obj, dict):
+        return dict(obj)
+    if hasattr(obj, "_asdict"):
+        return dict(obj._asdict())
+    return {k: v for k, v in vars(obj).items() if not k.startswith("_")}
+
+
+def jsonable(x: Any) -> Any:
+    """numpy scalars/arrays and NaN/inf → JSON-safe Python values."""
+    if isinstance(x, dict):
+        return {str(k): jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [jsonable(v) for v in x]
+    if isinstance(x, np.ndarray):
+        return jsonable(x.tolist())
+    if isinstance(x, (np.floating, float)):
+        f = float(x)
+        return f if np.isfinite(f) else None
+    if isinstance(x, (np.integer,)):
+        return int(x)
+    if isinstance(x, complex):
+        return [x.real, x.imag]
+    return x
+
+
+@dataclasses.dataclass
+class Capture:
+    """One recorded data set kept for download: equally long columns, "t" (s) first."""
+
+    id: int
+    kind: str
+    columns: dict[str, np.ndarray]
+    meta: dict[str, Any]
+    created: float = dataclasses.field(default_factory=time.time)
+
+    def summary(self) -> dict[str, Any]:
+        n = len(next(iter(self.columns.values()))) if self.columns else 0
+        return {
+            "id": self.id,
+            "kind": self.kind,
+            "columns": list(self.columns),
+            "samples": n,
+            "created": self.created,
+            "meta": jsonable(self.meta),
+        }
+
+
+class Bench:
+    """One drive on one bus, shared by every client of the dashboard.
+
+    drive: a connected ``drive_link.Drive``. description: what to show as "bus" (e.g.
+    "socketcand 127.0.0.1:29536 (virtual)"). virtual: whether the virtual-drive-only objects
+    (sim_load, sim_info) may be used.
+    """
+
+    def __init__(self, drive: Any, *, description: str, node_id: int, virtual: bool) -> None:
+        self.drive = drive
+        self.description = description
+        self.node_id = node_id
+        self.virtual = virtual
+        self.lease = ControlLease()
+        self.lock = threading.RLock()  # one drive command sequence at a time
+        self.speed_setpoint = 0.0  # rpm, last commanded
+        self.current_setpoint = 0.0  # A, last commanded
+        self.T_load = 0.0
+        self.identified: dict[str, float] | None = None  # {"a","b","Ts"} of the last fit
+        self.captures: dict[int, Capture] = {}
+        self._ids = itertools.count(1)
+        self._sequence: threading.Thread | None = None
+        self._sequence_stop = threading.Event()
+        self.last_step_t: float | None = None  # time.monotonic() of the last setpoint step
+        self.listeners: list[Callable[[str, dict], None]] = []
+        self.busy: str | None = None  # a long operation under way (capture, identify ...)
+
+    # ---------------------------------------------------------------- events
+    def emit(self, kind: str, data: dict | None = None) -> None:
+        """Tell the GUI / streams about something that happened (gains applied, capture ...)."""
+        for cb in list(self.listeners):
+            try:
+                cb(kind, data or {})
+            except Exception:  # a broken listener must not break a drive command
+                pass
+
+    # ---------------------------------------------------------------- state
+    def state(self) -> dict[str, Any]:
+        """Connection and drive state for display (values as the drive reports them)."""
+        d = self.drive
+        stats = {}
+        try:
+            stats = as_dict(d.live.stats)
+        except Exception as exc:  # pragma: no cover - shown to the user
+            stats = {"error": str(exc)}
+        holder = self.lease.holder
+        out: dict[str, Any] = {
+            "bus": self.description,
+            "node_id": self.node_id,
+            "virtual": self.virtual,
+            "nmt_state": _safe(lambda: d.nmt_state),
+            "state": _safe(lambda: d.state),
+            "mode": _safe(lambda: d.mode),
+            "speed_setpoint": self.speed_setpoint,
+            "current_setpoint": self.current_setpoint,
+            "T_load": self.T_load,
+            "emcy": [jsonable(as_dict(e)) for e in _safe(lambda: list(d.emcy_history), [])],
+            "live": jsonable(stats),
+            "controller": holder.public() if holder else None,
+            "busy": self.busy,
+            "sequence_running": self._sequence is not None and self._sequence.is_alive(),
+            "identified": self.identified,
+        }
+        return out
+
+    def live(self, seconds: float) -> dict[str, np.ndarray]:
+        """The last ``seconds`` of streamed values ("t" in s plus the signals)."""
+        return self.drive.live.window(seconds)
+
+    # ---------------------------------------------------------------- commands
+    def command(self, name: str) -> None:
+        """enable / disable / quick_stop / fault_reset (CiA 402)."""
+        with self.lock:
+            if name == "enable":
+                self.drive.enable(timeout=2.0)
+            elif name == "disable":
+                self.stop_sequence()
+                self.drive.disable()
+            elif name == "quick_stop":
+                self.stop_sequence()
+                self.drive.quick_stop()
+            elif name == "fault_reset":
+                self.drive.fault_reset()
+            else:
+                raise ValueError(f"unknown command {name!r}")
+        self.emit("state")
+
+    def set_mode(self, mode: str) -> None:
+        with self.lock:
+            self.drive.set_mode(mode)
+        self.emit("state")
+
+    def set_speed(self, rpm: float) -> None:
+        """Speed setpoint (rpm); switches to speed mode if needed."""
+        with self.lock:
+            if _safe(lambda: self.drive.mode) != "speed":
+                self.drive.set_mode("speed")
+            self.drive.set_speed(rpm)
+            self.speed_setpoint = float(rpm)
+            self.last_step_t = time.monotonic()
+        self.emit("setpoint", {"rpm": rpm})
+
+    def step_speed(self, delta_rpm: float, limit: float = 4000.0) -> float:
+        """Add ``delta_rpm`` to the speed setpoint (clamped to ±limit); returns the new setpoint."""
+        target = float(np.clip(self.speed_setpoint + delta_rpm, -limit, limit))
+        self.set_speed(target)
+        return target
+
+    def set_current(self, amps: float) -> None:
+        """Pseudo-current setpoint i_p* (A); switches to current mode if needed."""
+        with self.lock:
+            if _safe(lambda: self.drive.mode) != "current":
+                self.drive.set_mode("current")
+            self.drive.set_current(amps)
+            self.current_setpoint = float(amps)
+            self.last_step_t = time.monotonic()
+        self.emit("setpoint", {"i_p_ref": amps})
+
+    def set_load(self, T_load: float) -> None:
+        """Load-torque step on the virtual drive (N·m)."""
+        if not self.virtual:
+            raise ValueError("load steps exist only on the virtual drive")
+        with self.lock:
+            self.drive.write("sim_load.T_load", float(T_load))
+            self.T_load = float(T_load)
+        self.emit("load", {"T_load": T_load})
+
+    # ---------------------------------------------------------------- sequences
+    def start_sequence(self, steps: list[tuple[float, float]]) -> None:
+        """Run (at_s, rpm) speed setpoints in the background; a new one replaces a running one."""
+        self.stop_sequence()
+        self._sequence_stop.clear()
+
+        def run() -> None:
+            t0 = time.monotonic()
+            for at_s, rpm in steps:
+                if self._sequence_stop.wait(max(0.0, t0 + at_s - time.monotonic())):
+                    return
+                try:
+                    self.set_speed(rpm)
+                except Exception as exc:
+                    self.emit("error", {"message": f"sequence stopped: {exc}"})
+                    return
+            self.emit("sequence_done")
+
+        self._sequence = threading.Thread(target=run, name="speed-sequence", daemon=True)
+        self._sequence.start()
+
+    def stop_sequence(self) -> None:
+        self._sequence_stop.set()
+        seq = self._sequence
+        if seq is not None and seq is not threading.current_thread():
+            seq.join(timeout=1.0)
+        self._sequence = None
+
+    # ---------------------------------------------------------------- captures
+    def add_capture(self, kind: str, columns: dict[str, np.ndarray], meta: dict) -> Capture:
+        cap = Capture(next(self._ids), kind, {k: np.asarray(v) for k, v in columns.items()}, meta)
+        self.captures[cap.id] = cap
+        for old in sorted(self.captures)[:-20]:  # keep the last 20
+            del self.captures[old]
+        self.emit("capture", cap.summary())
+        return cap
+
+    def close(self) -> None:
+        self.stop_sequence()
+
+
+def _safe(fn: Callable[[], Any], default: Any = None) -> Any:
+    try:
+        return fn()
+    except Exception:
+        return default

@@ -1,0 +1,155 @@
+"""``drive-dashboard``: FastAPI (REST, WebSocket, docs) and the viser GUI in one process.
+
+``drive-dashboard --virtual`` starts the loopback hub and a virtual drive too, so one command
+gives a working bench. Binds 127.0.0.1; ``--allow-remote --token T`` exposes the REST API (the
+GUI stays on 127.0.0.1: viser has no authentication; reach it through an SSH tunnel).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import socket
+import sys
+from collections.abc import Sequence
+
+from dashboard.config import BenchConfig
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="drive-dashboard", description=__doc__.splitlines()[0])
+    p.add_argument(
+        "--virtual",
+        action="store_true",
+        help="start the loopback hub and a virtual drive (the bench without hardware)",
+    )
+    p.add_argument(
+        "--virtual-subprocess",
+        action="store_true",
+        help="with --virtual: run the virtual drive as a child process",
+    )
+    p.add_argument(
+        "--speed-factor",
+        type=float,
+        default=1.0,
+        help="virtual drive: simulated seconds per wall-clock second (default 1)",
+    )
+    p.add_argument(
+        "--hub-port",
+        type=int,
+        default=0,
+        help="virtual: TCP port of the loopback hub (default: any free)",
+    )
+    p.add_argument("--interface", help="python-can interface of the real bus (e.g. socketcan)")
+    p.add_argument("--channel", help="python-can channel (e.g. can0)")
+    p.add_argument("--bitrate", type=int, default=1_000_000, help="bit/s (default 1000000)")
+    p.add_argument("--node", type=int, default=1, help="CANopen node-ID of the drive (default 1)")
+    p.add_argument("--host", default="127.0.0.1", help="API bind address (default 127.0.0.1)")
+    p.add_argument("--port", type=int, default=8000, help="API port (default 8000)")
+    p.add_argument("--gui-port", type=int, default=8080, help="GUI port (default 8080; 0 = any)")
+    p.add_argument(
+        "--allow-remote", action="store_true", help="allow a non-loopback --host (needs --token)"
+    )
+    p.add_argument(
+        "--token",
+        default=os.environ.get("DRIVE_DASHBOARD_TOKEN"),
+        help="access token for the API (env DRIVE_DASHBOARD_TOKEN)",
+    )
+    return p
+
+
+def _port_free(host: str, port: int) -> bool:
+    if port == 0:
+        return True
+    with socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET) as s:
+        try:
+            s.bind((host, port))
+        except OSError:
+            return False
+    return True
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    config = BenchConfig(
+        host=args.host,
+        api_port=args.port,
+        gui_port=args.gui_port,
+        virtual=args.virtual,
+        virtual_subprocess=args.virtual_subprocess,
+        speed_factor=args.speed_factor,
+        hub_port=args.hub_port,
+        interface=args.interface,
+        channel=args.channel,
+        bitrate=args.bitrate,
+        node_id=args.node,
+        allow_remote=args.allow_remote,
+        token=args.token,
+    )
+    try:
+        config.validate()
+    except ValueError as exc:
+        print(f"drive-dashboard: error: {exc}", file=sys.stderr)
+        return 2
+    if not _port_free(config.host, config.api_port):
+        print(
+            f"drive-dashboard: error: port {config.api_port} on {config.host} is busy "
+            "(choose another with --port)",
+            file=sys.stderr,
+        )
+        return 2
+    if config.gui_port and not _port_free("127.0.0.1", config.gui_port):
+        print(
+            f"drive-dashboard: error: GUI port {config.gui_port} is busy "
+            "(choose another with --gui-port, or 0 for any)",
+            file=sys.stderr,
+        )
+        return 2
+
+    import uvicorn
+
+    from dashboard.app import create_app
+
+    def ready(app) -> None:
+        gui = app.state.gui
+        api = f"http://{_url_host(config.host)}:{config.api_port}"
+        print(f"open http://127.0.0.1:{gui.port}/", flush=True)
+        print(
+            f"  (REST API {api}/api, docs {api}/docs; bus: {app.state.bench.description}; "
+            "Ctrl-C stops)",
+            flush=True,
+        )
+
+    app = create_app(config, on_ready=ready)
+    server = uvicorn.Server(
+        uvicorn.Config(
+            app,
+            host=config.host,
+            port=config.api_port,
+            log_level="warning",
+            workers=1,
+            lifespan="on",
+        )
+    )
+    try:
+        server.run()
+    except KeyboardInterrupt:
+        pass
+    if not getattr(server, "started", False):
+        reason = getattr(app.state, "startup_error", None) or "could not start"
+        print(f"drive-dashboard: error: {reason}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def _url_host(host: str) -> str:
+    return f"[{host}]" if ":" in host else host
+
+
+if __name__ == "__main__":
+    sys.exit(main())

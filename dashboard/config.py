@@ -1,0 +1,67 @@
+"""Configuration of one bench session (what `drive-dashboard` was asked to do)."""
+
+from __future__ import annotations
+
+import ipaddress
+from dataclasses import dataclass, field
+
+LOOPBACK_HOSTS = ("127.0.0.1", "localhost", "::1")
+
+
+def is_loopback(host: str) -> bool:
+    """True if ``host`` names an address on this machine only."""
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+@dataclass
+class BenchConfig:
+    """Everything the dashboard needs to open its bench.
+
+    host/api_port: FastAPI bind (127.0.0.1 unless ``allow_remote``); gui_port: viser bind
+    (0 = any free port).
+    interface/channel/bitrate/node_id: the python-can bus and CANopen node when not ``virtual``.
+    speed_factor: virtual drive only, simulated seconds per wall-clock second.
+    virtual_subprocess: run the virtual drive as ``virtual-drive run`` in a child process.
+    hub_port: TCP port of the loopback hub on 127.0.0.1 (0 = any free port).
+    token: access token; required (and checked on every request) when ``allow_remote``.
+    """
+
+    host: str = "127.0.0.1"
+    api_port: int = 8000
+    gui_port: int = 8080
+    virtual: bool = False
+    interface: str | None = None
+    channel: str | None = None
+    bitrate: int = 1_000_000
+    node_id: int = 1
+    speed_factor: float = 1.0
+    virtual_subprocess: bool = False
+    hub_port: int = 0
+    allow_remote: bool = False
+    token: str | None = None
+    live_window_s: float = 4.0
+    gui_rate_hz: float = 25.0
+    stream_rate_hz: float = 20.0
+    extra_origins: list[str] = field(default_factory=list)
+
+    def validate(self) -> None:
+        """Raise ValueError (one line) when the combination is unsafe or incomplete."""
+        if not is_loopback(self.host) and not self.allow_remote:
+            raise ValueError(
+                f"refusing to bind {self.host}: remote binding needs --allow-remote and --token"
+            )
+        if self.allow_remote and not self.token:
+            raise ValueError("--allow-remote needs an access token (--token)")
+        if self.token is not None and len(self.token) < 12:
+            raise ValueError("--token must be at least 12 characters")
+        if not 1 <= self.node_id <= 127:
+            raise ValueError(f"node id {self.node_id} is outside 1..127")
+        if self.speed_factor <= 0:
+            raise ValueError("--speed-factor must be > 0")
+        if not self.virtual and self.interface is None:
+            raise ValueError("give --virtual, or --interface (and --channel) of the CAN bus")

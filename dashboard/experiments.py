@@ -1,0 +1,241 @@
+"""Recorder-based experiments: a trace capture, the current step test (Fig. 13, with the model's
+predicted response) and the speed-model identification (Fig. 16). Times in s, currents in A,
+speed in rpm; the loop period Ts is 20 µs (fs = 50 kHz)."""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import Any
+
+import numpy as np
+
+from dashboard.bench import Bench, Capture, as_dict
+from dashboard.models import CurrentStepIn, IdentifyIn, TraceIn
+from dashboard.tuning import read_gains
+from drive_link import Trigger, design, metrics
+from drive_link import identify as ident
+
+TS = 20e-6  #: loop period, s
+
+
+@contextmanager
+def _busy(bench: Bench, what: str) -> Iterator[None]:
+    if bench.busy:
+        raise RuntimeError(f"busy: {bench.busy} under way")
+    bench.busy = what
+    bench.emit("busy", {"what": what})
+    try:
+        yield
+    finally:
+        bench.busy = None
+        bench.emit("busy", {"what": None})
+
+
+def _column(trace: Any, name: str) -> np.ndarray:
+    for key in (name, f"measurements.{name}"):
+        if key in trace.signals:
+            return np.asarray(trace.signals[key], dtype=np.float64)
+    raise KeyError(f"trace has no channel {name} ({', '.join(trace.signals)})")
+
+
+def _short(name: str) -> str:
+    return name.removeprefix("measurements.")
+
+
+def _record(
+    bench: Bench,
+    channels: list[str],
+    *,
+    divider: int,
+    length: int,
+    pre_trigger: int,
+    trigger: Trigger,
+    action: Any = None,
+    timeout: float | None = None,
+) -> Any:
+    """Configure, arm, run ``action`` (e.g. a setpoint step), wait, upload; returns the Trace."""
+    rec = bench.drive.trace
+    rec.configure(channels, divider, length, pre_trigger, trigger)
+    rec.arm()
+    if pre_trigger:  # let the pre-trigger buffer fill before the step
+        time.sleep(min(2.0, pre_trigger * divider * TS / _speed_factor(bench) + 0.02))
+    if action is not None:
+        action()
+    if timeout is None:
+        timeout = 3.0 + 3.0 * length * divider * TS / _speed_factor(bench)
+    rec.wait(timeout)
+    return rec.upload()
+
+
+def _speed_factor(bench: Bench) -> float:
+    if not bench.virtual:
+        return 1.0
+    try:
+        f = float(bench.drive.read("sim_info.speed_factor"))
+        return f if f > 0 else 1.0
+    except Exception:
+        return 1.0
+
+
+def capture(bench: Bench, body: TraceIn) -> Capture:
+    """One trace as configured by ``body``; adds ī_p (moving average) when i_p is recorded."""
+    trig = Trigger(
+        mode=body.trigger,
+        source=body.channels[0],
+        level=body.trigger_level or 0.0,
+        edge=body.trigger_edge,
+    )
+    action = None
+    if body.trigger == "setpoint_step" and body.step_to_A is not None:
+
+        def action() -> None:
+            bench.set_current(body.step_to_A)
+
+    with bench.lock, _busy(bench, "capture"):
+        tr = _record(
+            bench,
+            list(body.channels),
+            divider=body.divider,
+            length=body.length,
+            pre_trigger=body.pre_trigger,
+            trigger=trig,
+            action=action,
+        )
+    cols: dict[str, np.ndarray] = {"t": np.asarray(tr.t, dtype=np.float64)}
+    for name, v in tr.signals.items():
+        cols[_short(name)] = np.asarray(v, dtype=np.float64)
+    if "i_p" in cols:
+        cols["i_p_avg"] = metrics.moving_average(cols["i_p"], body.average_samples)
+    meta = {
+        "divider": tr.divider,
+        "dt_s": tr.dt,
+        "trigger_index": tr.trigger_index,
+        "trigger": body.trigger,
+        "average_samples": body.average_samples,
+    }
+    return bench.add_capture("trace", cols, meta)
+
+
+def current_step(bench: Bench, body: CurrentStepIn, average_samples: int = 1) -> dict[str, Any]:
+    """Current step from_A → to_A in current mode, recorded at 50 kHz (divider 1), with its
+    metrics and the model's predicted response (drive_link.design.predicted_step) overlaid."""
+    if body.from_A == body.to_A:
+        raise ValueError("from_A and to_A must differ")
+    g = read_gains(bench)
+    n_post = max(10, round(body.duration_ms * 1e-3 / TS))
+    pre = max(5, n_post // 10)
+    length = pre + n_post
+    if 2 * length > 16384:
+        raise ValueError("duration too long for the recorder at 50 kHz")
+    with bench.lock, _busy(bench, "current step"):
+        bench.set_current(body.from_A)
+        if not str(bench.drive.state).upper().startswith("OPERATION ENABLED"):
+            bench.drive.enable(timeout=2.0)
+        time.sleep(0.05 / _speed_factor(bench) + 0.02)
+        tr = _record(
+            bench,
+            ["measurements.i_p", "measurements.i_p_ref"],
+            divider=1,
+            length=length,
+            pre_trigger=pre,
+            trigger=Trigger(mode="setpoint_step"),
+            action=lambda: bench.set_current(body.to_A),
+        )
+    t = np.asarray(tr.t, dtype=np.float64)
+    i_p = _column(tr, "i_p")
+    i_ref = _column(tr, "i_p_ref")
+    pred = design.predicted_step(
+        g["type"],
+        n_samples=int(np.sum(t >= 0)),
+        i_start=body.from_A,
+        i_final=body.to_A,
+        R=g["motor_R"],
+        L=g["motor_L"],
+        L_c=g["L_c"],
+        R_c=g["R_c"],
+        k_p=g["k_p"],
+        k_i=g["k_i"],
+    )
+    model = np.full(t.size, float(body.from_A))
+    model[t >= 0] = pred.i_p[: int(np.sum(t >= 0))]
+    avg = metrics.moving_average(i_p, average_samples)
+    m = metrics.step_metrics(t, avg, reference=body.to_A, t_step=0.0, y_initial=body.from_A)
+    post = t >= 0
+    rms = float(np.sqrt(np.mean((avg[post] - model[post]) ** 2)))
+    cap = bench.add_capture(
+        "current_step",
+        {"t": t, "i_p": i_p, "i_p_avg": avg, "i_p_ref": i_ref, "model": model},
+        {
+            "controller": g["type"],
+            "from_A": body.from_A,
+            "to_A": body.to_A,
+            "L_c": g["L_c"],
+            "R_c": g["R_c"],
+            "average_samples": average_samples,
+        },
+    )
+    md = as_dict(m)
+    return {
+        "capture": cap.summary(),
+        "controller": g["type"],
+        "metrics": {
+            "rise_time_s": md["rise_time"],
+            "settling_time_s": md["settling_time"],
+            "overshoot_pct": md["overshoot_pct"],
+            "steady_state_error_A": md["steady_state_error"],
+            "y_final_A": md["y_final"],
+        },
+        "model_rms_error_A": rms,
+        "model_stable": bool(pred.stable),
+    }
+
+
+def identify(bench: Bench, body: IdentifyIn) -> dict[str, Any]:
+    """Current step in current mode, trace of i_p and speed, least-squares fit of
+    G(z) = b/(z − a) at the loop rate (drive_link.identify); the fit is kept for the IP design."""
+    if body.from_A == body.to_A:
+        raise ValueError("from_A and to_A must differ")
+    divider = max(1, math.ceil(body.duration_s / (8000 * TS)))
+    n_post = round(body.duration_s / (divider * TS))
+    pre = max(10, n_post // 20)
+    length = min(8192, pre + n_post)
+    with bench.lock, _busy(bench, "identification"):
+        bench.set_current(body.from_A)
+        if not str(bench.drive.state).upper().startswith("OPERATION ENABLED"):
+            bench.drive.enable(timeout=2.0)
+        time.sleep(0.1 / _speed_factor(bench) + 0.02)
+        tr = _record(
+            bench,
+            ["measurements.i_p", "measurements.speed"],
+            divider=divider,
+            length=length,
+            pre_trigger=pre,
+            trigger=Trigger(mode="setpoint_step"),
+            action=lambda: bench.set_current(body.to_A),
+        )
+    t = np.asarray(tr.t, dtype=np.float64)
+    i_p = _column(tr, "i_p")
+    speed = _column(tr, "speed")
+    fit = ident.fit_first_order(i_p, speed, Ts=tr.dt)
+    model = ident.simulate_first_order(fit.a_D, fit.b_D, i_p, speed[0], fit.offset)
+    bench.identified = {"a": fit.a, "b": fit.b, "Ts": TS, "r2": fit.r2}
+    cap = bench.add_capture(
+        "identification",
+        {"t": t, "i_p": i_p, "speed": speed, "model": model},
+        {"a": fit.a, "b": fit.b, "divider": divider, "r2": fit.r2},
+    )
+    bench.emit("identified", bench.identified)
+    return {
+        "capture": cap.summary(),
+        "a": fit.a,
+        "b": fit.b,
+        "r2": fit.r2,
+        "rms_error_rpm": fit.rms,
+        "time_constant_s": fit.time_constant,
+        "dc_gain_rpm_per_A": fit.dc_gain,
+        "Ts": TS,
+        "divider": divider,
+    }

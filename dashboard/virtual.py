@@ -1,0 +1,115 @@
+"""Open the bench: a real bus and node, or (``--virtual``) the loopback hub plus a virtual drive.
+
+The virtual drive runs in this process (``VirtualDrive`` on its own socketcand connection to the
+hub) or, with ``subprocess=True``, as ``virtual-drive run`` in a child process; either way the
+dashboard reaches it only through the hub, exactly like a real drive on a bus.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+
+from dashboard.bench import Bench
+from dashboard.config import BenchConfig
+
+
+@contextlib.contextmanager
+def open_bench(config: BenchConfig) -> Iterator[Bench]:
+    """The bench for ``config`` (closed on exit, with the hub and virtual drive if started)."""
+    from drive_link import Drive
+
+    with contextlib.ExitStack() as stack:
+        if config.virtual:
+            port = stack.enter_context(_virtual_bus(config))
+            drive = Drive.connect(
+                host="127.0.0.1", port=port, bitrate=config.bitrate, node_id=config.node_id
+            )
+            where = "in-process" if not config.virtual_subprocess else "subprocess"
+            desc = f"loopback hub 127.0.0.1:{port} (virtual drive, {where})"
+        else:
+            drive = Drive.connect(
+                interface=config.interface,
+                channel=config.channel,
+                bitrate=config.bitrate,
+                node_id=config.node_id,
+            )
+            desc = f"{config.interface} {config.channel or ''}".strip()
+        stack.callback(drive.close)
+        bench = Bench(drive, description=desc, node_id=config.node_id, virtual=config.virtual)
+        bench.hub_port = port if config.virtual else None
+        stack.callback(bench.close)
+        yield bench
+
+
+@contextlib.contextmanager
+def _virtual_bus(config: BenchConfig) -> Iterator[int]:
+    """Start the hub and a virtual drive on it; yields the hub's TCP port on 127.0.0.1."""
+    from virtual_drive.hub import Hub
+
+    with contextlib.ExitStack() as stack:
+        hub = Hub(port=config.hub_port, bitrate=config.bitrate)
+        hub.start()
+        stack.callback(hub.stop)
+        if config.virtual_subprocess:
+            stack.enter_context(_drive_process(config, hub.port))
+        else:
+            stack.enter_context(_drive_in_process(config, hub.port))
+        yield hub.port
+
+
+@contextlib.contextmanager
+def _drive_in_process(config: BenchConfig, port: int) -> Iterator[None]:
+    import can
+
+    from virtual_drive.node import VirtualDrive
+
+    bus = can.Bus(
+        interface="socketcand", host="127.0.0.1", port=port, channel="vcan0", tcp_tune=True
+    )
+    try:
+        vd = VirtualDrive(bus, config.node_id, speed_factor=config.speed_factor)
+        start = getattr(vd, "start", None)
+        if callable(start):
+            start()
+        try:
+            yield
+        finally:
+            vd.stop() if hasattr(vd, "stop") else vd.close()
+    finally:
+        bus.shutdown()
+
+
+@contextlib.contextmanager
+def _drive_process(config: BenchConfig, port: int) -> Iterator[None]:
+    cmd = [
+        sys.executable,
+        "-m",
+        "virtual_drive.cli",
+        "run",
+        "--host",
+        "127.0.0.1",
+        "--port",
+        str(port),
+        "--node",
+        str(config.node_id),
+        "--speed-factor",
+        str(config.speed_factor),
+    ]
+    proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, env={**os.environ})
+    try:
+        time.sleep(0.3)
+        if proc.poll() is not None:
+            raise RuntimeError(f"virtual drive exited at start (status {proc.returncode})")
+        yield
+    finally:
+        proc.terminate()
+        try:
+            proc.wait(timeout=5)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
