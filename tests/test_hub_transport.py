@@ -1,0 +1,147 @@
+"""Hub transport between separate processes, with stock python-can socketcand clients.
+
+* 10,000 frames from one process to another through the hub: all arrive, in order, none echoed.
+* Bit-rate pacing: a burst of N identical frames whose length is hand-counted (121 bits, see
+  test_hub_frame_bits) takes N × 121 / bitrate seconds at the receiver, within 10 %.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from virtual_drive.hub import Hub
+
+pytestmark = pytest.mark.timeout(60)
+
+# A python-can client run as its own process. argv: role port count pattern
+CLIENT = r"""
+import json, sys, time
+import can
+
+role, port, count, pattern = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
+READY, DONE = 0x7E0, 0x7E1
+
+def frame(i):
+    if pattern == "car":
+        return can.Message(arbitration_id=0x0C1, data=bytes.fromhex("4001087500000000"),
+                           is_extended_id=False)
+    n = 8 if i % 3 else i % 9
+    data = (i.to_bytes(4, "big") + ((i * 2654435761) % 2**32).to_bytes(4, "big"))[:n]
+    if i % 7 == 0:
+        return can.Message(arbitration_id=0x1000000 + i, data=data, is_extended_id=True)
+    return can.Message(arbitration_id=0x100 + i % 0x500, data=data, is_extended_id=False)
+
+bus = can.Bus(interface="socketcand", host="127.0.0.1", port=port, channel="vcan0",
+              tcp_tune=True)
+out = {}
+if role == "receiver":
+    time.sleep(0.1)  # past the hub's handshake hold
+    bus.send(can.Message(arbitration_id=READY, data=b"", is_extended_id=False))
+    got, walls, stamps = [], [], []
+    deadline = time.time() + 30
+    while len(got) < count and time.time() < deadline:
+        m = bus.recv(1.0)
+        if m is None:
+            continue
+        walls.append(time.time())
+        stamps.append(m.timestamp)
+        got.append([m.arbitration_id, m.is_extended_id, m.data.hex(), m.is_error_frame])
+    bus.send(can.Message(arbitration_id=DONE, data=b"", is_extended_id=False))
+    out = {"frames": got, "first_wall": walls[0] if walls else None,
+           "last_wall": walls[-1] if walls else None,
+           "first_stamp": stamps[0] if stamps else None,
+           "last_stamp": stamps[-1] if stamps else None}
+else:
+    m = bus.recv(20.0)
+    assert m is not None and m.arbitration_id == READY, m
+    t_start = time.time()
+    for i in range(count):
+        bus.send(frame(i))
+    t_sent = time.time()
+    others = []
+    while True:
+        m = bus.recv(30.0)
+        if m is None or m.arbitration_id == DONE:
+            break
+        others.append(m.arbitration_id)
+    out = {"t_start": t_start, "t_sent": t_sent, "others": others}
+bus.shutdown()
+print(json.dumps(out))
+"""
+
+
+def _expected(i: int) -> list:
+    n = 8 if i % 3 else i % 9
+    data = (i.to_bytes(4, "big") + ((i * 2654435761) % 2**32).to_bytes(4, "big"))[:n]
+    if i % 7 == 0:
+        return [0x1000000 + i, True, data.hex(), False]
+    return [0x100 + i % 0x500, False, data.hex(), False]
+
+
+def _run_pair(port: int, count: int, pattern: str) -> tuple[dict, dict]:
+    procs = {
+        role: subprocess.Popen(
+            [sys.executable, "-c", CLIENT, role, str(port), str(count), pattern],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        for role in ("sender", "receiver")
+    }
+    results = {}
+    for role, p in procs.items():
+        try:
+            out, err = p.communicate(timeout=50)
+        except subprocess.TimeoutExpired:
+            for q in procs.values():
+                q.kill()
+            raise
+        assert p.returncode == 0, f"{role} failed: {err[-2000:]}"
+        results[role] = json.loads(out.strip().splitlines()[-1])
+    return results["sender"], results["receiver"]
+
+
+def test_ten_thousand_frames_between_processes_in_order_none_lost():
+    count = 10_000
+    with Hub(port=0) as hub:
+        sender, receiver = _run_pair(hub.port, count, "seq")
+        stats = hub.stats
+    got = receiver["frames"]
+    assert len(got) == count
+    assert got == [_expected(i) for i in range(count)]
+    assert sender["others"] == []  # the sender never hears its own frames
+    assert stats.frames_dropped == 0 and stats.frames_overrun == 0
+    assert stats.frames_forwarded == count + 2  # + READY and DONE
+    assert stats.protocol_errors == 0
+
+
+def test_pacing_matches_emulated_bit_rate_within_ten_percent():
+    count, bitrate, bits = 2000, 250_000, 121  # 121 bits: hand count in test_hub_frame_bits
+    frame_time = bits / bitrate
+    with Hub(port=0, bitrate=bitrate) as hub:
+        sender, receiver = _run_pair(hub.port, count, "car")
+    assert len(receiver["frames"]) == count
+    # the sender pushed the burst much faster than the bus can carry it ...
+    assert sender["t_sent"] - sender["t_start"] < 0.5 * count * frame_time
+    # ... so frames queued behind each other: first-to-last spacing is (N-1) frame times
+    wall_span = receiver["last_wall"] - receiver["first_wall"]
+    assert wall_span == pytest.approx((count - 1) * frame_time, rel=0.10)
+    stamp_span = receiver["last_stamp"] - receiver["first_stamp"]
+    assert stamp_span == pytest.approx((count - 1) * frame_time, abs=20e-6)
+    # and no frame arrived before the bus could have finished it
+    assert receiver["last_wall"] - sender["t_start"] >= count * frame_time - 1e-3
+
+
+def test_pacing_at_default_bit_rate_keeps_up_with_a_saturated_bus():
+    count, bits = 4000, 121
+    frame_time = bits / 1_000_000
+    with Hub(port=0) as hub:
+        _, receiver = _run_pair(hub.port, count, "car")
+    assert len(receiver["frames"]) == count
+    wall_span = receiver["last_wall"] - receiver["first_wall"]
+    # 8,264 frames/s: the hub must not fall behind the emulated bus by more than 10 %
+    assert wall_span == pytest.approx((count - 1) * frame_time, rel=0.10)
