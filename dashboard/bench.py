@@ -34,8 +34,13 @@ LIVE_NAMES: dict[str, str] = {
     "speed_current_limit": "speed_controller.current_limit",
 }
 
-#: Live plot signals in drive_link.live.window(), keyed as the drive names them.
-LIVE_SIGNALS = ("speed", "speed_ref", "i_p", "i_p_ref")
+#: Live plot signals in drive_link.live.window() (OD names of the TPDO2/TPDO3 objects).
+LIVE_SIGNALS = (
+    "measurements.speed",
+    "measurements.speed_ref",
+    "measurements.i_p",
+    "measurements.i_p_ref",
+)
 
 
 def as_dict(obj: Any) -> dict[str, Any]:
@@ -142,6 +147,7 @@ class Bench:
             "node_id": self.node_id,
             "virtual": self.virtual,
             "nmt_state": _safe(lambda: d.nmt_state),
+            "heartbeat_age_s": _safe(lambda: time.monotonic() - d.heartbeat.last_time),
             "state": _safe(lambda: d.state),
             "mode": _safe(lambda: d.mode),
             "speed_setpoint": self.speed_setpoint,
@@ -157,8 +163,8 @@ class Bench:
         return out
 
     def live(self, seconds: float) -> dict[str, np.ndarray]:
-        """The last ``seconds`` of streamed values ("t" in s plus the signals)."""
-        return self.drive.live.window(seconds)
+        """The last ``seconds`` of the plotted signals ("t" in s, host clock, plus the signals)."""
+        return self.drive.live.window(seconds, list(LIVE_SIGNALS))
 
     # ---------------------------------------------------------------- commands
     def command(self, name: str) -> None:
