@@ -1,0 +1,222 @@
+"""The hub against the socketcand rawmode protocol, CAN arbitration, and misbehaving clients.
+
+Truths: the socketcand protocol as documented by socketcand (doc/protocol.md) and as python-can's
+``socketcand`` client speaks it (``< hi >``, ``< open >``/``< ok >``, ``< rawmode >``/``< ok >``,
+``< send id len bytes >``, ``< frame id secs.usecs HEX >``, 3-digit standard / 8-digit extended
+ids); CAN 2.0 arbitration (the lowest identifier wins, a standard data frame beats an extended
+frame with the same base id because RTR=0 meets SRR=1).
+"""
+
+from __future__ import annotations
+
+import re
+import socket
+import time
+
+import can
+import pytest
+
+from virtual_drive.hub import Hub
+
+pytestmark = pytest.mark.timeout(30)
+
+FRAME_RE = re.compile(rb"< frame ([0-9A-F]+) (\d+)\.(\d{6}) ([0-9A-F]*) *>")
+
+
+class RawClient:
+    """A hand-driven socketcand client on a plain TCP socket."""
+
+    def __init__(self, port: int, handshake: bool = True, channel: str = "vcan0") -> None:
+        self.sock = socket.create_connection(("127.0.0.1", port), timeout=5)
+        self.buf = b""
+        if handshake:
+            assert self.read_element() == b"< hi >"
+            self.send(f"< open {channel} >")
+            assert self.read_element() == b"< ok >"
+            self.send("< rawmode >")
+            assert self.read_element() == b"< ok >"
+            time.sleep(Hub.handshake_hold_s + 0.02)
+
+    def send(self, text: str | bytes) -> None:
+        self.sock.sendall(text.encode() if isinstance(text, str) else text)
+
+    def read_element(self, timeout: float = 5.0) -> bytes | None:
+        """Next ``< ... >`` element (or None at timeout / EOF)."""
+        deadline = time.monotonic() + timeout
+        while b">" not in self.buf:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return None
+            self.sock.settimeout(left)
+            try:
+                chunk = self.sock.recv(4096)
+            except TimeoutError:
+                return None
+            except ConnectionError:
+                return None
+            if not chunk:
+                return None
+            self.buf += chunk
+        end = self.buf.index(b">") + 1
+        element, self.buf = self.buf[:end].strip(), self.buf[end:]
+        return element
+
+    def frames(self, timeout: float = 0.5) -> list[tuple[str, bytes]]:
+        """All frame elements arriving within ``timeout`` as (id text, data)."""
+        out = []
+        while (el := self.read_element(timeout)) is not None:
+            m = FRAME_RE.fullmatch(el)
+            if m:
+                out.append((m.group(1).decode(), bytes.fromhex(m.group(4).decode())))
+        return out
+
+    def closed_by_peer(self, timeout: float = 3.0) -> bool:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            self.sock.settimeout(0.2)
+            try:
+                chunk = self.sock.recv(4096)
+            except TimeoutError:
+                continue
+            except ConnectionError:
+                return True
+            if not chunk:
+                return True
+        return False
+
+    def close(self) -> None:
+        self.sock.close()
+
+
+@pytest.fixture
+def hub():
+    with Hub(port=0) as h:
+        yield h
+
+
+def test_handshake_and_frame_format(hub):
+    a = RawClient(hub.port)
+    b = RawClient(hub.port)
+    before = time.time()
+    a.send("< send 123 3 1 a ff >")
+    el = b.read_element()
+    m = FRAME_RE.fullmatch(el)
+    assert m, el
+    assert m.group(1) == b"123" and m.group(4) == b"010AFF"
+    stamp = int(m.group(2)) + int(m.group(3)) / 1e6
+    assert before - 0.01 <= stamp <= time.time() + 0.01
+    a.send("< send 1ABCDEF0 0 >")  # extended id: 8 hex digits, no data
+    m = FRAME_RE.fullmatch(b.read_element())
+    assert m and m.group(1) == b"1ABCDEF0" and m.group(4) == b""
+    a.send("< send 7 1 5 >")  # a short standard id is sent back as 3 digits
+    assert FRAME_RE.fullmatch(b.read_element()).group(1) == b"007"
+    assert a.frames(0.3) == []  # no echo to the sender
+    a.send("< echo >")
+    assert a.read_element() == b"< echo >"
+    a.close()
+    b.close()
+
+
+def test_channels_are_separate_buses(hub):
+    a = RawClient(hub.port, channel="vcan0")
+    b = RawClient(hub.port, channel="vcan0")
+    c = RawClient(hub.port, channel="vcan1")
+    a.send("< send 100 1 1 >")
+    assert b.frames(0.3) == [("100", b"\x01")]
+    assert c.frames(0.1) == []
+    for x in (a, b, c):
+        x.close()
+
+
+def test_arbitration_lowest_id_wins_and_sender_order_is_kept():
+    # 5 kbit/s: an 8-byte frame occupies the bus for ~24 ms, long enough to queue others behind.
+    with Hub(port=0, bitrate=5_000) as hub:
+        x, y, z = RawClient(hub.port), RawClient(hub.port), RawClient(hub.port)
+        x.send("< send 700 8 1 2 3 4 5 6 7 8 >")  # takes the idle bus at once
+        time.sleep(0.004)
+        x.send("< send 600 1 0 >< send 050 1 0 >")  # x's queue: 600 then 050 (FIFO per node)
+        y.send("< send 100 1 0 >< send 10000000 1 0 >")  # y: 100, then extended base 0x040
+        ids = [i for i, _ in z.frames(1.0)]
+        # bus free after 700: heads x=600, y=100 -> 100; then x=600 vs y=ext(base 0x040)
+        # -> ext wins (base 0x040 < 0x600); then 600, then 050.
+        assert ids == ["700", "100", "10000000", "600", "050"]
+        for c in (x, y, z):
+            c.close()
+
+
+def test_bad_clients_get_errors_or_are_dropped_and_good_clients_carry_on(hub):
+    good_a = can.Bus(**hub.join_kwargs())
+    good_b = can.Bus(**hub.join_kwargs())
+    time.sleep(Hub.handshake_hold_s + 0.05)
+
+    def exchange(seq: int) -> None:
+        good_a.send(can.Message(arbitration_id=0x181, data=[seq], is_extended_id=False))
+        m = good_b.recv(2.0)
+        assert m is not None and m.arbitration_id == 0x181 and m.data == bytes([seq])
+
+    exchange(1)
+    bad = RawClient(hub.port)
+    listener = RawClient(hub.port)
+    bad.send(
+        b"hello world\n>"  # text outside any element
+        b"< send 123 9 1 2 3 4 5 6 7 8 9 >"  # DLC > 8
+        b"< send 123 8 1 2 3 4 5 6 7 8 9 >"  # more data bytes than DLC
+        b"< send 123 2 1 >"  # fewer
+        b"< send 800 1 0 >"  # standard id above 0x7FF
+        b"< send 123 1 100 >"  # byte above 0xFF
+        b"< send 12345 0 >"  # 5-digit id
+        b"< send 12x 0 >"  # not hex
+        b"< frobnicate >"
+        b"\xff\xfe >"  # not ASCII
+    )
+    errors = []
+    while (el := bad.read_element(1.0)) is not None:
+        errors.append(el)
+    assert len(errors) == 10
+    assert all(e.startswith(b"< error 20000008 ") for e in errors)
+    assert listener.frames(0.3) == []  # nothing of it reached the bus
+    exchange(2)
+
+    # a client that never closes its element is dropped
+    runaway = RawClient(hub.port)
+    runaway.send(b"< send 123 " + b"1 " * 400)
+    assert runaway.closed_by_peer()
+    # a client that dies in the middle of an element: the partial element is discarded
+    partial = RawClient(hub.port)
+    partial.send(b"< send 321 2 1")
+    partial.close()
+    # garbage before any handshake
+    early = RawClient(hub.port, handshake=False)
+    assert early.read_element() == b"< hi >"
+    early.send(b"\x00\x01\x02>")
+    assert early.read_element().startswith(b"< error ")
+    early.send(b"< rawmode >")  # rawmode before open
+    assert early.read_element().startswith(b"< error ")
+    early.close()
+    exchange(3)
+    assert listener.frames(0.3) == [("181", b"\x02"), ("181", b"\x03")]
+
+    # a stock python-can client sending an oversized frame gets an error frame it can parse
+    good_a.send(can.Message(arbitration_id=0x123, data=bytes(9), is_extended_id=False, check=False))
+    m = good_a.recv(2.0)
+    assert m is not None and m.is_error_frame
+    exchange(4)
+    assert good_b.recv(0.2) is None  # the oversized frame was not forwarded
+
+    st = hub.stats
+    assert st.protocol_errors >= 13
+    assert st.clients_dropped >= 1
+    assert hub.running
+    for c in (bad, listener):
+        c.close()
+    good_a.shutdown()
+    good_b.shutdown()
+
+
+def test_too_many_errors_drop_the_client(hub):
+    bad = RawClient(hub.port)
+    bad.send(b"< nonsense >" * (Hub.max_errors_per_client + 1))
+    assert bad.closed_by_peer()
+    assert hub.stats.clients_dropped == 1
+    ok = RawClient(hub.port)  # the hub still accepts clients
+    ok.close()
