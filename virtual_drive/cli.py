@@ -13,7 +13,7 @@ import sys
 from collections.abc import Sequence
 
 #: Modules providing ``add_parser(subparsers)``, in the order shown by ``--help``.
-_SUBCOMMANDS: tuple[str, ...] = ("virtual_drive.hub",)
+_SUBCOMMANDS: tuple[str, ...] = ("virtual_drive.node.cli_run", "virtual_drive.hub")
 
 
 class _OneLineErrorParser(argparse.ArgumentParser):
@@ -38,6 +38,9 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``virtual-drive``; returns the process exit status."""
     parser = build_parser()
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if not argv or (argv[0].startswith("-") and argv[0] not in ("-h", "--help")):
+        argv.insert(0, "run")  # bare `virtual-drive [options]` means `virtual-drive run`
     args = parser.parse_args(argv)
     return int(args.func(args))
 

@@ -1,0 +1,143 @@
+"""``virtual-drive run``: serve the virtual drive as a CANopen node until SIGINT/SIGTERM.
+
+Bus selection follows python-can: options given on the command line are passed to
+``can.Bus``; anything not given comes from python-can's configuration file and environment
+(``can.util.load_config``), so ``virtual-drive run`` with no bus options uses the user's
+python-can default. ``--hub`` starts a loopback hub in this process and joins it.
+
+On start the process prints one line ``virtual-drive: node N ready on <bus>`` to stdout
+(tests and scripts wait for it); with ``--hub`` the line also gives the hub's join line.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import signal
+import sys
+import threading
+
+import can
+
+logger = logging.getLogger("virtual_drive.run")
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Register the ``run`` sub-command."""
+    p = subparsers.add_parser(
+        "run",
+        help="run the virtual drive as a CANopen CiA 402 node (default command)",
+        description="Run the simulated drive paced to wall-clock time as a CANopen node on a "
+        "python-can bus. Bus options not given come from python-can's config/environment.",
+    )
+    add_run_arguments(p)
+    p.set_defaults(func=run_command)
+    return p
+
+
+def add_run_arguments(p: argparse.ArgumentParser) -> None:
+    bus = p.add_argument_group("bus (python-can)")
+    bus.add_argument("-i", "--interface", help="python-can interface, e.g. socketcand, socketcan")
+    bus.add_argument("-c", "--channel", help="channel, e.g. vcan0 (socketcand: the hub's bus)")
+    bus.add_argument("-b", "--bitrate", type=int, help="bit rate, bit/s")
+    bus.add_argument("--host", help="socketcand host (the loopback hub: 127.0.0.1)")
+    bus.add_argument("--port", type=int, help="socketcand TCP port")
+    bus.add_argument(
+        "--hub",
+        action="store_true",
+        help="start a loopback hub in this process (127.0.0.1, --hub-port) and join it",
+    )
+    bus.add_argument("--hub-port", type=int, default=0, help="port of --hub (0 = any free)")
+    p.add_argument("-n", "--node-id", type=int, default=1, help="CANopen node-ID 1..127")
+    p.add_argument("--store", metavar="FILE", help="parameter file for 0x1010/0x1011")
+    p.add_argument(
+        "--speed", type=float, default=1.0, help="simulated seconds per wall-clock second"
+    )
+    p.add_argument("--log-level", default="INFO", choices=["DEBUG", "INFO", "WARNING", "ERROR"])
+
+
+def bus_kwargs(args: argparse.Namespace) -> dict:
+    """``can.Bus`` keyword arguments from the options actually given."""
+    kw: dict = {}
+    for key in ("interface", "channel", "bitrate", "host", "port"):
+        value = getattr(args, key, None)
+        if value is not None:
+            kw[key] = value
+    if kw.get("interface") == "socketcand":
+        kw.setdefault("channel", "vcan0")
+        kw.setdefault("host", "127.0.0.1")
+        kw.setdefault("tcp_tune", True)
+    return kw
+
+
+def _fail(message: str, code: int = 1) -> int:
+    print(f"virtual-drive: error: {message}", file=sys.stderr, flush=True)
+    return code
+
+
+def run_command(args: argparse.Namespace) -> int:
+    """Run until SIGINT/SIGTERM; returns the exit status."""
+    logging.basicConfig(
+        level=getattr(logging, args.log_level),
+        format="%(asctime)s %(levelname)s %(name)s: %(message)s",
+        stream=sys.stderr,
+    )
+    if not 1 <= args.node_id <= 127:
+        return _fail(f"--node-id must be 1..127, got {args.node_id}", 2)
+    if not args.speed > 0:
+        return _fail(f"--speed must be > 0, got {args.speed}", 2)
+    hub = None
+    if args.hub:
+        from virtual_drive.hub import Hub
+
+        try:
+            hub = Hub(port=args.hub_port, bitrate=args.bitrate or 1_000_000).start()
+        except (OSError, ValueError) as exc:
+            return _fail(f"cannot start the hub on 127.0.0.1:{args.hub_port}: {exc}")
+        args.interface, args.host, args.port = "socketcand", "127.0.0.1", hub.port
+        args.bitrate = None
+    kw = bus_kwargs(args)
+    try:
+        bus = can.Bus(**kw)
+    except Exception as exc:  # python-can raises many types (CanError, OSError, ValueError...)
+        if hub is not None:
+            hub.stop()
+        shown = ", ".join(f"{k}={v}" for k, v in kw.items()) or "python-can configuration"
+        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        return _fail(f"cannot open the CAN bus ({shown}): {reason}")
+
+    from virtual_drive.node.drive_node import VirtualDrive
+
+    stop = threading.Event()
+
+    def _on_signal(signum: int, frame: object) -> None:
+        stop.set()
+
+    previous = {s: signal.signal(s, _on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
+    drive = None
+    try:
+        try:
+            drive = VirtualDrive(bus, node_id=args.node_id, store_path=args.store, speed=args.speed)
+        except Exception as exc:
+            return _fail(f"cannot start the drive: {exc}")
+        if drive.store_error:
+            logger.error("parameter file: %s (defaults used)", drive.store_error)
+        drive.start()
+        where = bus.channel_info
+        line = f"virtual-drive: node {args.node_id} ready on {where}"
+        if hub is not None:
+            line += f"; hub: {hub.join_line()}"
+        print(line, flush=True)
+        while not stop.wait(0.2):
+            if drive.runner.error is not None:
+                return _fail(f"simulation loop stopped: {drive.runner.error}")
+        logger.info("signal received, shutting down")
+        return 0
+    finally:
+        if drive is not None:
+            drive.stop()
+        bus.shutdown()
+        if hub is not None:
+            hub.stop()
+        for s, handler in previous.items():
+            signal.signal(s, handler)

@@ -1,0 +1,125 @@
+"""NMT slave (CiA 301 §7.2.8): states, commands, boot-up, and which services each state allows.
+
+States and their heartbeat codes: INITIALISING 0x00, STOPPED 0x04, OPERATIONAL 0x05,
+PRE-OPERATIONAL 0x7F. Commands arrive on COB-ID 0x000 as ``[command, node_id]`` (node_id 0 = all):
+0x01 start, 0x02 stop, 0x80 enter pre-operational, 0x81 reset node, 0x82 reset communication.
+
+After either reset the node runs the given reset hook, sends a boot-up message (0x700+N, data
+``[0x00]``) and enters PRE-OPERATIONAL. Services by state (CiA 301 Table 78):
+SDO and EMCY in PRE-OPERATIONAL and OPERATIONAL, PDO only in OPERATIONAL, heartbeat in all
+states but INITIALISING.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+from collections.abc import Callable
+
+logger = logging.getLogger(__name__)
+
+INITIALISING = 0x00
+STOPPED = 0x04
+OPERATIONAL = 0x05
+PRE_OPERATIONAL = 0x7F
+
+STATE_NAMES = {
+    INITIALISING: "INITIALISING",
+    STOPPED: "STOPPED",
+    OPERATIONAL: "OPERATIONAL",
+    PRE_OPERATIONAL: "PRE-OPERATIONAL",
+}
+
+CMD_START = 0x01
+CMD_STOP = 0x02
+CMD_PRE_OPERATIONAL = 0x80
+CMD_RESET_NODE = 0x81
+CMD_RESET_COMMUNICATION = 0x82
+
+
+class NmtSlave:
+    """The node's NMT state machine.
+
+    :param node_id: this node's ID (1..127).
+    :param send: ``send(cob_id, data)`` puts a frame on the bus.
+    :param on_reset_node: called on "reset node" (application and communication parameters).
+    :param on_reset_communication: called on both resets (communication parameters).
+    :param on_state_change: called with ``(old, new)`` after every change.
+    """
+
+    def __init__(
+        self,
+        node_id: int,
+        send: Callable[[int, bytes], None],
+        on_reset_node: Callable[[], None] = lambda: None,
+        on_reset_communication: Callable[[], None] = lambda: None,
+        on_state_change: Callable[[int, int], None] = lambda old, new: None,
+    ) -> None:
+        self.node_id = node_id
+        self._send = send
+        self._on_reset_node = on_reset_node
+        self._on_reset_comm = on_reset_communication
+        self._on_state_change = on_state_change
+        self._state = INITIALISING
+        self._lock = threading.RLock()
+
+    @property
+    def state(self) -> int:
+        """Current state code (heartbeat byte)."""
+        return self._state
+
+    @property
+    def state_name(self) -> str:
+        return STATE_NAMES[self._state]
+
+    def sdo_allowed(self) -> bool:
+        return self._state in (PRE_OPERATIONAL, OPERATIONAL)
+
+    def emcy_allowed(self) -> bool:
+        return self._state in (PRE_OPERATIONAL, OPERATIONAL)
+
+    def pdo_allowed(self) -> bool:
+        return self._state == OPERATIONAL
+
+    def _set_state(self, new: int) -> None:
+        old = self._state
+        if new == old:
+            return
+        self._state = new
+        logger.info("NMT %s -> %s", STATE_NAMES[old], STATE_NAMES[new])
+        self._on_state_change(old, new)
+
+    def boot(self) -> None:
+        """Power-on: initialise, send the boot-up message, enter PRE-OPERATIONAL."""
+        with self._lock:
+            self._state = INITIALISING
+            self._send(0x700 + self.node_id, b"\x00")
+            self._set_state(PRE_OPERATIONAL)
+
+    def on_command(self, can_id: int, data: bytes, timestamp: float) -> None:
+        """Notifier callback for COB-ID 0x000."""
+        if len(data) < 2:
+            return
+        command, target = data[0], data[1]
+        if target not in (0, self.node_id):
+            return
+        self.command(command)
+
+    def command(self, command: int) -> None:
+        """Apply one NMT command (unknown commands are ignored, as CiA 301 says)."""
+        with self._lock:
+            if self._state == INITIALISING:
+                return
+            if command == CMD_START:
+                self._set_state(OPERATIONAL)
+            elif command == CMD_STOP:
+                self._set_state(STOPPED)
+            elif command == CMD_PRE_OPERATIONAL:
+                self._set_state(PRE_OPERATIONAL)
+            elif command in (CMD_RESET_NODE, CMD_RESET_COMMUNICATION):
+                self._set_state(INITIALISING)
+                if command == CMD_RESET_NODE:
+                    self._on_reset_node()
+                self._on_reset_comm()
+                self._send(0x700 + self.node_id, b"\x00")
+                self._set_state(PRE_OPERATIONAL)

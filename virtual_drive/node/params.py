@@ -1,0 +1,74 @@
+"""Checks every SDO/RPDO write must pass before the drive stores it.
+
+Order: the object's own limits and type (:meth:`firmware_protocol.od.Entry.check`: NaN/inf and
+non-integral → 0x06090030, above → 0x06090031, below → 0x06090032), then the cross-object rules
+of :data:`firmware_protocol.od.CONSTRAINTS` with the other objects' present values (e.g.
+``current_controller.L_c < 2 motor.L``: the deadbeat loop is unstable for L_c ≥ 2L). The staged
+gain set (0x20F0) is checked as a whole when 0x20F1 is written, not entry by entry.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+
+from canopen.sdo import SdoAbortedError
+
+from firmware_protocol.od import Entry, LimitError, ObjectDictionaryView
+
+Number = int | float
+
+ABORT_INVALID_VALUE = 0x06090030
+ABORT_VALUE_TOO_HIGH = 0x06090031
+ABORT_VALUE_TOO_LOW = 0x06090032
+
+
+class ParamChecker:
+    """Limit and physics checks against the OD view.
+
+    :param view: the OD view (limits, constraints).
+    :param current: ``current(name)`` returns the value the drive holds now for ``name``.
+    """
+
+    def __init__(self, view: ObjectDictionaryView, current: Callable[[str], Number]) -> None:
+        self.view = view
+        self._current = current
+        self._by_index: dict[tuple[int, int], Entry] = {(e.index, e.subindex): e for e in view}
+
+    def entry(self, index: int, subindex: int) -> Entry | None:
+        return self._by_index.get((index, subindex))
+
+    def check(self, index: int, subindex: int, value: object) -> object:
+        """Return the value as stored (REAL32 rounded), or raise SdoAbortedError."""
+        entry = self._by_index.get((index, subindex))
+        if entry is None:
+            return value
+        try:
+            value = entry.check(value)
+        except LimitError as exc:
+            raise SdoAbortedError(exc.abort_code) from exc
+        if isinstance(value, (int, float)):
+            self.check_rules({entry.name: value}, staged=False)
+        return value
+
+    def check_rules(self, changes: Mapping[str, Number], staged: bool) -> None:
+        """Cross-object rules for ``changes`` (names → new values) with present values.
+
+        ``staged`` False skips rules on the staged gain set (``gain_set.*``), which are checked
+        when the set is applied.
+        """
+        rules = {
+            c
+            for name in changes
+            for c in self.view.constraints_for(name)
+            if staged or not c.lhs.startswith("gain_set.")
+        }
+        if not rules:
+            return
+        changed = next(iter(changes)) if len(changes) == 1 else None
+        for c in rules:
+            values = {n: changes[n] if n in changes else self._current(n) for n in c.names}
+            if c.holds(values):
+                continue
+            lhs_written = changed is None or changed in (c.lhs, c.lhs_times)
+            too_high = c.bounds_from_above == lhs_written
+            raise SdoAbortedError(ABORT_VALUE_TOO_HIGH if too_high else ABORT_VALUE_TOO_LOW)

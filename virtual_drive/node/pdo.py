@@ -1,0 +1,288 @@
+"""PDOs coupled to the object dictionary (CiA 301 §7.2.2, §7.5.2.35–38).
+
+canopen's LocalNode keeps PDOs apart from its OD; this engine reads the communication
+(0x1400+/0x1800+) and mapping (0x1600+/0x1A00+) parameters from the node and
+
+- RPDO: decodes a received frame by its mapping and writes every mapped object through the node's
+  checked ``set_data`` (a value the checks refuse is dropped, the others apply);
+- TPDO: encodes the mapped objects' live values and sends them on the event timer (transmission
+  type 0xFE/0xFF, sub 5 in ms) or every n-th SYNC (types 1–240), respecting the inhibit time
+  (sub 3, 100 µs units);
+- only in NMT OPERATIONAL.
+
+Configuration writes are checked as CANopenNode does it (CiA 301 rules): the COB-ID cannot change
+while the PDO is valid (0x06090030); transmission types 241–253 are refused (0x06090030); a
+mapping entry can only be written with sub0 = 0 and the PDO invalid (0x06010000); sub0 checks that
+each mapped object exists (0x06020000 / 0x06090011), may be mapped (0x06040041) and that the total
+fits 64 bits (0x06040042). Mapping and COB-IDs may be changed in PRE-OPERATIONAL only
+(0x08000022 otherwise).
+"""
+
+from __future__ import annotations
+
+import logging
+import struct
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from canopen import objectdictionary as odm
+from canopen.sdo import SdoAbortedError
+
+logger = logging.getLogger(__name__)
+
+RPDO_COMM, RPDO_MAP = 0x1400, 0x1600
+TPDO_COMM, TPDO_MAP = 0x1800, 0x1A00
+N_RPDO, N_TPDO = 2, 4
+PDO_INVALID = 0x80000000
+ABORT_INVALID_VALUE = 0x06090030
+ABORT_UNSUPPORTED_ACCESS = 0x06010000
+ABORT_CANNOT_MAP = 0x06040041
+ABORT_LENGTH_EXCEEDED = 0x06040042
+ABORT_DEVICE_STATE = 0x08000022
+
+_FMT = {
+    odm.BOOLEAN: "?",
+    odm.INTEGER8: "b",
+    odm.INTEGER16: "h",
+    odm.INTEGER32: "i",
+    odm.UNSIGNED8: "B",
+    odm.UNSIGNED16: "H",
+    odm.UNSIGNED32: "I",
+    odm.REAL32: "f",
+    odm.INTEGER64: "q",
+    odm.UNSIGNED64: "Q",
+    odm.REAL64: "d",
+}
+
+
+def is_pdo_config(index: int) -> bool:
+    return (
+        RPDO_COMM <= index < RPDO_COMM + N_RPDO
+        or RPDO_MAP <= index < RPDO_MAP + N_RPDO
+        or TPDO_COMM <= index < TPDO_COMM + N_TPDO
+        or TPDO_MAP <= index < TPDO_MAP + N_TPDO
+    )
+
+
+@dataclass
+class _Tpdo:
+    number: int
+    cob_id: int
+    trans_type: int
+    event_s: float
+    inhibit_s: float
+    pack: Callable[..., bytes]
+    getters: list[Callable[[], float | int]]
+    next_due: float = 0.0
+    last_sent: float = -1e9
+    sync_count: int = 0
+
+
+@dataclass
+class _Rpdo:
+    number: int
+    cob_id: int
+    entries: list[tuple[int, int, int, int]] = field(default_factory=list)  # idx, sub, off, len
+    size: int = 0
+
+
+class PdoEngine:
+    """Runs the node's PDOs.
+
+    :param node: the local node (``object_dictionary``, ``get_data``, ``set_data``).
+    :param send: ``send(cob_id, data)``.
+    :param subscribe: ``subscribe(cob_id, callback)`` / ``unsubscribe(cob_id, callback)``.
+    :param allowed: True in NMT OPERATIONAL.
+    :param nmt_state: returns the NMT state code (0x7F pre-operational).
+    :param fast_getter: ``(index, sub) → callable`` returning the live value, or None to read
+        through ``node.get_data`` (slower).
+    """
+
+    def __init__(
+        self,
+        node,
+        send: Callable[[int, bytes], None],
+        subscribe: Callable,
+        unsubscribe: Callable,
+        allowed: Callable[[], bool],
+        nmt_state: Callable[[], int],
+        fast_getter: Callable[[int, int], Callable[[], float | int] | None] = lambda i, s: None,
+    ) -> None:
+        self.node = node
+        self._send = send
+        self._subscribe = subscribe
+        self._unsubscribe = unsubscribe
+        self._allowed = allowed
+        self._nmt_state = nmt_state
+        self._fast_getter = fast_getter
+        self.tpdos: list[_Tpdo] = []
+        self.rpdos: dict[int, _Rpdo] = {}
+        self.sent = 0
+        self.dropped_rx = 0
+
+    # -- helpers --------------------------------------------------------------------------
+    def _u(self, index: int, sub: int) -> int:
+        obj = self.node._find_object(index, sub)
+        return obj.decode_raw(self.node.get_data(index, sub))
+
+    def _mapped(self, map_index: int) -> list[tuple[int, int, int]]:
+        count = self._u(map_index, 0)
+        out = []
+        for s in range(1, count + 1):
+            entry = self._u(map_index, s)
+            out.append(((entry >> 16) & 0xFFFF, (entry >> 8) & 0xFF, entry & 0xFF))
+        return out
+
+    # -- configuration --------------------------------------------------------------------
+    def configure(self) -> None:
+        """(Re)build the PDO tables from the OD (after writes and NMT resets)."""
+        for rpdo in self.rpdos.values():
+            self._unsubscribe(rpdo.cob_id, self._on_rpdo)
+        self.rpdos = {}
+        for k in range(N_RPDO):
+            cob = self._u(RPDO_COMM + k, 1)
+            if cob & PDO_INVALID:
+                continue
+            cob_id = cob & 0x7FF
+            rpdo = _Rpdo(k + 1, cob_id)
+            off = 0
+            for index, sub, bits in self._mapped(RPDO_MAP + k):
+                rpdo.entries.append((index, sub, off, bits // 8))
+                off += bits // 8
+            rpdo.size = off
+            self.rpdos[cob_id] = rpdo
+            self._subscribe(cob_id, self._on_rpdo)
+        tpdos = []
+        now = time.monotonic()
+        for k in range(N_TPDO):
+            cob = self._u(TPDO_COMM + k, 1)
+            if cob & PDO_INVALID:
+                continue
+            fmt = "<"
+            getters = []
+            for index, sub, _bits in self._mapped(TPDO_MAP + k):
+                obj = self.node._find_object(index, sub)
+                fmt += _FMT[obj.data_type]
+                getters.append(self._getter(index, sub, obj))
+            event_ms = self._u(TPDO_COMM + k, 5)
+            tpdos.append(
+                _Tpdo(
+                    number=k + 1,
+                    cob_id=cob & 0x7FF,
+                    trans_type=self._u(TPDO_COMM + k, 2),
+                    event_s=event_ms / 1000.0,
+                    inhibit_s=self._u(TPDO_COMM + k, 3) * 100e-6,
+                    pack=struct.Struct(fmt).pack,
+                    getters=getters,
+                    next_due=now + event_ms / 1000.0,
+                )
+            )
+        self.tpdos = tpdos
+
+    def _getter(self, index: int, sub: int, obj) -> Callable[[], float | int]:
+        fast = self._fast_getter(index, sub)
+        if fast is not None:
+            return fast
+        node = self.node
+
+        def read() -> float | int:
+            return obj.decode_raw(node.get_data(index, sub))
+
+        return read
+
+    def check_write(self, index: int, sub: int, value: int) -> None:
+        """Validate a write to a PDO parameter; raises SdoAbortedError to refuse it."""
+        is_comm = TPDO_COMM <= index < TPDO_COMM + N_TPDO or RPDO_COMM <= index < RPDO_COMM + N_RPDO
+        if is_comm:
+            if sub == 1:
+                old = self._u(index, 1)
+                if self._nmt_state() == 0x05 and value != old:
+                    raise SdoAbortedError(ABORT_DEVICE_STATE)
+                can_id = value & 0x7FF
+                if not value & PDO_INVALID:
+                    if not old & PDO_INVALID and (old & 0x7FF) != can_id:
+                        raise SdoAbortedError(ABORT_INVALID_VALUE)
+                    if can_id < 0x80 or 0x700 <= can_id or 0x580 <= can_id < 0x700:
+                        raise SdoAbortedError(ABORT_INVALID_VALUE)
+            elif sub == 2 and 241 <= value <= 253:
+                raise SdoAbortedError(ABORT_INVALID_VALUE)
+            return
+        # mapping objects
+        if self._nmt_state() == 0x05:
+            raise SdoAbortedError(ABORT_DEVICE_STATE)
+        comm = index - 0x200
+        if not self._u(comm, 1) & PDO_INVALID:
+            raise SdoAbortedError(ABORT_UNSUPPORTED_ACCESS)
+        if sub > 0:
+            if self._u(index, 0) != 0:
+                raise SdoAbortedError(ABORT_UNSUPPORTED_ACCESS)
+            return
+        if value > 8:
+            raise SdoAbortedError(ABORT_LENGTH_EXCEEDED)
+        total = 0
+        receive = index < TPDO_MAP
+        for s in range(1, value + 1):
+            entry = self._u(index, s)
+            m_index, m_sub, bits = (entry >> 16) & 0xFFFF, (entry >> 8) & 0xFF, entry & 0xFF
+            obj = self.node._find_object(m_index, m_sub)  # 0x06020000 / 0x06090011
+            if not obj.pdo_mappable or len(obj) != bits or obj.data_type not in _FMT:
+                raise SdoAbortedError(ABORT_CANNOT_MAP)
+            if (receive and not obj.writable) or (not receive and not obj.readable):
+                raise SdoAbortedError(ABORT_CANNOT_MAP)
+            total += bits
+        if total > 64:
+            raise SdoAbortedError(ABORT_LENGTH_EXCEEDED)
+
+    # -- runtime --------------------------------------------------------------------------
+    def _on_rpdo(self, can_id: int, data: bytes, timestamp: float) -> None:
+        if not self._allowed():
+            return
+        rpdo = self.rpdos.get(can_id)
+        if rpdo is None:
+            return
+        if len(data) < rpdo.size:
+            self.dropped_rx += 1
+            return
+        for index, sub, off, size in rpdo.entries:
+            try:
+                self.node.set_data(index, sub, bytes(data[off : off + size]))
+            except SdoAbortedError as exc:
+                logger.warning(
+                    "RPDO%d: 0x%04X:%02X refused (0x%08X)", rpdo.number, index, sub, exc.code
+                )
+
+    def tick(self, now: float) -> None:
+        """Send the TPDOs whose event timer expired (call every loop period)."""
+        if not self._allowed():
+            return
+        for t in self.tpdos:
+            if t.event_s <= 0 or t.trans_type < 0xFE:
+                continue
+            if now >= t.next_due and now - t.last_sent >= t.inhibit_s:
+                self._send_tpdo(t, now)
+                t.next_due += t.event_s
+                if t.next_due <= now:
+                    t.next_due = now + t.event_s
+
+    def on_sync(self, can_id: int, data: bytes, timestamp: float) -> None:
+        """SYNC (0x080): synchronous TPDOs of type 1–240 go out every n-th SYNC."""
+        if not self._allowed():
+            return
+        now = time.monotonic()
+        for t in self.tpdos:
+            if 1 <= t.trans_type <= 240:
+                t.sync_count += 1
+                if t.sync_count >= t.trans_type:
+                    t.sync_count = 0
+                    self._send_tpdo(t, now)
+
+    def _send_tpdo(self, t: _Tpdo, now: float) -> None:
+        try:
+            payload = t.pack(*[g() for g in t.getters])
+        except (struct.error, SdoAbortedError) as exc:
+            logger.warning("TPDO%d not sent: %s", t.number, exc)
+            return
+        self._send(t.cob_id, payload)
+        t.last_sent = now
+        self.sent += 1

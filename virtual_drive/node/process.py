@@ -1,0 +1,121 @@
+"""Run ``virtual-drive run`` as a child process (cross-process tests, benchmarks, dashboard)."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+
+class DriveProcess:
+    """A running ``virtual-drive run`` child; stop it with :meth:`stop` (SIGTERM) or
+    :meth:`kill` (SIGKILL). ``ready_line`` is the line it printed when it came up."""
+
+    def __init__(self, proc: subprocess.Popen, ready_line: str) -> None:
+        self.proc = proc
+        self.ready_line = ready_line
+        self._stderr: list[str] = []
+        self._reader = threading.Thread(target=self._drain, daemon=True)
+        self._reader.start()
+
+    def _drain(self) -> None:
+        assert self.proc.stderr is not None
+        for line in self.proc.stderr:
+            self._stderr.append(line)
+            del self._stderr[:-200]
+
+    @property
+    def pid(self) -> int:
+        return self.proc.pid
+
+    @property
+    def stderr_tail(self) -> str:
+        return "".join(self._stderr[-40:])
+
+    def stop(self, timeout: float = 10.0) -> int:
+        """SIGTERM and wait; returns the exit status."""
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+        try:
+            return self.proc.wait(timeout)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            return self.proc.wait(timeout)
+
+    def kill(self) -> int:
+        """SIGKILL (no clean-up at all) and wait."""
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGKILL)
+        return self.proc.wait(10)
+
+    def __enter__(self) -> DriveProcess:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+
+def spawn_virtual_drive(
+    args: Sequence[str] = (),
+    *,
+    interface: str | None = "socketcand",
+    host: str = "127.0.0.1",
+    port: int | None = None,
+    channel: str | None = "vcan0",
+    node_id: int = 1,
+    store: str | Path | None = None,
+    speed: float = 1.0,
+    timeout: float = 20.0,
+    env: dict | None = None,
+) -> DriveProcess:
+    """Start ``python -m virtual_drive run ...`` and wait for its ready line.
+
+    :param port: socketcand port of the loopback hub (required for socketcand).
+    :raises RuntimeError: the child exited or stayed silent for ``timeout`` s (its stderr is
+        in the message).
+    """
+    cmd = [sys.executable, "-m", "virtual_drive.cli", "run"]
+    if interface is not None:
+        cmd += ["--interface", interface]
+        if interface == "socketcand":
+            if port is None:
+                raise ValueError("socketcand needs the hub's port")
+            cmd += ["--host", host, "--port", str(port)]
+    if channel is not None:
+        cmd += ["--channel", channel]
+    cmd += ["--node-id", str(node_id), "--speed", repr(float(speed))]
+    if store is not None:
+        cmd += ["--store", str(store)]
+    cmd += list(args)
+    proc = subprocess.Popen(
+        cmd,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env={**os.environ, **(env or {})},
+    )
+    assert proc.stdout is not None
+    line_box: list[str] = []
+
+    def _read() -> None:
+        line_box.append(proc.stdout.readline())
+
+    reader = threading.Thread(target=_read, daemon=True)
+    reader.start()
+    reader.join(timeout)
+    line = line_box[0] if line_box else ""
+    if "ready" not in line:
+        deadline = time.monotonic() + 2
+        while proc.poll() is None and time.monotonic() < deadline and not line:
+            time.sleep(0.05)
+        if proc.poll() is None:
+            proc.kill()
+        err = proc.stderr.read() if proc.stderr else ""
+        proc.wait(5)
+        raise RuntimeError(f"virtual-drive did not come up: {line.strip()} {err.strip()[-2000:]}")
+    return DriveProcess(proc, line.strip())

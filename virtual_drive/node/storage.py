@@ -1,0 +1,97 @@
+"""Parameter store behind 0x1010 (save) and 0x1011 (restore defaults).
+
+The file holds raw little-endian OD values keyed ``"IIII:SS"`` (hex index and sub-index) in JSON
+with a SHA-256 over the canonical parameter text, so a damaged or truncated file is detected.
+Writes are atomic: temporary file in the same directory, ``fsync``, ``os.replace``, ``fsync`` of
+the directory — a kill at any instant leaves either the old or the new file, never a torn one.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+import os
+import tempfile
+from pathlib import Path
+
+logger = logging.getLogger(__name__)
+
+FORMAT = "bldc-bench-drive-parameters"
+VERSION = 1
+
+#: "save" / "load" signatures (CiA 301 §7.5.2.13/14)
+SAVE_SIGNATURE = 0x65766173
+LOAD_SIGNATURE = 0x64616F6C
+
+
+class StoreCorruptError(ValueError):
+    """The parameter file exists but cannot be trusted."""
+
+
+def _key(index: int, subindex: int) -> str:
+    return f"{index:04X}:{subindex:02X}"
+
+
+def _digest(params: dict[str, str]) -> str:
+    text = json.dumps(params, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def write_atomic(path: str | os.PathLike, data: bytes) -> None:
+    """Replace ``path`` by ``data`` atomically and durably."""
+    path = Path(path)
+    directory = path.parent if str(path.parent) else Path(".")
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except FileNotFoundError:
+            pass
+        raise
+    dir_fd = os.open(directory, os.O_RDONLY)
+    try:
+        os.fsync(dir_fd)
+    finally:
+        os.close(dir_fd)
+
+
+def save(path: str | os.PathLike, values: dict[tuple[int, int], bytes]) -> None:
+    """Store raw OD values ``{(index, sub): bytes}``; an empty dict means "defaults"."""
+    params = {_key(i, s): v.hex() for (i, s), v in sorted(values.items())}
+    doc = {"format": FORMAT, "version": VERSION, "params": params, "sha256": _digest(params)}
+    write_atomic(path, (json.dumps(doc, indent=1, sort_keys=True) + "\n").encode())
+
+
+def load(path: str | os.PathLike) -> dict[tuple[int, int], bytes]:
+    """Stored raw values; ``{}`` if the file does not exist.
+
+    :raises StoreCorruptError: unreadable JSON, wrong format or a checksum mismatch.
+    """
+    path = Path(path)
+    try:
+        text = path.read_bytes()
+    except FileNotFoundError:
+        return {}
+    try:
+        doc = json.loads(text)
+        if doc.get("format") != FORMAT or doc.get("version") != VERSION:
+            raise StoreCorruptError(f"{path}: not a parameter file of this drive")
+        params = doc["params"]
+        if not isinstance(params, dict) or doc.get("sha256") != _digest(params):
+            raise StoreCorruptError(f"{path}: checksum mismatch")
+        out = {}
+        for key, hexval in params.items():
+            index, sub = key.split(":")
+            out[(int(index, 16), int(sub, 16))] = bytes.fromhex(hexval)
+        return out
+    except StoreCorruptError:
+        raise
+    except (ValueError, KeyError, TypeError, AttributeError) as exc:
+        raise StoreCorruptError(f"{path}: {exc}") from exc
