@@ -2705,7 +2705,7 @@
  *      abort code is TOO_HIGH for the bounded object, TOO_LOW for the bound) ---- */
 /* current_controller.L_c < 2 * motor.L - deadbeat loop stable for L_c < 2 L */
 #define OD_CURRENT_CONTROLLER__L_C_BOUND_FACTOR                  2.0f
-/* gain_set.L_c < 2 * motor.L - staged L_c, checked when gain_set_apply is written */
+/* gain_set.L_c < 2 * motor.L - staged L_c, checked when the staged set is written or applied (gain_set_apply) */
 #define OD_GAIN_SET__L_C_BOUND_FACTOR                            2.0f
 /* |setpoints.i_p_ref| <= speed_controller.current_limit - pseudo-current reference within the current limit */
 #define OD_SETPOINTS__I_P_REF_BOUND_FACTOR                       1.0f

@@ -258,6 +258,8 @@ class Constraint:
     rhs: str
     lhs_times: str | None = None
     reason: str = ""
+    checked_on: tuple[str, ...] | None = None
+    """Names whose presence in the checked values triggers the rule (default: all of them)."""
 
     def __post_init__(self) -> None:
         if self.op not in _OPS:
@@ -268,6 +270,11 @@ class Constraint:
         """Every object name the rule reads."""
         extra = (self.lhs_times,) if self.lhs_times else ()
         return (self.lhs, *extra, self.rhs)
+
+    @property
+    def triggers(self) -> tuple[str, ...]:
+        """Names that trigger the rule when written (:attr:`checked_on` or :attr:`names`)."""
+        return self.checked_on if self.checked_on is not None else self.names
 
     @property
     def bounds_from_above(self) -> bool:
@@ -309,7 +316,8 @@ CONSTRAINTS: tuple[Constraint, ...] = (
         "<",
         2,
         "motor.L",
-        reason="staged L_c, checked when gain_set_apply is written",
+        reason="staged L_c, checked when the staged set is written or applied (gain_set_apply)",
+        checked_on=("gain_set.L_c",),
     ),
     Constraint(
         "setpoints.i_p_ref",
@@ -463,6 +471,9 @@ class ObjectDictionaryView:
     def check_constraints(self, values: Mapping[str, Number], changed: str | None = None) -> None:
         """Raise :class:`LimitError` if ``values`` break a cross-object rule.
 
+        Only rules triggered by a name in ``values`` are evaluated (see
+        :attr:`Constraint.checked_on`: the staged ``gain_set`` rule is checked when the staged
+        values are passed, e.g. at ``gain_set_apply``, not when ``motor.L`` alone is written).
         Names missing from ``values`` take their EDS default. ``changed`` names the object being
         written; the abort code is 0x06090031 when it is pushed above its bound, 0x06090032 when
         a bound it provides is pushed below the other object (e.g. lowering ``motor.L`` under
@@ -475,7 +486,7 @@ class ObjectDictionaryView:
             if self._by_name[n].is_real:  # compare as the drive does, in float32
                 merged[n] = _f32(float(merged[n]))
         for c in self._constraints:
-            if not any(n in values for n in c.names):
+            if not any(n in values for n in c.triggers):
                 continue
             if c.holds(merged):
                 continue
