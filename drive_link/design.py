@@ -15,6 +15,11 @@ Symbols follow the paper:
 * PI controller ``C_PI(z) = k_p + k_i z / (z - 1)`` [V/A] (eq. 22).
 * Predictive law ``v_L(k+1) = 2 L_c fs (i_p* - i_p(k)) - v_L(k) + 2 e_L(k)`` (eq. 23), i.e. the
   linear controller ``2 L_c fs z / (z + 1)`` plus a back-EMF feed-forward ``2 z / (z + 1)``.
+  With exact L_c and R = 0 this gives ``I_p/I_p* = z^-2`` as the paper states. Note: the
+  paper's eq. (24) places ``2 L fs Gamma`` as the constant term of the denominator; substituting
+  eq. (23) into eq. (6) gives it as the coefficient of ``z`` instead (the printed polynomial has
+  a root outside the unit circle), and the steady-state error of eq. (23) with R ≠ 0 is
+  ≈ 1.65 % here rather than the 0.83 % quoted in the text.
 * Speed model ``G(z) = b / (z - a)`` [rpm/A per sample] (eq. 26) and IP controller
   ``u = k_p (k_i z/(z-1) (w* - w) - w)`` whose closed loop is eq. 27; gains from eqs. 28–31.
 """
@@ -566,6 +571,9 @@ class PredictedStep:
         v_L: line voltage applied by the inverter during each sample [V] (the previous output).
         u: controller output computed at each sample [V].
         stable: closed-loop poles inside the unit circle.
+        i_p_final: equilibrium of i_p for the new reference [A] (what a stable loop settles to;
+            i_final for the deadbeat and PI laws, which have integral action).
+        max_pole_radius: largest closed-loop pole magnitude (settling ∝ radius^k).
     """
 
     t: np.ndarray
@@ -574,6 +582,8 @@ class PredictedStep:
     v_L: np.ndarray
     u: np.ndarray
     stable: bool
+    i_p_final: float = math.nan
+    max_pole_radius: float = math.nan
 
 
 def predicted_step(
@@ -655,7 +665,12 @@ def predicted_step(
         X = np.linalg.solve(eye - A, Bw @ w0)
     except np.linalg.LinAlgError:  # closed-loop pole exactly at z = 1: start from rest
         X = np.zeros(2 + m)
-    stable = is_stable(np.poly(A))
+    radius = float(np.max(np.abs(np.linalg.eigvals(A))))
+    stable = radius < 1.0
+    try:
+        i_p_final = float(np.linalg.solve(eye - A, Bw @ w1)[0])
+    except np.linalg.LinAlgError:
+        i_p_final = math.nan
     bw1 = Bw @ w1
     i_p = np.empty(n)
     v_L = np.empty(n)
@@ -666,7 +681,7 @@ def predicted_step(
         u[k] = Cc @ X[2:] + Dc[0] * (i_final - X[0]) + Dc[1] * e_L + Dc[2] * v_comp
         X = A @ X + bw1
     t = np.arange(n) / fs
-    return PredictedStep(t, i_p, np.full(n, float(i_final)), v_L, u, stable)
+    return PredictedStep(t, i_p, np.full(n, float(i_final)), v_L, u, stable, i_p_final, radius)
 
 
 def eq25_compensation(

@@ -1,0 +1,517 @@
+"""``drive-link design`` and ``drive-link identify`` sub-commands (offline maths, no bus).
+
+``add_parsers(subparsers)`` registers both on the ``drive-link`` parser; every sub-parser sets
+``func`` to a handler ``(argparse.Namespace) -> int`` (exit status). Bad input gives one line on
+stderr and exit status 2, with nothing else printed. ``run_cli(argv)`` runs them standalone.
+
+Examples::
+
+    drive-link design --Lc 22.2e-6 --json              # deadbeat loop with L_c = 1.5 L
+    drive-link design --controller pi --kp 0.4647 --ki 0.0492
+    drive-link design --controller pi --crossover-hz 2750 --pm 45.6   # PI gains for a spec
+    drive-link design --a 0.9999785 --b 3.33715e-4 --xi 1 --wn 2.3 --json   # IP speed gains
+    drive-link identify --csv trace.csv --json
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import math
+import re
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from drive_link import design
+from drive_link.identify import fit_first_order
+from drive_link.metrics import step_metrics
+
+
+class UsageError(ValueError):
+    """Bad command-line input (reported as one line, exit status 2)."""
+
+
+# --------------------------------------------------------------------------- helpers
+def _num(name: str, text: str | None, *, positive: bool = False, nonneg: bool = False) -> float:
+    if text is None:
+        raise UsageError(f"{name} is required")
+    try:
+        v = float(text)
+    except (TypeError, ValueError):
+        raise UsageError(f"{name} must be a number (got {text!r})") from None
+    if not math.isfinite(v):
+        raise UsageError(f"{name} must be finite (got {text!r})")
+    if positive and v <= 0.0:
+        raise UsageError(f"{name} must be > 0 (got {text})")
+    if nonneg and v < 0.0:
+        raise UsageError(f"{name} must be >= 0 (got {text})")
+    return v
+
+
+def _int(name: str, text: str, *, minimum: int = 1) -> int:
+    try:
+        v = int(text)
+    except (TypeError, ValueError):
+        raise UsageError(f"{name} must be an integer (got {text!r})") from None
+    if v < minimum:
+        raise UsageError(f"{name} must be >= {minimum} (got {v})")
+    return v
+
+
+def _clean(x: Any) -> Any:
+    """JSON-safe: numpy scalars to Python, non-finite floats to None, recursively."""
+    if isinstance(x, dict):
+        return {k: _clean(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return [_clean(v) for v in x]
+    if isinstance(x, np.generic):
+        x = x.item()
+    if isinstance(x, float) and not math.isfinite(x):
+        return None
+    return x
+
+
+def _fmt(x: float | None, spec: str = ".4g", unit: str = "") -> str:
+    if x is None or (isinstance(x, float) and math.isnan(x)):
+        return "n/a"
+    if isinstance(x, float) and math.isinf(x):
+        return "inf"
+    sep = "" if unit in ("", "%", "°") else " "
+    return f"{x:{spec}}{sep}{unit}"
+
+
+# --------------------------------------------------------------------------- design
+def analyse_current_loop(
+    controller: str,
+    *,
+    R: float,
+    L: float,
+    L_c: float,
+    R_c: float,
+    k_p: float,
+    k_i: float,
+    fs: float,
+    i_start: float = 15.0,
+    i_final: float = 20.0,
+    n_samples: int | None = None,
+) -> dict[str, Any]:
+    """Stability, margins and predicted step figures of one current loop (JSON-ready dict).
+
+    Units: R [Ω], L, L_c [H], R_c [Ω], k_p, k_i [V/A], fs [Hz], currents [A]; times in the result
+    are in s, frequencies in Hz, margins in dB and degrees. ``n_samples=None`` predicts the step
+    until the slowest closed-loop pole has decayed to 1e-4.
+    """
+    loop = design.current_loop_tf(controller, R=R, L=L, L_c=L_c, R_c=R_c, k_p=k_p, k_i=k_i, fs=fs)  # type: ignore[arg-type]
+    cl = design.feedback(loop)
+    poles = cl.poles()
+    stable = design.is_stable(cl)
+    m = design.margins(loop)
+    Phi, Gamma = design.phi_gamma(R, L, fs)
+    out: dict[str, Any] = {
+        "controller": controller,
+        "R": R,
+        "L": L,
+        "L_c": L_c,
+        "R_c": R_c,
+        "fs": fs,
+        "Phi": Phi,
+        "Gamma": Gamma,
+        "stable": stable,
+        "jury_stable": design.jury_stable(cl.den),
+        "max_pole_radius": float(np.max(np.abs(poles))) if poles.size else 0.0,
+        "poles": [[float(p.real), float(p.imag)] for p in poles],
+        "gain_margin_db": m.gain_margin_db,
+        "phase_margin_deg": m.phase_margin_deg,
+        "sensitivity_peak": m.sensitivity_peak,
+        "gain_crossover_hz": m.gain_crossover_hz,
+        "phase_crossover_hz": m.phase_crossover_hz,
+        "phase_margins_deg": list(m.phase_margins_deg),
+        "gain_crossovers_hz": list(m.gain_crossovers_hz),
+    }
+    if controller == "deadbeat":
+        Phi_c, Gamma_c = design.phi_gamma(R_c, L_c, fs)
+        out["Phi_c"], out["Gamma_c"] = Phi_c, Gamma_c
+    if controller == "pi":
+        out["k_p"], out["k_i"] = k_p, k_i
+    step: dict[str, Any] = {
+        "overshoot_pct": None,
+        "rise_time_s": None,
+        "settling_time_s": None,
+        "steady_state_error_A": None,
+        "steady_state_error_pct": None,
+        "step_samples": None,
+    }
+    if stable:
+        r_max = float(np.max(np.abs(poles))) if poles.size else 0.0
+        if n_samples is None:  # long enough for the slowest pole to decay to 1e-4
+            n_samples = 50 if r_max < 1e-3 else math.ceil(math.log(1e-4) / math.log(r_max))
+            n_samples = min(max(n_samples, 50), 200_000)
+        r = design.predicted_step(
+            controller,  # type: ignore[arg-type]
+            n_samples=n_samples,
+            i_start=i_start,
+            i_final=i_final,
+            R=R,
+            L=L,
+            L_c=L_c,
+            R_c=R_c,
+            k_p=k_p,
+            k_i=k_i,
+            fs=fs,
+        )
+        y0 = design.predicted_step(
+            controller,  # type: ignore[arg-type]
+            n_samples=1,
+            i_start=i_start,
+            i_final=i_start,
+            R=R,
+            L=L,
+            L_c=L_c,
+            R_c=R_c,
+            k_p=k_p,
+            k_i=k_i,
+            fs=fs,
+        ).i_p_final
+        sm = step_metrics(r.t, r.i_p, reference=i_final, y_initial=y0, y_final=r.i_p_final)
+        step = {
+            "overshoot_pct": sm.overshoot_pct,
+            "rise_time_s": sm.rise_time,
+            "settling_time_s": sm.settling_time,
+            "steady_state_error_A": sm.steady_state_error,
+            "steady_state_error_pct": (
+                100.0 * sm.steady_state_error / abs(i_final) if i_final != 0.0 else None
+            ),
+            "step_samples": n_samples,
+        }
+    out.update(step)
+    out["step_from_A"], out["step_to_A"] = i_start, i_final
+    return out
+
+
+def _design_ip(args: argparse.Namespace) -> dict[str, Any]:
+    a = _num("--a", args.a)
+    b = _num("--b", args.b)
+    if not 0.0 < a < 1.0:
+        raise UsageError(f"--a must be in (0, 1) (got {args.a})")
+    if b <= 0.0:
+        raise UsageError(f"--b must be > 0 (got {args.b})")
+    xi = _num("--xi", args.xi, positive=True)
+    wn = _num("--wn", args.wn, positive=True)
+    fs = _num("--fs", args.fs, positive=True)
+    try:
+        k_p, k_i = design.ip_gains(a, b, xi, wn, fs)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    cl = design.ip_closed_loop(a, b, k_p, k_i, fs)
+    poles = cl.poles()
+    out: dict[str, Any] = {
+        "a": a,
+        "b": b,
+        "xi": xi,
+        "wn": wn,
+        "fs": fs,
+        "kp": k_p,
+        "ki": k_i,
+        "stable": design.is_stable(cl),
+        "poles": [[float(p.real), float(p.imag)] for p in poles],
+    }
+    # predicted speed step 0 -> 1000 rpm over 8 / (xi wn) s (ideal inner loop), sampled every 1 ms
+    if out["stable"]:
+        T = min(max(8.0 / (xi * wn), 0.01), 20.0)
+        dec = max(1, round(fs * 1e-3))
+        r = design.predicted_speed_step(
+            a,
+            b,
+            k_p,
+            k_i,
+            n_samples=round(T * fs),
+            w_start=0.0,
+            w_final=1000.0,
+            fs=fs,
+            decimate=dec,
+        )
+        sm = step_metrics(r.t, r.speed, reference=1000.0, y_initial=0.0, y_final=1000.0)
+        out["overshoot_pct"] = sm.overshoot_pct
+        out["settling_time_s"] = sm.settling_time
+        out["rise_time_s"] = sm.rise_time
+    return out
+
+
+def _cmd_design(args: argparse.Namespace) -> int:
+    try:
+        if args.a is not None or args.b is not None:
+            result = _design_ip(args)
+            if args.json:
+                print(json.dumps(_clean(result), indent=2))
+            else:
+                print(
+                    f"IP speed gains for b/(z - a), a = {result['a']:.8g}, b = {result['b']:.6g}, "
+                    f"xi = {result['xi']:g}, wn = {result['wn']:g} rad/s:"
+                )
+                print(f"  k_p = {result['kp']:.6g} A/rpm   k_i = {result['ki']:.6g} 1/sample")
+                print(f"  closed loop (eq. 27) stable: {'yes' if result['stable'] else 'NO'}")
+                if "settling_time_s" in result:
+                    print(
+                        f"  predicted step: overshoot {_fmt(result['overshoot_pct'], '.2f', '%')}"
+                        f", settling (2 %) {_fmt(result['settling_time_s'], '.3g', 's')}"
+                    )
+            return 0
+        fs = _num("--fs", args.fs, positive=True)
+        R = _num("--R", args.R, nonneg=True)
+        L = _num("--L", args.L, positive=True)
+        L_c = L if args.Lc is None else _num("--Lc", args.Lc, positive=True)
+        R_c = R if args.Rc is None else _num("--Rc", args.Rc, nonneg=True)
+        i0 = _num("--step-from", args.step_from)
+        i1 = _num("--step-to", args.step_to)
+        if i0 == i1:
+            raise UsageError("--step-from and --step-to must differ")
+        n = None if args.samples == "auto" else _int("--samples", args.samples, minimum=10)
+        k_p = _num("--kp", args.kp)
+        k_i = _num("--ki", args.ki)
+        if args.crossover_hz is not None or args.pm is not None:
+            if args.controller != "pi":
+                raise UsageError("--crossover-hz/--pm design PI gains: use --controller pi")
+            fc = _num("--crossover-hz", args.crossover_hz, positive=True)
+            pm = _num("--pm", args.pm, positive=True)
+            try:
+                k_p, k_i = design.pi_current_gains(fc, pm, R=R, L=L, fs=fs)
+            except ValueError as exc:
+                raise UsageError(str(exc)) from None
+        try:
+            result = analyse_current_loop(
+                args.controller,
+                R=R,
+                L=L,
+                L_c=L_c,
+                R_c=R_c,
+                k_p=k_p,
+                k_i=k_i,
+                fs=fs,
+                i_start=i0,
+                i_final=i1,
+                n_samples=n,
+            )
+        except ValueError as exc:
+            raise UsageError(str(exc)) from None
+    except UsageError as exc:
+        print(f"drive-link design: error: {exc}", file=sys.stderr)
+        return 2
+    if args.json:
+        print(json.dumps(_clean(result), indent=2))
+        return 0
+    r = result
+    head = f"{r['controller']} current loop: R = {R:.4g} Ω, L = {L:.4g} H, fs = {fs:g} Hz"
+    if r["controller"] in ("deadbeat", "predictive"):
+        head += f", L_c = {L_c:.4g} H ({L_c / L:.3g} L)"
+    if r["controller"] == "deadbeat":
+        head += f", R_c = {R_c:.4g} Ω"
+    if r["controller"] == "pi":
+        head += f", k_p = {k_p:.6g}, k_i = {k_i:.6g}"
+    print(head)
+    jury = "stable" if r["jury_stable"] else "not stable"
+    print(
+        f"  closed loop: {'stable' if r['stable'] else 'UNSTABLE'} "
+        f"(max |pole| = {r['max_pole_radius']:.6f}; Jury: {jury})"
+    )
+    pms = ", ".join(f"{p:.1f}°" for p in r["phase_margins_deg"]) or "none"
+    print(
+        f"  gain margin {_fmt(r['gain_margin_db'], '.2f', 'dB')} "
+        f"at {_fmt(r['phase_crossover_hz'], '.0f', 'Hz')}; "
+        f"phase margin {_fmt(r['phase_margin_deg'], '.1f', '°')} "
+        f"at {_fmt(r['gain_crossover_hz'], '.0f', 'Hz')} (all crossovers: {pms}); "
+        f"‖S‖∞ = {_fmt(r['sensitivity_peak'], '.3f')}"
+    )
+    if r["stable"]:
+        rise_us = None if r["rise_time_s"] is None else r["rise_time_s"] * 1e6
+        settle_us = None if r["settling_time_s"] is None else r["settling_time_s"] * 1e6
+        print(
+            f"  predicted step {i0:g} → {i1:g} A: "
+            f"overshoot {_fmt(r['overshoot_pct'], '.2f', '%')}, "
+            f"rise (10–90 %) {_fmt(rise_us, '.3g', 'µs')}, settling (2 %) "
+            f"{_fmt(settle_us, '.3g', 'µs')}, "
+            f"steady-state error {_fmt(r['steady_state_error_A'], '.3g', 'A')}"
+        )
+    else:
+        print("  no step prediction: the loop is unstable")
+    return 0
+
+
+# --------------------------------------------------------------------------- identify
+_UNIT = re.compile(r"\s*\[[^\]]*\]\s*$")
+
+
+def _canonical(col: str) -> str:
+    name = _UNIT.sub("", col).strip()
+    return name.removeprefix("measurements.")
+
+
+def read_trace_csv(
+    path: str | Path, current_col: str = "i_p", speed_col: str = "speed"
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Read ``t`` [s], i_p [A] and speed [rpm] from a CSV file.
+
+    Accepts a plain header ``t,i_p,speed`` or the trace-capture format (``t [s]``,
+    ``measurements.i_p [A]`` ...): units in brackets and a ``measurements.`` prefix are ignored;
+    lines starting with ``#`` are skipped. Raises UsageError with one line on any problem.
+    """
+    p = Path(path)
+    try:
+        text = p.read_text()
+    except OSError as exc:
+        raise UsageError(f"cannot read {path}: {exc.strerror or exc}") from None
+    rows = [r for r in csv.reader(line for line in text.splitlines() if not line.startswith("#"))]
+    rows = [r for r in rows if r and any(c.strip() for c in r)]
+    if len(rows) < 2:
+        raise UsageError(f"{path}: no data rows")
+    header = [_canonical(c) for c in rows[0]]
+    want = {"t": ("t", "time"), "i": (_canonical(current_col),), "w": (_canonical(speed_col),)}
+    idx: dict[str, int] = {}
+    for key, names in want.items():
+        for n in names:
+            if n in header:
+                idx[key] = header.index(n)
+                break
+        else:
+            raise UsageError(f"{path}: no column {names[0]!r} (columns: {', '.join(header)})")
+    data = np.empty((len(rows) - 1, 3))
+    for r_i, row in enumerate(rows[1:], start=2):
+        for j, key in enumerate(("t", "i", "w")):
+            try:
+                data[r_i - 2, j] = float(row[idx[key]])
+            except (IndexError, ValueError):
+                raise UsageError(f"{path}: line {r_i}: bad or missing {key!r} value") from None
+    if not np.all(np.isfinite(data)):
+        raise UsageError(f"{path}: non-finite values in the data")
+    return data[:, 0], data[:, 1], data[:, 2]
+
+
+def _cmd_identify(args: argparse.Namespace) -> int:
+    try:
+        fs = _num("--fs", args.fs, positive=True)
+        Ts_model = 1.0 / fs
+        t, i_p, w = read_trace_csv(args.csv, args.current_col, args.speed_col)
+        if t.size < 5:
+            raise UsageError(f"{args.csv}: need at least 5 samples (got {t.size})")
+        dt = np.diff(t)
+        if np.any(dt <= 0):
+            raise UsageError(f"{args.csv}: t is not strictly increasing")
+        Ts = float(np.median(dt))
+        if np.max(np.abs(dt - Ts)) > 0.01 * Ts:
+            raise UsageError(f"{args.csv}: t is not uniformly sampled")
+        if args.divider is not None:
+            D = _int("--divider", args.divider)
+        else:
+            D = max(1, round(Ts / Ts_model))
+            if abs(D * Ts_model - Ts) > 1e-3 * Ts:
+                raise UsageError(
+                    f"{args.csv}: sample period {Ts:g} s is not a multiple of 1/fs = {Ts_model:g} s"
+                )
+        try:
+            fit = fit_first_order(
+                i_p, w, D * Ts_model, Ts_model=Ts_model, offset=not args.no_offset
+            )
+        except ValueError as exc:
+            raise UsageError(f"{args.csv}: {exc}") from None
+        result = fit.as_dict()
+        if args.xi is not None or args.wn is not None:
+            xi = _num("--xi", args.xi if args.xi is not None else "1", positive=True)
+            wn = _num("--wn", args.wn if args.wn is not None else "2.3", positive=True)
+            k_p, k_i = design.ip_gains(fit.a, fit.b, xi, wn, fs)
+            result.update({"xi": xi, "wn": wn, "kp": k_p, "ki": k_i})
+    except UsageError as exc:
+        print(f"drive-link identify: error: {exc}", file=sys.stderr)
+        return 2
+    if args.json:
+        print(json.dumps(_clean(result), indent=2))
+        return 0
+    print(
+        f"speed model b/(z - a) at {fs:g} Hz from {fit.n_samples} samples "
+        f"(every {fit.D} loop samples, {fit.Ts:g} s):"
+    )
+    print(f"  a = {fit.a:.9f}   b = {fit.b:.6g} rpm/A per sample   offset = {fit.offset:.4g} rpm")
+    print(
+        f"  time constant {_fmt(fit.time_constant, '.4g', 's')}, "
+        f"DC gain {_fmt(fit.dc_gain, '.4g', 'rpm/A')}"
+    )
+    print(
+        f"  fit: R² = {fit.r2:.5f}, RMS {fit.rms:.4g} rpm (free run), "
+        f"one-step RMS {fit.one_step_rms:.4g} rpm"
+    )
+    if "kp" in result:
+        print(
+            f"  IP gains (xi = {result['xi']:g}, wn = {result['wn']:g} rad/s): "
+            f"k_p = {result['kp']:.6g} A/rpm, k_i = {result['ki']:.6g} 1/sample"
+        )
+    return 0
+
+
+# --------------------------------------------------------------------------- registration
+def add_parsers(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Register the ``design`` and ``identify`` sub-commands; each sets ``func``."""
+    d = subparsers.add_parser(
+        "design",
+        help="current-loop stability/margins/step prediction, PI or IP gain design",
+        description=(
+            "Analyse a current loop (deadbeat eq. 15, PI eq. 22, predictive eq. 23) for motor "
+            "R, L and controller estimates L_c, R_c: closed-loop stability, gain/phase margins, "
+            "‖S‖∞ and the predicted step. With --a/--b: IP speed gains (eqs. 28–31)."
+        ),
+    )
+    d.add_argument("--R", default=str(design.R_TABLE2), help="motor resistance [Ω] (6.2e-3)")
+    d.add_argument("--L", default=str(design.L_TABLE2), help="motor inductance [H] (14.8e-6)")
+    d.add_argument("--Lc", default=None, help="controller's inductance estimate L_c [H] (= L)")
+    d.add_argument("--Rc", default=None, help="controller's resistance estimate R_c [Ω] (= R)")
+    d.add_argument("--fs", default="50000", help="sampling frequency [Hz] (50000)")
+    d.add_argument("--controller", choices=design.CONTROLLERS, default="deadbeat")
+    d.add_argument("--kp", default=str(design.PI_KP_PAPER), help="PI k_p [V/A] (0.4647)")
+    d.add_argument("--ki", default=str(design.PI_KI_PAPER), help="PI k_i [V/A] (0.0492)")
+    d.add_argument("--crossover-hz", default=None, help="design PI gains for this crossover [Hz]")
+    d.add_argument("--pm", default=None, help="... and this phase margin [°]")
+    d.add_argument("--step-from", default="15", help="predicted step start [A] (15)")
+    d.add_argument("--step-to", default="20", help="predicted step end [A] (20)")
+    d.add_argument("--samples", default="auto", help="predicted step length [samples] (auto)")
+    d.add_argument("--a", default=None, help="speed model pole a (per loop sample)")
+    d.add_argument("--b", default=None, help="speed model gain b [rpm/A per loop sample]")
+    d.add_argument("--xi", default="1", help="IP damping ratio ξ (1)")
+    d.add_argument("--wn", default="2.3", help="IP natural frequency ω_n [rad/s] (2.3)")
+    d.add_argument("--json", action="store_true", help="print JSON")
+    d.set_defaults(func=_cmd_design)
+
+    i = subparsers.add_parser(
+        "identify",
+        help="least-squares speed model b/(z - a) from a current-step trace CSV",
+        description=(
+            "Fit w[k+1] = a w[k] + b i_p[k] (+ offset) to a CSV with columns t, i_p, speed "
+            "(or as saved by the trace capture); decimated traces are converted to the loop rate."
+        ),
+    )
+    i.add_argument("--csv", required=True, help="trace file (t [s], i_p [A], speed [rpm])")
+    i.add_argument("--current-col", default="i_p", help="current column name (i_p)")
+    i.add_argument("--speed-col", default="speed", help="speed column name (speed)")
+    i.add_argument("--fs", default="50000", help="loop sampling frequency [Hz] (50000)")
+    i.add_argument("--divider", default=None, help="loop samples per trace sample (from t)")
+    i.add_argument("--no-offset", action="store_true", help="fit without a constant term")
+    i.add_argument("--xi", default=None, help="also design IP gains with this ξ")
+    i.add_argument("--wn", default=None, help="also design IP gains with this ω_n [rad/s]")
+    i.add_argument("--json", action="store_true", help="print JSON")
+    i.set_defaults(func=_cmd_identify)
+
+
+def run_cli(argv: Sequence[str] | None = None) -> int:
+    """Run ``design``/``identify`` as ``drive-link`` would; returns the exit status."""
+    parser = argparse.ArgumentParser(prog="drive-link")
+    sub = parser.add_subparsers(dest="command", required=True)
+    add_parsers(sub)
+    try:
+        args = parser.parse_args(list(argv) if argv is not None else None)
+    except SystemExit as exc:  # argparse already printed its message
+        return int(exc.code or 0) if not isinstance(exc.code, str) else 2
+    return int(args.func(args))
+
+
+__all__ = ["add_parsers", "analyse_current_loop", "read_trace_csv", "run_cli"]
