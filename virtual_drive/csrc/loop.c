@@ -1,0 +1,370 @@
+/* loop.c -- see loop.h. */
+#include <math.h>
+#include <stddef.h>
+
+#include "loop.h"
+
+#define PI_D 3.14159265358979323846
+#define RPM_PER_RAD_S (60.0 / (2.0 * PI_D))
+
+/* six-step table: "+" and "-" phase per Hall sector 1..6 (index 0 unused) */
+static const int sec_plus[7] = {0, 0, 0, 1, 1, 2, 2};
+static const int sec_minus[7] = {0, 1, 2, 2, 0, 0, 1};
+static const int sec_open[7] = {0, 2, 1, 0, 2, 1, 0};
+
+static double sgn_d(double x) { return (x > 0.0) ? 1.0 : ((x < 0.0) ? -1.0 : 0.0); }
+
+static int phase_sign(int sec, int ph)
+{
+    if (sec_plus[sec] == ph) {
+        return 1;
+    }
+    if (sec_minus[sec] == ph) {
+        return -1;
+    }
+    return 0;
+}
+
+/* Signed pseudo current: (s+ i+ + s- i- + s_o i_o)/2 with the open phase signed as in the
+ * previous sector along the direction of rotation; equals eq. (1) when motoring. */
+static double pseudo_current(const double i[3], int sec, double omega)
+{
+    int prev = (omega >= 0.0) ? (sec == 1 ? 6 : sec - 1) : (sec == 6 ? 1 : sec + 1);
+    int o = sec_open[sec];
+    return 0.5 * (i[sec_plus[sec]] - i[sec_minus[sec]] + phase_sign(prev, o) * i[o]);
+}
+
+void loop_update_mech(loop_t *L)
+{
+    if (L->p.B_tot > 0.0) {
+        L->a_m = exp(-L->p.B_tot * L->Ts / L->p.J);
+    } else {
+        L->a_m = 1.0;
+    }
+}
+
+static double ctrl_v0(const loop_t *L, double e_L)
+{
+    if (L->cc.type == CC_PREDICTIVE) {
+        return e_L;
+    }
+    return L->cc.emf_ff ? 0.0 : e_L;
+}
+
+void loop_init(loop_t *L)
+{
+    L->p.i[0] = L->p.i[1] = L->p.i[2] = 0.0;
+    L->p.Te_int = 0.0;
+    L->p.i_abs_max = 0.0;
+    L->p.nonfinite = 0;
+    L->m_prev = L->m_prev2 = 0.0f;
+    L->sec_prev = L->sec_prev2 = plant_hall_sector(L->p.theta_e);
+    L->on_prev = L->on_prev2 = 0;
+    L->active = 0;
+    L->fault_code = 0;
+    L->fault_reason = 0;
+    L->fault_time = 0.0;
+    L->inject = 0;
+    L->segments = 0;
+    L->os_len = 0;
+    cc_current_reset(&L->cc, 0.0f);
+    cc_speed_reset(&L->sc, 0.0f, 0.0f);
+    loop_update_mech(L);
+}
+
+void loop_reset_fault(loop_t *L)
+{
+    L->fault_code = 0;
+    L->fault_reason = 0;
+    L->inject = 0;
+    L->p.nonfinite = 0;
+    L->p.i_abs_max = 0.0;
+    L->active = 0;
+}
+
+static void os_record(loop_t *L, double t)
+{
+    double *b;
+    int sec;
+    if (L->os_buf == NULL || L->os_len >= L->os_cap) {
+        return;
+    }
+    b = L->os_buf + 5 * L->os_len;
+    sec = plant_hall_sector(L->p.theta_e);
+    b[0] = t;
+    b[1] = L->p.i[0];
+    b[2] = L->p.i[1];
+    b[3] = L->p.i[2];
+    b[4] = pseudo_current(L->p.i, sec, L->p.omega);
+    L->os_len++;
+}
+
+static int leg_mode_pwm(double d, double u, double Ts, double T_BT)
+{
+    /* returns 1 high, 0 low, 2 open */
+    double r, f;
+    if (d >= 1.0) {
+        return 1;
+    }
+    if (d <= 0.0) {
+        return 0;
+    }
+    r = 0.5 * (1.0 - d) * Ts;
+    f = 0.5 * (1.0 + d) * Ts;
+    if (u < r) {
+        return 0;
+    }
+    if (u < r + T_BT) {
+        return 2;
+    }
+    if (u < f) {
+        return 1;
+    }
+    if (u < f + T_BT) {
+        return 2;
+    }
+    return 0;
+}
+
+static void sort_d(double *a, int n)
+{
+    int i, j;
+    for (i = 1; i < n; ++i) {
+        double x = a[i];
+        for (j = i - 1; j >= 0 && a[j] > x; --j) {
+            a[j + 1] = a[j];
+        }
+        a[j + 1] = x;
+    }
+}
+
+/* Advance the plant over pattern time [u0, u1) of one PWM period; t_start is the absolute time
+ * at u0 (for the oversampled record). */
+static void apply_pattern(loop_t *L, float m, int sec, int on, double u0, double u1,
+                          double t_start)
+{
+    double bp[16 + LOOP_OS_MAX];
+    int nb = 0, j;
+    int mode[3];
+    double vdrv[3] = {0.0, 0.0, 0.0};
+    const double Ts = L->Ts, Vd = L->p.V_dc;
+    double dp = 0.5 * (1.0 + (double)m), dm = 0.5 * (1.0 - (double)m);
+    int xp = sec_plus[sec], xm = sec_minus[sec];
+    double os_dt = (L->os_n > 0) ? Ts / L->os_n : 0.0;
+    if (u1 <= u0) {
+        return;
+    }
+    bp[nb++] = u0;
+    bp[nb++] = u1;
+    if (on && L->model == LOOP_MODEL_PWM) {
+        double cand[8];
+        int c;
+        cand[0] = 0.5 * (1.0 - dp) * Ts;
+        cand[1] = cand[0] + L->T_BT;
+        cand[2] = 0.5 * (1.0 + dp) * Ts;
+        cand[3] = cand[2] + L->T_BT;
+        cand[4] = 0.5 * (1.0 - dm) * Ts;
+        cand[5] = cand[4] + L->T_BT;
+        cand[6] = 0.5 * (1.0 + dm) * Ts;
+        cand[7] = cand[6] + L->T_BT;
+        for (c = 0; c < 8; ++c) {
+            if (cand[c] > u0 && cand[c] < u1) {
+                bp[nb++] = cand[c];
+            }
+        }
+    }
+    if (os_dt > 0.0) {
+        /* grid points t_k + j Ts/os_n, in pattern time u = t - t_start + u0 */
+        double g = ceil((t_start - L->t) / os_dt - 1e-9) * os_dt + L->t; /* absolute */
+        for (; g < t_start + (u1 - u0) - 1e-12 && nb < 16 + LOOP_OS_MAX; g += os_dt) {
+            double ug = g - t_start + u0;
+            if (ug > u0 + 1e-12) {
+                bp[nb++] = ug;
+            }
+        }
+    }
+    sort_d(bp, nb);
+    for (j = 0; j + 1 < nb; ++j) {
+        double a = bp[j], b = bp[j + 1], um = 0.5 * (a + b);
+        int x;
+        if (b - a < 1e-15) {
+            continue;
+        }
+        if (!on) {
+            mode[0] = mode[1] = mode[2] = PLANT_OPEN;
+        } else {
+            for (x = 0; x < 3; ++x) {
+                mode[x] = PLANT_OPEN;
+            }
+            if (L->model == LOOP_MODEL_PWM) {
+                int mp = leg_mode_pwm(dp, um, Ts, L->T_BT);
+                int mm = leg_mode_pwm(dm, um, Ts, L->T_BT);
+                if (mp != 2) {
+                    mode[xp] = PLANT_DRIVEN;
+                    vdrv[xp] = mp ? Vd : 0.0;
+                }
+                if (mm != 2) {
+                    mode[xm] = PLANT_DRIVEN;
+                    vdrv[xm] = mm ? Vd : 0.0;
+                }
+            } else {
+                double bt = Vd * L->T_BT / Ts;
+                mode[xp] = PLANT_DRIVEN;
+                mode[xm] = PLANT_DRIVEN;
+                vdrv[xp] = dp * Vd - sgn_d(L->p.i[xp]) * bt;
+                vdrv[xm] = dm * Vd - sgn_d(L->p.i[xm]) * bt;
+            }
+        }
+        L->segments += plant_advance(&L->p, mode, vdrv, b - a);
+        if (os_dt > 0.0) {
+            double tb = t_start + (b - u0);
+            double rel = (tb - L->t) / os_dt;
+            double rr = floor(rel + 0.5);
+            if (fabs(rel - rr) < 1e-6 && rr >= 1.0 && rr < (double)L->os_n - 0.5) {
+                os_record(L, tb);
+            }
+        }
+    }
+}
+
+static void trip(loop_t *L, int code, int reason)
+{
+    L->fault_code = code;
+    L->fault_reason = reason;
+    L->fault_time = L->t;
+    L->on_prev = L->on_prev2 = 0;
+    L->active = 0;
+}
+
+int loop_run(loop_t *L, int n, float **sig, double *t_out)
+{
+    int k;
+    const double Ts = L->Ts;
+    for (k = 0; k < n; ++k) {
+        plant_t *p = &L->p;
+        int sec = plant_hall_sector(p->theta_e);
+        double e[3], e_L, i_p, speed, Te, i_ref = 0.0, w_ref = L->w_ref_set;
+        float m = 0.0f;
+        int on = 0, x;
+        plant_emf(p, p->theta_e, e);
+        e_L = e[sec_plus[sec]] - e[sec_minus[sec]];
+        i_p = pseudo_current(p->i, sec, p->omega);
+        speed = p->omega * RPM_PER_RAD_S;
+        Te = 0.0;
+        if (p->omega != 0.0) {
+            for (x = 0; x < 3; ++x) {
+                Te += e[x] * p->i[x];
+            }
+            Te /= p->omega;
+        } else {
+            for (x = 0; x < 3; ++x) {
+                Te += plant_emf_shape(p->theta_e - (2.0 * PI_D / 3.0) * x, p->emf_rounding)
+                      * p->i[x];
+            }
+            Te *= p->k_e;
+        }
+        /* protection */
+        if (L->fault_code == 0) {
+            if (p->nonfinite || !(i_p == i_p)) {
+                trip(L, 0x2310, 2);
+            } else if (p->i_abs_max > L->oc_trip) {
+                trip(L, 0x2310, 1);
+            } else if (L->inject != 0) {
+                trip(L, L->inject, 5);
+                L->inject = 0;
+            } else if (p->V_dc > L->ov_trip) {
+                trip(L, 0x3210, 3);
+            } else if (p->V_dc < L->uv_trip) {
+                trip(L, 0x3220, 4);
+            }
+        }
+        p->i_abs_max = fmax(fabs(p->i[0]), fmax(fabs(p->i[1]), fabs(p->i[2])));
+        if (p->nonfinite) {
+            /* keep the record finite: a tripped, diverged plant is frozen at zero */
+            p->i[0] = p->i[1] = p->i[2] = 0.0;
+            if (!(p->omega == p->omega)) {
+                p->omega = 0.0;
+            }
+            if (!(p->theta_e == p->theta_e)) {
+                p->theta_e = 0.0;
+            }
+            p->Te_int = 0.0;
+            p->i_abs_max = 0.0;
+            p->nonfinite = 0;
+            i_p = e_L = Te = 0.0;
+            speed = p->omega * RPM_PER_RAD_S;
+        }
+        /* controllers */
+        if (L->mode != LOOP_OFF && L->fault_code == 0) {
+            if (!L->active) {
+                cc_current_reset(&L->cc, (float)ctrl_v0(L, e_L));
+                cc_speed_reset(&L->sc, (float)i_p, (float)speed);
+            }
+            if (L->mode == LOOP_SPEED) {
+                i_ref = cc_speed_step(&L->sc, (float)w_ref, (float)speed);
+            } else {
+                i_ref = L->i_ref_set;
+            }
+            m = cc_current_step(&L->cc, (float)i_ref, (float)i_p, (float)e_L, (float)p->V_dc);
+            on = 1;
+            L->active = 1;
+        } else {
+            L->active = 0;
+            i_ref = (L->mode == LOOP_CURRENT) ? L->i_ref_set : 0.0;
+        }
+        if (L->mode != LOOP_SPEED) {
+            w_ref = (L->mode == LOOP_OFF) ? 0.0 : w_ref;
+        }
+        /* record sample k */
+        L->last[SIG_I_P] = (float)i_p;
+        L->last[SIG_I_A] = (float)p->i[0];
+        L->last[SIG_I_B] = (float)p->i[1];
+        L->last[SIG_I_C] = (float)p->i[2];
+        L->last[SIG_SPEED] = (float)speed;
+        L->last[SIG_V_L] = m * (float)p->V_dc;
+        L->last[SIG_E_L] = (float)e_L;
+        L->last[SIG_M] = m;
+        L->last[SIG_HALL] = (float)sec;
+        L->last[SIG_I_P_REF] = (float)i_ref;
+        L->last[SIG_SPEED_REF] = (float)((L->mode == LOOP_SPEED) ? w_ref : 0.0);
+        L->last[SIG_V_DC] = (float)p->V_dc;
+        L->last[SIG_T_E] = (float)Te;
+        L->last[SIG_THETA_E] = (float)p->theta_e;
+        if (sig != NULL) {
+            int j;
+            for (j = 0; j < LOOP_NSIG; ++j) {
+                if (sig[j] != NULL) {
+                    sig[j][k] = L->last[j];
+                }
+            }
+        }
+        if (t_out != NULL) {
+            t_out[k] = L->t;
+        }
+        if (L->os_n > 0) {
+            os_record(L, L->t);
+        }
+        /* advance the circuit over [t_k, t_k + Ts), back-EMF at the sample's mid-angle */
+        plant_set_segment_emf(p, p->theta_e + 0.5 * Ts * p->pole_pairs * p->omega);
+        if (L->T_delay > 0.0) {
+            apply_pattern(L, L->m_prev2, L->sec_prev2, L->on_prev2, Ts - L->T_delay, Ts, L->t);
+            apply_pattern(L, L->m_prev, L->sec_prev, L->on_prev, 0.0, Ts - L->T_delay,
+                          L->t + L->T_delay);
+        } else {
+            apply_pattern(L, L->m_prev, L->sec_prev, L->on_prev, 0.0, Ts, L->t);
+        }
+        if (L->fault_code != 0) {
+            on = 0;
+        }
+        L->m_prev2 = L->m_prev;
+        L->sec_prev2 = L->sec_prev;
+        L->on_prev2 = L->on_prev;
+        L->m_prev = m;
+        L->sec_prev = sec;
+        L->on_prev = on;
+        plant_mech_step(p, Ts, L->a_m);
+        L->k += 1;
+        L->t = L->k * Ts;
+    }
+    return n;
+}

@@ -1,0 +1,257 @@
+/* plant.c -- see plant.h for the model, its assumptions and units. */
+#include <math.h>
+
+#include "plant.h"
+
+#define PI_D 3.14159265358979323846
+#define TWO_PI_D (2.0 * PI_D)
+#define I_EPS 1e-9 /* A: a current below this with an open leg counts as zero */
+
+static const double phase_shift[3] = {0.0, 2.0 * PI_D / 3.0, 4.0 * PI_D / 3.0};
+
+static double wrap_2pi(double x)
+{
+    if (x >= 0.0 && x < 2.0 * TWO_PI_D) {
+        return (x >= TWO_PI_D) ? x - TWO_PI_D : x;
+    }
+    if (x < 0.0 && x >= -TWO_PI_D) {
+        return x + TWO_PI_D;
+    }
+    x = fmod(x, TWO_PI_D);
+    return (x < 0.0) ? x + TWO_PI_D : x;
+}
+
+double plant_emf_shape(double theta, double w)
+{
+    double sgn = 1.0, T, x;
+    const double c = PI_D / 6.0;    /* corner at 30 deg */
+    const double slope = 6.0 / PI_D; /* ramp slope, 1/rad */
+    if (theta >= TWO_PI_D || theta < 0.0) {
+        theta = wrap_2pi(theta);
+    }
+    if (theta >= PI_D) { /* F(theta + pi) = -F(theta) */
+        theta -= PI_D;
+        sgn = -1.0;
+    }
+    if (theta > 0.5 * PI_D) { /* F(pi - theta) = F(theta) */
+        theta = PI_D - theta;
+    }
+    T = (theta < c) ? theta * slope : 1.0;
+    x = theta - c;
+    if (w > 0.0 && x > -0.5 * w && x < 0.5 * w) {
+        /* moving average of width w across a slope change of -slope */
+        double y = x + 0.5 * w;
+        T -= slope * (y * y / (2.0 * w) - (x > 0.0 ? x : 0.0));
+    }
+    return sgn * T;
+}
+
+int plant_hall_sector(double theta_e)
+{
+    double u = wrap_2pi(theta_e - PI_D / 6.0);
+    int s;
+    s = (int)(u / (PI_D / 3.0));
+    if (s > 5) {
+        s = 5;
+    }
+    return s + 1;
+}
+
+void plant_emf(const plant_t *p, double theta_e, double e[3])
+{
+    int x;
+    for (x = 0; x < 3; ++x) {
+        e[x] = p->k_e * p->omega * plant_emf_shape(theta_e - phase_shift[x], p->emf_rounding);
+    }
+}
+
+void plant_set_segment_emf(plant_t *p, double theta_e)
+{
+    int x;
+    for (x = 0; x < 3; ++x) {
+        p->F_seg[x] = plant_emf_shape(theta_e - phase_shift[x], p->emf_rounding);
+        p->e_seg[x] = p->k_e * p->omega * p->F_seg[x];
+    }
+}
+
+static double sgn_d(double x) { return (x > 0.0) ? 1.0 : ((x < 0.0) ? -1.0 : 0.0); }
+
+/* Phi(t) = exp(-a t) and G(t) = (1 - Phi)/R for a = R/L, accurate for small a t. */
+static void phi_g(double R, double L, double t, double *Phi, double *G)
+{
+    double x = R * t / L;
+    if (x < 0.02) {
+        /* series to x^7: relative error < 1e-16 for x < 0.02 */
+        double em1 = x * (1.0 - x / 2.0 * (1.0 - x / 3.0 * (1.0 - x / 4.0 * (1.0 - x / 5.0 *
+                     (1.0 - x / 6.0 * (1.0 - x / 7.0))))));
+        *Phi = 1.0 - em1;
+        *G = em1 / R;
+    } else {
+        double em1 = -expm1(-x);
+        *Phi = 1.0 - em1;
+        *G = em1 / R;
+    }
+}
+
+int plant_advance(plant_t *p, const int mode[3], const double v_drv[3], double dt)
+{
+    double remaining = dt;
+    int iter = 0;
+    int nseg = 0;
+    const double Vd = p->V_dc, VG = p->V_G;
+    while (remaining > 1e-15 && iter < 24) {
+        const double *e = p->e_seg;
+        double v[3], u[3], Phi, G, t_seg, t_ev = remaining;
+        int known[3], diode[3], nk = 0, x, ev_leg = -1;
+        ++iter;
+        for (x = 0; x < 3; ++x) {
+            diode[x] = 0;
+            known[x] = 1;
+            if (mode[x] == PLANT_DRIVEN) {
+                v[x] = v_drv[x] - VG * sgn_d(p->i[x]);
+            } else if (p->i[x] > I_EPS) {
+                v[x] = -VG;
+                diode[x] = 1;
+            } else if (p->i[x] < -I_EPS) {
+                v[x] = Vd + VG;
+                diode[x] = -1;
+            } else {
+                known[x] = 0;
+                p->i[x] = 0.0;
+            }
+            nk += known[x];
+        }
+        if (nk <= 1) {
+            /* all currents zero: does some pair of legs start conducting? */
+            double best = 0.0;
+            int bp = -1, bq = -1, q;
+            for (x = 0; x < 3; ++x) {
+                for (q = 0; q < 3; ++q) {
+                    double vp, vq, drive;
+                    if (q == x) {
+                        continue;
+                    }
+                    /* current into the motor at x (lower diode if open), out at q */
+                    vp = known[x] ? v[x] : -VG;
+                    vq = known[q] ? v[q] : Vd + VG;
+                    drive = (vp - vq) - (e[x] - e[q]);
+                    if (drive > best) {
+                        best = drive;
+                        bp = x;
+                        bq = q;
+                    }
+                }
+            }
+            if (bp < 0) {
+                p->i[0] = p->i[1] = p->i[2] = 0.0;
+                remaining = 0.0;
+                ++nseg;
+                break;
+            }
+            for (x = 0; x < 3; ++x) {
+                known[x] = 0;
+            }
+            nk = 2;
+            if (mode[bp] != PLANT_DRIVEN) {
+                v[bp] = -VG;
+                diode[bp] = 1;
+            }
+            if (mode[bq] != PLANT_DRIVEN) {
+                v[bq] = Vd + VG;
+                diode[bq] = -1;
+            }
+            known[bp] = known[bq] = 1;
+        }
+        if (nk == 2) {
+            int z = !known[0] ? 0 : (!known[1] ? 1 : 2);
+            int a = (z + 1) % 3, b = (z + 2) % 3;
+            double v_open = 0.5 * (v[a] + v[b] - e[a] - e[b]) + e[z];
+            if (v_open > Vd + VG) {
+                v[z] = Vd + VG;
+                diode[z] = -1;
+                nk = 3;
+            } else if (v_open < -VG) {
+                v[z] = -VG;
+                diode[z] = 1;
+                nk = 3;
+            }
+        }
+        if (nk == 3) {
+            double vn = (v[0] + v[1] + v[2] - e[0] - e[1] - e[2]) / 3.0;
+            for (x = 0; x < 3; ++x) {
+                u[x] = v[x] - vn - e[x];
+            }
+        } else {
+            int z = !known[0] ? 0 : (!known[1] ? 1 : 2);
+            int a = (z + 1) % 3, b = (z + 2) % 3;
+            double ul = 0.5 * (v[a] - v[b] - e[a] + e[b]);
+            u[a] = ul;
+            u[b] = -ul;
+            u[z] = 0.0;
+            p->i[z] = 0.0;
+            p->i[b] = -p->i[a];
+        }
+        /* diode current-zero events */
+        for (x = 0; x < 3; ++x) {
+            if (diode[x] != 0 && u[x] * diode[x] < 0.0 && p->i[x] * diode[x] > 0.0) {
+                double t_star = (p->L / p->R) * log1p(-p->i[x] * p->R / u[x]);
+                if (t_star < t_ev) {
+                    t_ev = t_star;
+                    ev_leg = x;
+                }
+            }
+        }
+        t_seg = t_ev;
+        phi_g(p->R, p->L, t_seg, &Phi, &G);
+        {
+            double i_new[3], Tm = 0.0;
+            for (x = 0; x < 3; ++x) {
+                i_new[x] = Phi * p->i[x] + G * u[x];
+            }
+            if (ev_leg >= 0) {
+                i_new[ev_leg] = 0.0;
+            }
+            if (nk == 3) { /* enforce the star constraint against rounding */
+                double r = (i_new[0] + i_new[1] + i_new[2]) / 3.0;
+                for (x = 0; x < 3; ++x) {
+                    if (x != ev_leg) {
+                        i_new[x] -= (ev_leg >= 0) ? 1.5 * r : r;
+                    }
+                }
+            }
+            for (x = 0; x < 3; ++x) {
+                Tm += p->F_seg[x] * 0.5 * (p->i[x] + i_new[x]);
+                p->i[x] = i_new[x];
+                if (fabs(i_new[x]) > p->i_abs_max) {
+                    p->i_abs_max = fabs(i_new[x]);
+                }
+                if (!(i_new[x] == i_new[x]) || fabs(i_new[x]) > 1e12) {
+                    p->nonfinite = 1;
+                }
+            }
+            p->Te_int += p->k_e * Tm * t_seg;
+        }
+        remaining -= t_seg;
+        ++nseg;
+        if (p->nonfinite) {
+            break;
+        }
+    }
+    return nseg;
+}
+
+void plant_mech_step(plant_t *p, double Ts, double a_m)
+{
+    double Te = p->Te_int / Ts;
+    double w0 = p->omega;
+    if (p->B_tot > 0.0) {
+        p->omega = a_m * w0 + (1.0 - a_m) * (Te - p->T_load) / p->B_tot;
+    } else {
+        p->omega = w0 + Ts * (Te - p->T_load) / p->J;
+    }
+    p->theta_e = wrap_2pi(p->theta_e + p->pole_pairs * 0.5 * (p->omega + w0) * Ts);
+    p->Te_int = 0.0;
+    if (!(p->omega == p->omega)) {
+        p->nonfinite = 1;
+    }
+}

@@ -1,0 +1,79 @@
+/*
+ * plant.h -- BLDC motor (star, per-phase R and L, trapezoidal back-EMF with rounded corners),
+ * two-level three-phase bridge with freewheel diodes, and the shaft.  Host-side simulation code
+ * (double precision); not DSP code.
+ *
+ * Electrical model.  Phase x in {a,b,c}: v_x - v_n = R i_x + L di_x/dt + e_x, i_a+i_b+i_c = 0.
+ * A leg is either driven (switch on: v_x = 0 or V_dc, minus V_G sign(i_x)) or open (both
+ * switches off: its diode clamps it to 0 - V_G if i_x > 0, to V_dc + V_G if i_x < 0; with
+ * i_x = 0 it floats and conducts only if its open-circuit voltage leaves [-V_G, V_dc+V_G]).
+ * While the leg states are constant the circuit is linear with constant inputs, so each
+ * segment is solved in closed form: i(t) = Phi(t) i0 + (1 - Phi(t)) u / R, Phi = exp(-R t/L),
+ * with u the (constant) voltage across the phase's R-L.  A diode current reaching zero is an
+ * event found in closed form, t* = (L/R) log1p(-i0 R/u); the segment is split there and the leg
+ * floats afterwards.  This is how the outgoing phase decays at commutation (and how all
+ * currents decay with the bridge off): through the freewheel diodes, against the DC link.
+ * Back-EMF is taken constant within each sample at its value at the sample's mid-angle
+ * (midpoint rule; at 4000 rpm, 4 pole pairs the rotor turns 1.9 deg electrical in one 20 us
+ * sample), so within every PWM sub-interval e is constant.  Speed is constant within a sample; the shaft is advanced once per sample with the
+ * exact solution of J dw/dt = T_e - (B + k_gen') w - T_load for the sample-mean torque.
+ *
+ * Back-EMF shape: e_x = k_e w F(theta_e - phi_x), k_e = K_rpm (60/2pi) / 2 per phase, F an
+ * odd trapezoid with 120 deg flat tops and 60 deg ramps whose four corners are rounded by a
+ * moving average over emf_rounding rad electrical (0 = ideal trapezoid; fringing, Sec. IV-B).
+ * Phase a: flat +1 on [30, 150] deg, flat -1 on [210, 330] deg.  Hall sector s = 1..6 spans
+ * theta_e in [30 + 60 (s-1), 30 + 60 s) deg; six-step table (+,-): 1 (a,b) 2 (a,c) 3 (b,c)
+ * 4 (b,a) 5 (c,a) 6 (c,b).  Torque T_e = k_e sum(F_x i_x) (N m).
+ */
+#ifndef BLDC_PLANT_H
+#define BLDC_PLANT_H
+
+#define PLANT_DRIVEN 0
+#define PLANT_OPEN 1
+
+typedef struct {
+    /* parameters (SI) */
+    double R;            /* Ohm per phase */
+    double L;            /* H per phase */
+    double k_e;          /* V s/rad per phase (mechanical rad/s) */
+    int pole_pairs;
+    double emf_rounding; /* rad electrical, [0, pi/3] */
+    double J;            /* kg m^2 */
+    double B_tot;        /* N m s/rad: friction B plus DC-generator load k_gen */
+    double T_load;       /* N m, constant load torque */
+    double V_dc;         /* V */
+    double V_G;          /* V, switch / diode drop */
+    /* state */
+    double i[3];         /* A, phase currents, positive into the motor */
+    double omega;        /* rad/s mechanical */
+    double theta_e;      /* rad electrical in [0, 2 pi) */
+    double e_seg[3];     /* V, phase back-EMFs used for the segments of this sample */
+    double F_seg[3];     /* 1, their shape values */
+    /* accumulators over the current sample */
+    double Te_int;       /* N m s */
+    double i_abs_max;    /* A, largest |i_x| seen */
+    int nonfinite;
+} plant_t;
+
+/* Trapezoid shape F(theta) in [-1, 1] for phase a, with rounding width w (rad). */
+double plant_emf_shape(double theta, double w);
+
+/* Hall sector 1..6 from the electrical angle. */
+int plant_hall_sector(double theta_e);
+
+/* Set the back-EMF used by plant_advance (e_seg, F_seg) for the angle theta_e (rad). */
+void plant_set_segment_emf(plant_t *p, double theta_e);
+
+/* Advance the circuit by dt seconds with the given leg states (PLANT_DRIVEN / PLANT_OPEN) and
+ * driven leg voltages v_drv (V, ideal, before the V_G drop), back-EMF e_seg constant.
+ * Integrates torque into Te_int.  Returns the number of solved sub-segments. */
+int plant_advance(plant_t *p, const int mode[3], const double v_drv[3], double dt);
+
+/* Phase back-EMFs (V) at the present angle and speed. */
+void plant_emf(const plant_t *p, double theta_e, double e[3]);
+
+/* Shaft update over Ts with mean torque Te_int / Ts; resets Te_int; advances theta_e with the
+ * mean speed.  a_m = exp(-B_tot Ts / J). */
+void plant_mech_step(plant_t *p, double Ts, double a_m);
+
+#endif
