@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import errno
+import functools
 import math
 import random
 import re
@@ -139,6 +140,12 @@ def frame_bits(arbitration_id: int, data: bytes, is_extended: bool = False) -> i
     region_bits = n_bits + 15
     stuff = _stuff_bit_count(format(stuffed_region, f"0{region_bits}b"))
     return region_bits + stuff + _TRAILER_BITS
+
+
+@functools.lru_cache(maxsize=8192)
+def _frame_bits_cached(arbitration_id: int, data: bytes, is_extended: bool) -> int:
+    """frame_bits for frames already validated by the protocol parser (PDOs repeat a lot)."""
+    return frame_bits(arbitration_id, data, is_extended)
 
 
 def _arbitration_key(arbitration_id: int, is_extended: bool) -> int:
@@ -533,7 +540,7 @@ class Hub:
         cmd = words[0]
         if client.state == _RAW and cmd == "send":
             frame = parse_send(words)
-            bits = frame_bits(frame.arbitration_id, frame.data, frame.is_extended)
+            bits = _frame_bits_cached(frame.arbitration_id, frame.data, frame.is_extended)
             key = _arbitration_key(frame.arbitration_id, frame.is_extended)
             bus = client.bus
             if not client.queue:

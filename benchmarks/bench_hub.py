@@ -1,0 +1,174 @@
+"""Benchmark of the loopback CAN hub (virtual_drive.hub) with stock python-can clients.
+
+Prints:
+* throughput, frames/s, of a burst of 8-byte frames from one process to another, at the
+  emulated 1 Mbit/s (expected: the bus limit, 1e6 / frame_bits) and with pacing made
+  negligible (1 Gbit/s: the hub's own capacity), plus the hub's CPU use (one core = 100 %);
+* SDO-like round-trip latency: a requester process sends 0x601 (8 bytes) and waits for the 0x581
+  reply of a responder process, with and without python-can's ``tcp_tune``.
+
+Run: python benchmarks/bench_hub.py [--frames 20000] [--round-trips 1000]
+Clients run as separate processes; the hub runs in this process.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import time
+
+from virtual_drive.hub import Hub, frame_bits
+
+CLIENT = r"""
+import json, os, sys, time
+import can
+
+role, port, count, tune = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), sys.argv[4] == "1"
+bus = can.Bus(interface="socketcand", host="127.0.0.1", port=port, channel="vcan0", tcp_tune=tune)
+READY = 0x7E0
+out = {}
+if role == "sink":
+    time.sleep(0.1)
+    bus.send(can.Message(arbitration_id=READY, is_extended_id=False))
+    n, first, last = 0, None, None
+    while n < count:
+        m = bus.recv(10.0)
+        if m is None:
+            break
+        last = time.perf_counter()
+        if first is None:
+            first = last
+        n += 1
+    out = {"n": n, "span": (last - first) if n > 1 else None}
+elif role == "source":
+    assert bus.recv(20.0).arbitration_id == READY
+    rng = __import__("random").Random(1)
+    for i in range(count):
+        bus.send(can.Message(arbitration_id=0x181, data=bytes(rng.randrange(256) for _ in range(8)),
+                             is_extended_id=False))
+    time.sleep(0.5)
+elif role == "responder":
+    time.sleep(0.1)
+    bus.send(can.Message(arbitration_id=READY, is_extended_id=False))
+    served = 0
+    while served < count:
+        m = bus.recv(10.0)
+        if m is None:
+            break
+        if m.arbitration_id == 0x601:
+            bus.send(can.Message(arbitration_id=0x581, data=bytes([0x43, 0, 0x10, 0, 1, 2, 3, 4]),
+                                 is_extended_id=False))
+            served += 1
+    out = {"served": served}
+elif role == "requester":
+    assert bus.recv(20.0).arbitration_id == READY
+    rtts = []
+    req = can.Message(arbitration_id=0x601, data=bytes([0x40, 0, 0x10, 0, 0, 0, 0, 0]),
+                      is_extended_id=False)
+    for _ in range(count):
+        t0 = time.perf_counter()
+        bus.send(req)
+        while True:
+            m = bus.recv(5.0)
+            if m is None or m.arbitration_id == 0x581:
+                break
+        if m is None:
+            break
+        rtts.append(time.perf_counter() - t0)
+    out = {"rtts": rtts}
+bus.shutdown()
+print(json.dumps(out))
+"""
+
+
+def _pair(port: int, roles: tuple[str, str], count: int, tune: bool) -> dict:
+    procs = {
+        r: subprocess.Popen(
+            [sys.executable, "-c", CLIENT, r, str(port), str(count), "1" if tune else "0"],
+            stdout=subprocess.PIPE,
+            text=True,
+        )
+        for r in roles
+    }
+    results = {}
+    for r, p in procs.items():
+        out, _ = p.communicate(timeout=300)
+        if p.returncode != 0:
+            raise SystemExit(f"bench_hub: {r} process failed (exit {p.returncode})")
+        results[r] = json.loads(out.strip().splitlines()[-1])
+    return results
+
+
+def throughput(frames: int, bitrate: int) -> tuple[float, float]:
+    """(frames/s at the sink, hub CPU time per frame in µs) for a burst of 8-byte frames.
+
+    The CPU time is this process's (the hub thread's; the clients are child processes) over the
+    whole run, so it slightly overstates the per-frame cost.
+    """
+    with Hub(port=0, bitrate=bitrate) as hub:
+        cpu0 = os.times()
+        res = _pair(hub.port, ("source", "sink"), frames, True)
+        cpu1 = os.times()
+        sink = res["sink"]
+        if sink["n"] != frames:
+            raise SystemExit(f"bench_hub: sink got {sink['n']} of {frames} frames")
+    rate = (frames - 1) / sink["span"]
+    cpu = (cpu1.user - cpu0.user) + (cpu1.system - cpu0.system)
+    return rate, 1e6 * cpu / frames
+
+
+def round_trip(count: int, tune: bool) -> list[float]:
+    """Round-trip times (s) of count request/response exchanges at 1 Mbit/s."""
+    with Hub(port=0) as hub:
+        res = _pair(hub.port, ("responder", "requester"), count, tune)
+    return res["requester"]["rtts"]
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--frames", type=int, default=20_000, help="frames per throughput run")
+    parser.add_argument("--round-trips", type=int, default=1000, help="exchanges per RTT run")
+    args = parser.parse_args(argv)
+
+    import random
+
+    rng = random.Random(1)
+    sample = [bytes(rng.randrange(256) for _ in range(8)) for _ in range(args.frames)]
+    mean_bits = sum(frame_bits(0x181, d) for d in sample) / len(sample)
+    print(f"hub benchmark  (python {sys.version.split()[0]}, {os.cpu_count()} CPUs)")
+    print(f"8-byte frames: mean {mean_bits:.1f} bits with exact stuffing")
+    for bitrate, label in ((1_000_000, "1 Mbit/s emulated"), (1_000_000_000, "pacing off")):
+        rate, us = throughput(args.frames, bitrate)
+        limit = bitrate / mean_bits
+        extra = f" (bus limit {limit:,.0f})" if bitrate <= 1_000_000 else ""
+        print(
+            f"throughput, {label:18s}: {rate:9,.0f} frames/s{extra}; hub CPU {us:.1f} µs/frame"
+            f" = {us * 9000 / 1e4:.0f} % of a core at 9,000 frames/s"
+        )
+    floor = frame_bits(0x601, bytes([0x40, 0, 0x10, 0, 0, 0, 0, 0])) + frame_bits(
+        0x581, bytes([0x43, 0, 0x10, 0, 1, 2, 3, 4])
+    )
+    print(f"round trips at 1 Mbit/s include 2 frames on the bus: {floor / 1e3:.3f} ms")
+    for tune in (True, False):
+        rtts = sorted(round_trip(args.round_trips, tune))
+        if not rtts:
+            print(f"round trip, tcp_tune={tune!s:5s}: no replies")
+            continue
+        p95 = rtts[min(len(rtts) - 1, int(0.95 * len(rtts)))]
+        print(
+            f"SDO-like round trip, tcp_tune={tune!s:5s}: median {statistics.median(rtts) * 1e3:.3f}"
+            f" ms, p95 {p95 * 1e3:.3f} ms, mean {statistics.fmean(rtts) * 1e3:.3f} ms"
+            f" ({len(rtts)} exchanges)"
+        )
+    return 0
+
+
+if __name__ == "__main__":
+    t0 = time.time()
+    code = main()
+    print(f"(bench took {time.time() - t0:.1f} s)")
+    sys.exit(code)
