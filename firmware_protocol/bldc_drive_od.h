@@ -2087,12 +2087,12 @@
 #define OD_TRACE_CONFIG__TRIGGER_POSITION_PDO                    0u
 #define OD_TRACE_CONFIG__TRIGGER_POSITION_DEFAULT                0x00000000UL /* samples */
 #define OD_TRACE_CONFIG__TRIGGER_POSITION_REF                    0x21000B20UL
-/* 0x2100:0C trace_config.capacity UNSIGNED32 const [samples] - REAL32 samples, all channels (64 KiB XINTF SRAM) */
+/* 0x2100:0C trace_config.capacity UNSIGNED32 ro [samples] - REAL32 samples, all channels (64 KiB XINTF SRAM) */
 #define OD_TRACE_CONFIG__CAPACITY_INDEX                          0x2100u
 #define OD_TRACE_CONFIG__CAPACITY_SUB                            0x0Cu
 #define OD_TRACE_CONFIG__CAPACITY_TYPE                           OD_TYPE_U32
 #define OD_TRACE_CONFIG__CAPACITY_CTYPE                          uint32_t
-#define OD_TRACE_CONFIG__CAPACITY_ACCESS                         OD_ACCESS_CONST
+#define OD_TRACE_CONFIG__CAPACITY_ACCESS                         OD_ACCESS_RO
 #define OD_TRACE_CONFIG__CAPACITY_PDO                            0u
 #define OD_TRACE_CONFIG__CAPACITY_DEFAULT                        0x00004000UL /* samples */
 #define OD_TRACE_CONFIG__CAPACITY_REF                            0x21000C20UL

@@ -157,7 +157,7 @@ def test_contract_python_names_resolve() -> None:
         ("trace_config.divider", 0x2100, 2, 6, "rw", 1),
         ("trace_config.trigger_source", 0x2100, 5, 7, "rw", 0x20400120),
         ("trace_config.state", 0x2100, 10, 5, "ro", None),
-        ("trace_config.capacity", 0x2100, 12, 7, None, 16384),
+        ("trace_config.capacity", 0x2100, 12, 7, "ro", 16384),
         ("trace_channels.channel_8", 0x2101, 8, 7, "rw", None),
         ("trace_data", 0x2102, 0, 0xF, "ro", None),
         ("sim_load.T_load", 0x5000, 1, 8, "rw", None),
