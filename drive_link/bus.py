@@ -8,6 +8,7 @@ rawmode on 127.0.0.1).
 
 from __future__ import annotations
 
+import socket
 from typing import Any
 
 import can
@@ -54,6 +55,8 @@ def open_bus(**settings: Any) -> can.BusABC:
     Raises :class:`BusError` with one line when the bus cannot be opened.
     """
     kw = bus_settings(**settings)
+    if kw.get("interface") == "socketcand" and "host" in kw:
+        _probe_tcp(kw["host"], int(kw.get("port", 29536)))
     try:
         return can.Bus(**kw)
     except Exception as exc:  # python-can raises many kinds (OSError, CanError, ValueError, ...)
@@ -62,3 +65,14 @@ def open_bus(**settings: Any) -> can.BusABC:
         )
         msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise BusError(f"cannot open CAN bus ({desc or 'python-can defaults'}): {msg}") from None
+
+
+def _probe_tcp(host: str, port: int, timeout: float = 2.0) -> None:
+    """Fail fast if nothing listens (python-can's socketcand retries silently for 10 s)."""
+    try:
+        with socket.create_connection((host, port), timeout=timeout):
+            pass
+    except OSError as exc:
+        raise BusError(
+            f"cannot open CAN bus: no hub at {host}:{port} ({exc.strerror or exc})"
+        ) from None
