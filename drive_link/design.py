@@ -603,6 +603,7 @@ def predicted_step(
     feedforward: bool | None = None,
     v_loss: float = 0.0,
     v_comp: float = 0.0,
+    e_L_final: float | None = None,
 ) -> PredictedStep:
     """Predicted response of i_p to a reference step i_start → i_final (linear model, eq. 6).
 
@@ -626,6 +627,8 @@ def predicted_step(
         v_loss: constant voltage lost in the inverter (blanking time, switch drops) [V].
         v_comp: the predictive law's non-ideality compensation term of eq. (25) [V]
             (see :func:`eq25_compensation`); predictive only.
+        e_L_final: back-EMF after sample 0 [V] (default e_L): a back-EMF step, e.g. to see the
+            disturbance response of eq. (12)/(21) with i_start = i_final.
 
     Returns:
         :class:`PredictedStep` (float64 arrays of length n_samples).
@@ -659,7 +662,8 @@ def predicted_step(
     A[2:, 2:] = Ac
     Bw[2:, 0], Bw[2:, 1], Bw[2:, 3] = Bc[:, 0], Bc[:, 1], Bc[:, 2]
     w0 = np.array([i_start, e_L, v_loss, v_comp], dtype=float)
-    w1 = np.array([i_final, e_L, v_loss, v_comp], dtype=float)
+    e1 = e_L if e_L_final is None else _finite("e_L_final", e_L_final)
+    w1 = np.array([i_final, e1, v_loss, v_comp], dtype=float)
     eye = np.eye(2 + m)
     try:
         X = np.linalg.solve(eye - A, Bw @ w0)
@@ -678,7 +682,7 @@ def predicted_step(
     for k in range(n):
         i_p[k] = X[0]
         v_L[k] = X[1]
-        u[k] = Cc @ X[2:] + Dc[0] * (i_final - X[0]) + Dc[1] * e_L + Dc[2] * v_comp
+        u[k] = Cc @ X[2:] + Dc[0] * (i_final - X[0]) + Dc[1] * e1 + Dc[2] * v_comp
         X = A @ X + bw1
     t = np.arange(n) / fs
     return PredictedStep(t, i_p, np.full(n, float(i_final)), v_L, u, stable, i_p_final, radius)
