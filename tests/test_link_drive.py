@@ -7,6 +7,7 @@ names, limits, trace layout), and the paper's closed-loop equations (python-cont
 from __future__ import annotations
 
 import csv
+import itertools
 import struct
 import threading
 import time
@@ -207,7 +208,7 @@ def test_trace_capture_csv_png_and_parallel_status(drive, tmp_path):
     k = tr.trigger_index
     assert ref[k - 1] < 7.5 <= ref[k]  # rising crossing of the level at the trigger sample
     assert progress[-1] == (1500 * 3 * 4, 1500 * 3 * 4)
-    assert all(a[0] <= b[0] for a, b in zip(progress, progress[1:]))
+    assert all(a[0] <= b[0] for a, b in itertools.pairwise(progress))
     path = tr.to_csv(tmp_path / "t.csv")
     with path.open() as fh:
         rows = list(csv.reader(fh))
