@@ -184,17 +184,32 @@ class Bench:
                 raise ValueError(f"unknown command {name!r}")
         self.emit("state")
 
-    def set_mode(self, mode: str) -> None:
+    def set_mode(self, mode: str, setpoint: Callable[[], None] | None = None) -> None:
+        """Switch to "speed" or "current" mode.
+
+        The drive refuses a mode change while OPERATION ENABLED (SDO abort 0x08000022), so the
+        bench disables, switches, applies ``setpoint`` (if given) and enables again; the
+        power stage is off for that moment (the motor coasts).
+        """
         with self.lock:
+            if _safe(lambda: self.drive.mode) == mode:
+                if setpoint is not None:
+                    setpoint()
+                return
+            enabled = _safe(lambda: self.drive.state) == "OPERATION ENABLED"
+            if enabled:
+                self.drive.disable()
             self.drive.set_mode(mode)
+            if setpoint is not None:
+                setpoint()
+            if enabled:
+                self.drive.enable(timeout=2.0)
         self.emit("state")
 
     def set_speed(self, rpm: float) -> None:
-        """Speed setpoint (rpm); switches to speed mode if needed."""
+        """Speed setpoint (rpm); switches to speed mode if needed (see :meth:`set_mode`)."""
         with self.lock:
-            if _safe(lambda: self.drive.mode) != "speed":
-                self.drive.set_mode("speed")
-            self.drive.set_speed(rpm)
+            self.set_mode("speed", lambda: self.drive.set_speed(rpm))
             self.speed_setpoint = float(rpm)
             self.last_step_t = time.monotonic()
         self.emit("setpoint", {"rpm": rpm})
@@ -208,9 +223,7 @@ class Bench:
     def set_current(self, amps: float) -> None:
         """Pseudo-current setpoint i_p* (A); switches to current mode if needed."""
         with self.lock:
-            if _safe(lambda: self.drive.mode) != "current":
-                self.drive.set_mode("current")
-            self.drive.set_current(amps)
+            self.set_mode("current", lambda: self.drive.set_current(amps))
             self.current_setpoint = float(amps)
             self.last_step_t = time.monotonic()
         self.emit("setpoint", {"i_p_ref": amps})

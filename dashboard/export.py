@@ -10,14 +10,11 @@ from dashboard.bench import Capture
 
 
 def capture_csv(cap: Capture) -> bytes:
-    """CSV text of a capture; the header names the columns with their units where known."""
+    """CSV of a capture: one header row of column names ("t" in s first), then one row per
+    sample. The capture's metadata is in ``GET /api/trace/{id}`` (not in the CSV)."""
     names = list(cap.columns)
     data = np.column_stack([np.asarray(cap.columns[n], dtype=np.float64) for n in names])
     buf = io.StringIO()
-    buf.write(f"# {cap.kind} capture {cap.id}\n")
-    for k, v in cap.meta.items():
-        if isinstance(v, (int, float, str)):
-            buf.write(f"# {k} = {v}\n")
     np.savetxt(buf, data, delimiter=",", header=",".join(names), comments="", fmt="%.9g")
     return buf.getvalue().encode()
 

@@ -49,15 +49,33 @@ def _poles(tf: design.DiscreteTF) -> list[list[float]]:
     return [[float(p.real), float(p.imag)] for p in tf.poles()]
 
 
+def _phase_margin(m: design.Margins) -> tuple[float, float]:
+    """(PM °, crossover Hz): the smallest |PM| over all gain crossovers, ties (within 1e-6°)
+    going to the lowest crossover frequency. drive_link's own pick compares |PM| rounded to 9
+    digits, so for the deadbeat loop 1/(z² − 1) float noise made it report the −60° of the
+    20.8 kHz crossing instead of the +60° at 4.2 kHz (python-control, after minreal: +60°)."""
+    if not m.phase_margins_deg:
+        return m.phase_margin_deg, m.gain_crossover_hz
+    smallest = min(abs(p) for p in m.phase_margins_deg)
+    cands = [
+        (hz, p)
+        for p, hz in zip(m.phase_margins_deg, m.gain_crossovers_hz, strict=True)
+        if abs(p) - smallest <= 1e-6
+    ]
+    hz, pm = min(cands)
+    return pm, hz
+
+
 def _margins_dict(loop: design.DiscreteTF, closed: design.DiscreteTF) -> dict[str, Any]:
     m = design.margins(loop)
     stable = design.is_stable(closed)
+    pm, pm_hz = _phase_margin(m)
     return {
         "stable": stable,
         "gain_margin_dB": m.gain_margin_db,
-        "phase_margin_deg": m.phase_margin_deg,
+        "phase_margin_deg": pm,
         "S_inf": m.sensitivity_peak,
-        "gain_crossover_hz": m.gain_crossover_hz,
+        "gain_crossover_hz": pm_hz,
         "phase_crossover_hz": m.phase_crossover_hz,
         "poles": _poles(closed),
         "max_pole_radius": float(np.max(np.abs(closed.poles()))) if closed.den.size > 1 else 0.0,

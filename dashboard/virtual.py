@@ -8,9 +8,7 @@ dashboard reaches it only through the hub, exactly like a real drive on a bus.
 from __future__ import annotations
 
 import contextlib
-import os
-import subprocess
-import sys
+import tempfile
 import time
 from collections.abc import Iterator
 
@@ -40,6 +38,9 @@ def open_bench(config: BenchConfig) -> Iterator[Bench]:
             )
             desc = f"{config.interface} {config.channel or ''}".strip()
         stack.callback(drive.close)
+        if drive.nmt_state != "OPERATIONAL":
+            drive.nmt("start")  # TPDOs (live values) flow in OPERATIONAL only
+            _wait_operational(drive)
         bench = Bench(drive, description=desc, node_id=config.node_id, virtual=config.virtual)
         bench.hub_port = port if config.virtual else None
         stack.callback(bench.close)
@@ -71,45 +72,38 @@ def _drive_in_process(config: BenchConfig, port: int) -> Iterator[None]:
     bus = can.Bus(
         interface="socketcand", host="127.0.0.1", port=port, channel="vcan0", tcp_tune=True
     )
-    try:
-        vd = VirtualDrive(bus, config.node_id, speed_factor=config.speed_factor)
-        start = getattr(vd, "start", None)
-        if callable(start):
-            start()
+    with tempfile.TemporaryDirectory(prefix="drive-dashboard-") as tmp:
         try:
-            yield
+            vd = VirtualDrive(
+                bus, config.node_id, store_path=f"{tmp}/parameters.json", speed=config.speed_factor
+            )
+            vd.start()
+            try:
+                yield
+            finally:
+                vd.stop()
         finally:
-            vd.stop() if hasattr(vd, "stop") else vd.close()
-    finally:
-        bus.shutdown()
+            bus.shutdown()
 
 
 @contextlib.contextmanager
 def _drive_process(config: BenchConfig, port: int) -> Iterator[None]:
-    cmd = [
-        sys.executable,
-        "-m",
-        "virtual_drive.cli",
-        "run",
-        "--host",
-        "127.0.0.1",
-        "--port",
-        str(port),
-        "--node",
-        str(config.node_id),
-        "--speed-factor",
-        str(config.speed_factor),
-    ]
-    proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, env={**os.environ})
-    try:
-        time.sleep(0.3)
-        if proc.poll() is not None:
-            raise RuntimeError(f"virtual drive exited at start (status {proc.returncode})")
-        yield
-    finally:
-        proc.terminate()
-        try:
-            proc.wait(timeout=5)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
+    from virtual_drive.node.process import spawn_virtual_drive
+
+    with tempfile.TemporaryDirectory(prefix="drive-dashboard-") as tmp:
+        proc = spawn_virtual_drive(
+            port=port,
+            node_id=config.node_id,
+            store=f"{tmp}/parameters.json",
+            speed=config.speed_factor,
+        )
+        with proc:
+            yield
+
+
+def _wait_operational(drive, timeout: float = 2.0) -> None:
+    deadline = time.monotonic() + timeout
+    while drive.nmt_state != "OPERATIONAL":
+        if time.monotonic() > deadline:
+            raise RuntimeError(f"drive did not enter OPERATIONAL ({drive.nmt_state})")
+        time.sleep(0.02)

@@ -1,0 +1,342 @@
+"""REST API of drive-dashboard against the virtual drive (loopback hub + VirtualDrive, in process).
+
+Truths used: CiA 402 state names, the paper's equations through python-control (test-only oracle)
+for margins, ‖S‖∞ and the PI overshoot, the paper's printed IP gains (k_p = 0.2113, k_i =
+2.9994e-5 for ξ = 1, ω_n = 2.3 rad/s), the IP loop's property of no overshoot (ξ = 1), and the
+drive's own object values read through drive_link for "nothing changed".
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import re
+import struct
+import time
+
+import control as ct
+import numpy as np
+import pytest
+from fastapi.testclient import TestClient
+from starlette.websockets import WebSocketDisconnect
+
+from dashboard.app import create_app
+from dashboard.config import BenchConfig
+
+pytestmark = pytest.mark.timeout(120)
+
+SPEED_FACTOR = 4.0
+TS = 20e-6
+R, L = 6.2e-3, 14.8e-6
+
+
+def f32(x: float) -> float:
+    return struct.unpack("<f", struct.pack("<f", x))[0]
+
+
+@pytest.fixture(scope="module")
+def client():
+    cfg = BenchConfig(virtual=True, speed_factor=SPEED_FACTOR, gui_port=0)
+    with TestClient(create_app(cfg, gui=False)) as c:
+        yield c
+
+
+@pytest.fixture()
+def hdr(client):
+    r = client.post("/api/control", json={"client": "pytest", "take_over": True})
+    assert r.status_code == 200
+    return {"X-Control-Token": r.json()["token"]}
+
+
+def drive(client):
+    """drive_link's Drive behind the app: the independent reader of the drive's objects."""
+    return client.app.state.bench.drive
+
+
+def speeds(client, seconds: float) -> tuple[np.ndarray, np.ndarray]:
+    w = drive(client).live.window(seconds, ["measurements.speed", "measurements.speed_ref"])
+    t, v = np.asarray(w["t"]), np.asarray(w["measurements.speed"])
+    ok = np.isfinite(v)  # NaN before the first frame of a stream inside the window
+    return t[ok], v[ok]
+
+
+def wait_speed(client, target: float, tol: float, timeout: float) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        _, w = speeds(client, 0.1)
+        if w.size and abs(w[-1] - target) <= tol:
+            return
+        time.sleep(0.05)
+    raise AssertionError(f"speed did not reach {target} rpm (last {w[-1] if w.size else None})")
+
+
+# ---------------------------------------------------------------- state, docs, access rules
+def test_state_and_offline_docs(client):
+    s = client.get("/api/state").json()
+    assert s["nmt_state"] == "OPERATIONAL"
+    assert s["node_id"] == 1 and s["virtual"] is True
+    assert "127.0.0.1" in s["bus"]
+    assert s["heartbeat_age_s"] is not None and 0 <= s["heartbeat_age_s"] < 0.5
+    docs = client.get("/docs")
+    assert docs.status_code == 200 and "openapi.json" in docs.text
+    assert not re.search(r"""(src|href)\s*=\s*["']?(https?:)?//""", docs.text)  # no CDN
+    spec = client.get("/openapi.json").json()
+    for path in ("/api/gains", "/api/steps/speed", "/api/trace/capture", "/api/identify"):
+        assert path in spec["paths"]
+
+
+def test_control_lease_and_json_only(client):
+    a = client.post("/api/control", json={"client": "A", "take_over": True}).json()
+    r = client.post("/api/control", json={"client": "B"})
+    assert r.status_code == 409 and "A controls" in r.json()["detail"]
+    assert client.post("/api/command", json={"command": "disable"}).status_code == 409
+    r = client.post(
+        "/api/command", data={"command": "disable"}, headers={"X-Control-Token": a["token"]}
+    )
+    assert r.status_code == 415  # a cross-site HTML form cannot send JSON
+    b = client.post("/api/control", json={"client": "B", "take_over": True}).json()
+    assert client.get("/api/state").json()["controller"]["client"] == "B"  # visible
+    r = client.post(
+        "/api/command", json={"command": "disable"}, headers={"X-Control-Token": a["token"]}
+    )
+    assert r.status_code == 409  # A only watches now
+    r = client.post(
+        "/api/command", json={"command": "disable"}, headers={"X-Control-Token": b["token"]}
+    )
+    assert r.status_code == 200
+
+
+def test_access_token_when_remote(client):
+    cfg = client.app.state.config
+    cfg.token = "secret-token-1234"
+    try:
+        assert client.get("/api/state").status_code == 401
+        assert client.get("/api/state?token=wrong-token-0000").status_code == 401
+        ok = client.get("/api/state", headers={"Authorization": "Bearer secret-token-1234"})
+        assert ok.status_code == 200
+    finally:
+        cfg.token = None
+
+
+def test_stream_checks_origin_and_streams(client):
+    with pytest.raises(WebSocketDisconnect) as exc:
+        with client.websocket_connect(
+            "/api/stream", headers={"origin": "http://evil.example"}
+        ) as ws:
+            ws.receive_text()
+    assert exc.value.code == 1008
+    with client.websocket_connect("/api/stream", headers={"origin": "http://127.0.0.1:8000"}) as ws:
+        kinds = set()
+        for _ in range(10):
+            msg = json.loads(ws.receive_text())
+            kinds.add(msg["type"])
+            if msg["type"] == "live":
+                assert len(msg["t"]) == len(msg["measurements.speed"]) > 0
+            if kinds == {"live", "state"}:
+                break
+        assert kinds == {"live", "state"}
+
+
+# ---------------------------------------------------------------- speed loop (Figs. 18–20)
+def test_speed_step_reaches_setpoint_without_overshoot(client, hdr):
+    assert client.put("/api/mode", json={"mode": "speed"}, headers=hdr).status_code == 200
+    assert client.post("/api/command", json={"command": "enable"}, headers=hdr).json()["state"] == (
+        "OPERATION ENABLED"
+    )
+    client.put("/api/setpoints/speed", json={"rpm": 0}, headers=hdr)
+    wait_speed(client, 0.0, 5.0, 10.0)
+    r = client.post("/api/steps/speed", json={"delta_rpm": 500}, headers=hdr)
+    assert r.status_code == 200 and r.json()["rpm"] == 500
+    assert drive(client).read("target_velocity") == 500
+    t0 = time.monotonic()
+    wait_speed(client, 500.0, 5.0, 12.0)
+    time.sleep(1.0 / SPEED_FACTOR)  # 1 s of drive time at the setpoint
+    span = time.monotonic() - t0 + 0.5
+    _, w = speeds(client, span)
+    assert abs(w[-1] - 500.0) < 5.0
+    assert w.max() < 500.0 * 1.02  # ξ = 1: no overshoot (paper Section V)
+
+
+def test_load_step_recovers(client, hdr):
+    client.put("/api/setpoints/speed", json={"rpm": 500}, headers=hdr)
+    wait_speed(client, 500.0, 5.0, 12.0)
+    r = client.post("/api/steps/load", json={"T_load": 2.0}, headers=hdr)
+    assert r.status_code == 200
+    assert math.isclose(drive(client).read("sim_load.T_load"), 2.0)
+    time.sleep(3.0 / SPEED_FACTOR)
+    _, w = speeds(client, 3.0 / SPEED_FACTOR)
+    assert w.min() < 495.0  # the load step is visible as a dip (Fig. 20)
+    wait_speed(client, 500.0, 5.0, 12.0)  # the IP integral action removes it
+    client.post("/api/steps/load", json={"T_load": 0.0}, headers=hdr)
+
+
+def test_sequence_runs_in_order(client, hdr):
+    body = {"steps": [{"at_s": 0.0, "rpm": 300}, {"at_s": 0.3, "rpm": 600}]}
+    assert client.post("/api/steps/sequence", json=body, headers=hdr).status_code == 200
+    time.sleep(0.1)
+    assert drive(client).read("target_velocity") == 300
+    time.sleep(0.5)
+    assert drive(client).read("target_velocity") == 600
+    assert client.get("/api/state").json()["speed_setpoint"] == 600
+    bad = {"steps": [{"at_s": 1.0, "rpm": 300}, {"at_s": 0.5, "rpm": 600}]}
+    assert client.post("/api/steps/sequence", json=bad, headers=hdr).status_code == 422
+
+
+def test_bad_setpoint_changes_nothing(client, hdr):
+    before = drive(client).read("target_velocity")
+    for body in ({"rpm": 5000}, {"rpm": "fast"}, {"rpm": 100, "extra": 1}, {}):
+        assert client.put("/api/setpoints/speed", json=body, headers=hdr).status_code == 422
+    assert client.post("/api/steps/load", json={"T_load": 1e9}, headers=hdr).status_code == 422
+    assert drive(client).read("target_velocity") == before
+
+
+# ---------------------------------------------------------------- gains
+def deadbeat_loop(L_c: float, R_c: float = R) -> ct.TransferFunction:
+    """C_db(z) P(z) from the paper's eqs. (4)–(8), (15) with python-control."""
+    Phi, Gamma = math.exp(-R * TS / L), (1 - math.exp(-R * TS / L)) / (2 * R)
+    Phi_c, Gamma_c = math.exp(-R_c * TS / L_c), (1 - math.exp(-R_c * TS / L_c)) / (2 * R_c)
+    P = ct.tf([Gamma], [1, -Phi, 0], TS)
+    C = ct.tf([1, -Phi_c, 0], [Gamma_c, 0, -Gamma_c], TS)
+    return ct.minreal(C * P, verbose=False)
+
+
+def oracle(loop: ct.TransferFunction) -> tuple[float, float, float, bool]:
+    gm, pm, _, _ = ct.margin(loop)
+    w = np.linspace(1.0, math.pi / TS * 0.99999, 200_000)
+    S = 1.0 / np.abs(1.0 + loop(np.exp(1j * w * TS)))
+    cl = ct.feedback(loop, 1)
+    stable = bool(np.all(np.abs(cl.poles()) < 1.0))
+    return 20 * math.log10(gm), pm, float(S.max()), stable
+
+
+def test_gains_preview_matches_python_control(client):
+    for ratio in (1.0, 0.6, 1.5):
+        p = client.post("/api/gains/preview", json={"type": "deadbeat", "L_c": ratio * L, "R_c": R})
+        assert p.status_code == 200
+        c = p.json()["current"]
+        gm_db, pm, s_inf, stable = oracle(deadbeat_loop(ratio * L))
+        assert c["stable"] == stable is True
+        assert c["gain_margin_dB"] == pytest.approx(gm_db, abs=0.05)
+        assert c["phase_margin_deg"] == pytest.approx(pm, abs=0.5)
+        assert c["S_inf"] == pytest.approx(s_inf, rel=2e-3)
+    ref = client.post("/api/gains/preview", json={"L_c": L}).json()["current"]
+    assert ref["phase_margin_deg"] == pytest.approx(60.0, abs=0.2)  # C·P = 1/(z² − 1)
+    assert ref["S_inf"] == pytest.approx(2.0, rel=1e-3)
+
+
+def test_gains_apply_readback_and_bad_input_changes_nothing(client, hdr):
+    before = client.get("/api/gains").json()
+    assert before["L_c"] == pytest.approx(f32(L))
+    for body in (
+        {"L_c": 2.5 * L},  # outside (0, 2L): the deadbeat loop would be unstable
+        {"L_c": -1e-6},
+        {"k_p": "abc"},
+        {"Lc": 1e-5},
+        {},
+        {"type": "bangbang"},
+    ):
+        r = client.put("/api/gains", json=body, headers=hdr)
+        assert r.status_code == 422, body
+    assert client.get("/api/gains").json() == before
+    r = client.put("/api/gains", json={"L_c": 1.5 * L, "speed_k_p": 0.25}, headers=hdr)
+    assert r.status_code == 200
+    back = r.json()
+    assert back["L_c"] == f32(1.5 * L) and back["speed_k_p"] == f32(0.25)
+    assert back["L_c_over_L"] == pytest.approx(1.5, rel=1e-6)
+    assert drive(client).read("current_controller.L_c") == f32(1.5 * L)
+    diff = client.get("/api/gains/diff").json()
+    assert diff["stored"] is None
+    assert client.post("/api/gains/store", json={}, headers=hdr).status_code == 200
+    assert client.get("/api/gains/diff").json()["differs"] == []
+    client.put("/api/gains", json={"L_c": L, "speed_k_p": 0.2113}, headers=hdr)
+    assert set(client.get("/api/gains/diff").json()["differs"]) >= {"L_c", "speed_k_p"}
+
+
+def test_ip_design_reproduces_paper_gains(client):
+    r = client.post(
+        "/api/gains/ip_design", json={"xi": 1.0, "omega_n": 2.3, "a": 0.9999785, "b": 3.33715e-4}
+    )
+    assert r.status_code == 200
+    assert r.json()["speed_k_p"] == pytest.approx(0.2113, rel=2e-3)
+    assert r.json()["speed_k_i"] == pytest.approx(2.9994e-5, rel=2e-3)
+    assert client.post("/api/gains/ip_design", json={"xi": -1}).status_code == 422
+
+
+# ---------------------------------------------------------------- current loop (Fig. 13)
+def pi_overshoot_oracle() -> tuple[float, float]:
+    Phi, Gamma = math.exp(-R * TS / L), (1 - math.exp(-R * TS / L)) / (2 * R)
+    P = ct.tf([Gamma], [1, -Phi, 0], TS)
+    C = ct.tf([0.4647 + 0.0492, -0.4647], [1, -1], TS)
+    info = ct.step_info(ct.feedback(C * P, 1), SettlingTimeThreshold=0.02)
+    return info["Overshoot"], info["SettlingTime"]
+
+
+def test_current_step_deadbeat_and_pi(client, hdr):
+    client.put("/api/mode", json={"mode": "current"}, headers=hdr)
+    client.post("/api/command", json={"command": "enable"}, headers=hdr)
+    r = client.post(
+        "/api/steps/current", json={"from_A": 15, "to_A": 20, "duration_ms": 2}, headers=hdr
+    )
+    assert r.status_code == 200, r.text
+    db = r.json()
+    assert db["controller"] == "deadbeat"
+    assert db["metrics"]["settling_time_s"] <= 5 * TS  # deadbeat k = 2 (plus ripple)
+    assert abs(db["metrics"]["steady_state_error_A"]) < 0.3
+    assert client.put("/api/gains", json={"type": "pi"}, headers=hdr).status_code == 200
+    try:
+        r = client.post(
+            "/api/steps/current", json={"from_A": 15, "to_A": 20, "duration_ms": 3}, headers=hdr
+        )
+        pi = r.json()
+        os_ref, ts_ref = pi_overshoot_oracle()
+        assert pi["metrics"]["overshoot_pct"] == pytest.approx(os_ref, abs=6.0)
+        assert pi["metrics"]["settling_time_s"] == pytest.approx(ts_ref, rel=0.35)
+        assert pi["metrics"]["settling_time_s"] > 4 * db["metrics"]["settling_time_s"]
+    finally:
+        client.put("/api/gains", json={"type": "deadbeat"}, headers=hdr)
+    cap = pi["capture"]["id"]
+    rows = list(csv.reader(io.StringIO(client.get(f"/api/trace/{cap}/csv").text)))
+    header = next(r for r in rows if r and not r[0].startswith("#"))
+    assert header[:2] == ["t", "i_p"] and "model" in header
+
+
+def test_trace_capture_csv_and_png(client, hdr):
+    body = {"channels": ["measurements.i_p", "measurements.speed"], "length": 500, "pre_trigger": 0}
+    r = client.post("/api/trace/capture", json=body, headers=hdr)
+    assert r.status_code == 200, r.text
+    cap = r.json()
+    assert cap["samples"] == 500
+    text = client.get(f"/api/trace/{cap['id']}/csv").text
+    data = np.genfromtxt(io.StringIO(text), delimiter=",", comments="#", names=True)
+    assert set(data.dtype.names) >= {"t", "i_p", "speed"}
+    assert np.allclose(np.diff(data["t"]), TS, rtol=1e-4)  # 50 kHz
+    png = client.get(f"/api/trace/{cap['id']}/png")
+    assert png.headers["content-type"] == "image/png" and png.content[:8] == b"\x89PNG\r\n\x1a\n"
+    import matplotlib.image as mpimg
+
+    img = mpimg.imread(io.BytesIO(png.content), format="png")
+    assert img.shape[0] > 200 and img.shape[1] > 400
+    assert client.get("/api/trace/99999/csv").status_code == 404
+    bad = {"channels": ["measurements.nothing"], "length": 10}
+    assert client.post("/api/trace/capture", json=bad, headers=hdr).status_code == 422
+
+
+def test_identify_and_carry_into_ip_design(client, hdr):
+    r = client.post(
+        "/api/identify", json={"from_A": 15, "to_A": 30, "duration_s": 1.0}, headers=hdr
+    )
+    assert r.status_code == 200, r.text
+    res = r.json()
+    assert 0.9999 < res["a"] < 1.0 and res["b"] > 0
+    assert res["r2"] > 0.98
+    assert client.get("/api/state").json()["identified"]["a"] == pytest.approx(res["a"])
+    d = client.post("/api/gains/ip_design", json={"xi": 1.0, "omega_n": 2.3}).json()
+    assert d["a"] == pytest.approx(res["a"]) and d["b"] == pytest.approx(res["b"])
+    # eq. (27) with the designed gains has a double pole at e^{-ξ ω_n Ts} (oracle: control)
+    kp, ki, a, b = d["speed_k_p"], d["speed_k_i"], d["a"], d["b"]
+    cl = ct.tf([kp * b * ki, 0], [1, kp * b * ki + kp * b - 1 - a, a - kp * b], TS)
+    assert np.allclose(np.abs(cl.poles()), math.exp(-2.3 * TS), atol=1e-7)
+    client.put("/api/mode", json={"mode": "speed"}, headers=hdr)
+    client.put("/api/setpoints/speed", json={"rpm": 0}, headers=hdr)
