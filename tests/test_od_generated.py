@@ -11,6 +11,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import canopen
 import pytest
 
 from firmware_protocol import EDS_PATH, load_od
@@ -245,3 +246,59 @@ def test_generate_bad_input_is_one_line_and_non_zero(tmp_path: Path) -> None:
     result = _generate("--check", "--eds", str(tmp_path / "missing.eds"))
     assert result.returncode != 0
     assert result.stderr.strip().count("\n") == 0 and "missing.eds" in result.stderr
+
+
+def test_strict_eds_export_keeps_the_od_and_only_cia306_keys(tmp_path: Path) -> None:
+    out = tmp_path / "strict.eds"
+    result = _generate("--check", "--strict-eds", str(out))
+    assert result.returncode == 0, result.stderr
+    cp = configparser.RawConfigParser(inline_comment_prefixes=(";",))
+    cp.optionxform = str  # type: ignore[assignment,method-assign]
+    cp.read(out, encoding="utf-8")
+    # the object-section keys CiA 306 defines (as accepted by strict checkers such as lely dcfchk)
+    cia306 = {
+        "SubNumber",
+        "ParameterName",
+        "ObjectType",
+        "DataType",
+        "AccessType",
+        "LowLimit",
+        "HighLimit",
+        "DefaultValue",
+        "PDOMapping",
+        "ObjFlags",
+        "CompactSubObj",
+        "ParameterValue",
+        "UploadFile",
+        "DownloadFile",
+        "Denotation",
+        "ParamRefd",
+    }
+    n = 0
+    for sec in cp.sections():
+        if re.fullmatch(r"[0-9A-F]{4}(sub[0-9A-F]+)?", sec):
+            assert set(cp[sec]) <= cia306, sec
+            n += 1
+    assert n == len(_eds_rows()) + sum(
+        1 for s in cp.sections() if re.fullmatch(r"[0-9A-F]{4}", s) and "SubNumber" in cp[s]
+    )
+    strict, full = canopen.import_od(str(out), 1), canopen.import_od(str(EDS_PATH), 1)
+
+    def flat(od):
+        rows = set()
+        for obj in od.values():
+            for var in obj.values() if hasattr(obj, "values") else [obj]:
+                rows.add(
+                    (
+                        var.index,
+                        var.subindex,
+                        var.name,
+                        var.data_type,
+                        var.access_type,
+                        var.pdo_mappable,
+                        repr(var.default),
+                    )
+                )
+        return rows
+
+    assert flat(strict) == flat(full)
