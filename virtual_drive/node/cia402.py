@@ -154,13 +154,13 @@ class Cia402StateMachine:
             rising_reset = bool(controlword & 0x80) and not (self._last_cw & 0x80)
             self._last_cw = controlword
             self.controlword = controlword
-            if rising_reset:
-                if self.state == FAULT and self._can_reset():
+            if self.state == FAULT:
+                if rising_reset and self._can_reset():
                     self.fault_code = 0
                     self._set(SWITCH_ON_DISABLED)  # transition 15
                 return
-            if controlword & 0x80:
-                return  # fault reset bit held high: no other command
+            # Outside FAULT bit 7 has no meaning; bits 0..3 still command the device (canopen's
+            # BaseNode402, for one, sends 0x80 for "disable voltage").
             cmd = decode_command(controlword)
             st = self.state
             opt = self._options()

@@ -83,7 +83,6 @@ MEASUREMENTS = {
 SPEED_ZERO_RPM = 10.0  #: |speed| below this counts as standstill (statusword bit 12, ramps)
 SPEED_WINDOW_RPM = 20.0  #: target reached window in profile velocity mode
 CURRENT_WINDOW_A = 1.0  #: target reached window in the current modes
-RAMP_TIMEOUT_S = 2.0  #: a stop ramp ends at the latest this long after its speed ref reached 0
 
 
 class DriveLocalNode(LocalNode):
@@ -194,7 +193,9 @@ class VirtualDrive:
             on_state_change=self._on_nmt_change,
         )
         self.emcy = EmcyManager(0x80 + node_id, self._send, self.nmt.emcy_allowed)
-        self.sdo = BlockSdoServer(0x600 + node_id, 0x580 + node_id, self.node, self.nmt.sdo_allowed)
+        self.sdo = BlockSdoServer(
+            0x600 + node_id, 0x580 + node_id, self.node, self.nmt.sdo_allowed, send=self._send
+        )
         self.node.sdo = self.sdo
         self.sdo2: BlockSdoServer | None = None
         self.hb_producer = HeartbeatProducer(node_id, self._send, lambda: self.nmt.state)
@@ -222,7 +223,6 @@ class VirtualDrive:
         self._mode = MODE_PROFILE_VELOCITY
         self._sim_mode = "off"
         self._speed_ref = 0.0  # profile output (rpm) fed to the IP loop
-        self._ramp_zero_t: float | None = None
         self._last_fault = None
         self._started = False
         self._load_parameters()
@@ -346,8 +346,9 @@ class VirtualDrive:
             self.sdo2 = None
         if rx & 0x80000000 or tx & 0x80000000:
             return
-        self.sdo2 = BlockSdoServer(rx & 0x7FF, tx & 0x7FF, self.node, self.nmt.sdo_allowed)
-        self.sdo2.network = self.network
+        self.sdo2 = BlockSdoServer(
+            rx & 0x7FF, tx & 0x7FF, self.node, self.nmt.sdo_allowed, send=self._send
+        )
         self.network.subscribe(self.sdo2.rx_cobid, self.sdo2.on_request)
 
     def _reset_communication(self) -> None:
@@ -375,6 +376,7 @@ class VirtualDrive:
             self._speed_ref = 0.0
             self.recorder.stop()
             self.sim.reset_fault()
+            self._sim_mode = "off"
             self._last_fault = None
         self.emcy.clear_all()
         self._mode = MODE_PROFILE_VELOCITY
@@ -533,7 +535,8 @@ class VirtualDrive:
             self._check_trace_channel(value)
             return True, None
         if index == 0x5010:
-            return True, self._fault_write(sub, value)
+            self._fault_write(sub, value)
+            return True, None
         if index == 0x5030 and sub == 3:
             return True, self._model_write(value)
         return True, None
@@ -656,16 +659,16 @@ class VirtualDrive:
         rec.trigger_edge = self._value(0x2100, 7)
         rec.trigger_mode = self._value(0x2100, 8)
 
-    def _fault_write(self, sub: int, value: Any) -> Callable[[], None] | None:
-        fn = getattr(self.sim, "inject_fault" if sub == 1 else "set_supply", None)
-        if fn is None:
-            raise SdoAbortedError(ABORT_INVALID_VALUE)
-
-        def after() -> None:
-            with self.sim_lock:
-                fn(value)
-
-        return after
+    def _fault_write(self, sub: int, value: Any) -> None:
+        """0x5010: 1 inject (0 none, 1 overcurrent, 2 overvoltage, 3 undervoltage), 2 supply V."""
+        with self.sim_lock:
+            try:
+                if sub == 1:
+                    self.sim.inject_fault(int(value))
+                elif sub == 2:
+                    self.sim.set_supply_voltage(float(value))
+            except ValueError as exc:
+                raise SdoAbortedError(ABORT_INVALID_VALUE) from exc
 
     def _model_write(self, value: Any) -> Callable[[], None] | None:
         fn = getattr(self.sim, "set_model", None)
@@ -689,7 +692,8 @@ class VirtualDrive:
 
     def _reset_fault(self) -> bool:
         with self.sim_lock:
-            self.sim.reset_fault()
+            self.sim.reset_fault()  # leaves the bridge off
+            self._sim_mode = "off"
             self._last_fault = None
         self.emcy.clear_all()
         return True
@@ -730,7 +734,6 @@ class VirtualDrive:
         if st.ramp is not None:
             self._ramp_step(dt)
             return
-        self._ramp_zero_t = None
         if mode == MODE_PROFILE_VELOCITY:
             self._set_sim_mode("speed")
             target = float(self._value(0x60FF))
@@ -752,28 +755,31 @@ class VirtualDrive:
         return max(-cap, min(cap, ref))
 
     def _ramp_step(self, dt: float) -> None:
-        """Stop ramp of quick stop / slow down / fault reaction."""
+        """Stop ramp of quick stop / slow down / fault reaction, in every mode.
+
+        The IP speed loop is far too slow to follow a stop ramp (its integral path has a time
+        constant of about a second with the paper's gains), so the drive brakes in current mode:
+        |i_p*| = J α / K_t for the deceleration α of 0x6085 (quick) or 0x6084 (slow; 0 = use
+        0x6085), capped by the current limit, until |speed| < 10 rpm; then the ramp ends.
+        """
         st = self.cia402
-        if self._mode == MODE_PROFILE_VELOCITY:
-            self._set_sim_mode("speed")
-            decel = self._value(0x6085) if st.ramp == sm.RAMP_QUICK else self._value(0x6084)
-            if decel == 0 and st.ramp == sm.RAMP_SLOW:
-                decel = self._value(0x6085)
-            self._speed_ref = _ramp_towards(self._speed_ref, 0.0, decel, decel, dt)
-            self.sim.set_speed_ref(self._speed_ref)
-            if self._speed_ref == 0.0:
-                t = float(self.sim.time)
-                if self._ramp_zero_t is None:
-                    self._ramp_zero_t = t
-                slow = abs(self.live["speed"]) < SPEED_ZERO_RPM
-                if slow or t - self._ramp_zero_t > RAMP_TIMEOUT_S:
-                    self._ramp_zero_t = None
-                    st.ramp_done()
-        else:
-            self._set_sim_mode("current")
+        speed = float(self.live["speed"])
+        self._set_sim_mode("current")
+        if abs(speed) < SPEED_ZERO_RPM:
             self.sim.set_current_ref(0.0)
-            if abs(self.live["i_p"]) < CURRENT_WINDOW_A or abs(self.live["i_p_ref"]) == 0.0:
-                st.ramp_done()
+            self._speed_ref = 0.0
+            st.ramp_done()
+            return
+        decel = self._value(0x6084) if st.ramp == sm.RAMP_SLOW else 0
+        if decel == 0:
+            decel = self._value(0x6085)
+        alpha = decel * 2.0 * math.pi / 60.0  # rad/s^2
+        K_t = self._value(0x2000, 3) * 60.0 / (2.0 * math.pi)  # N m/A (i_p)
+        J = self._value(0x5000, 3)
+        rated = self._value(0x6075) / 1000.0
+        limit = min(self._value(0x2020, 3), self._value(0x6073) / 1000.0 * rated)
+        i_brake = min(limit, J * alpha / K_t) if decel > 0 else limit
+        self.sim.set_current_ref(-math.copysign(i_brake, speed))
 
     def _step(self, n: int) -> None:
         """One chunk: setpoints, simulation, faults, recorder, live values (runner thread)."""
@@ -788,7 +794,7 @@ class VirtualDrive:
             arr = rec.get(name)
             if arr is not None and len(arr):
                 live[name] = float(arr[-1])
-        if fault is not None and fault is not self._last_fault:
+        if fault is not None and fault != self._last_fault:
             self._last_fault = fault
             self.recorder.note_fault(float(fault.t))
             self.emcy.raise_error(int(fault.code))

@@ -37,7 +37,7 @@ SETTERS: dict[int, tuple[str, Mapping[int, str]]] = {
     0x2020: ("set_speed_gains", SPEED_KW),
     0x2050: ("set_protection", PROTECTION_KW),
     0x5000: ("set_load", LOAD_KW),
-    0x5020: ("set_inverter", INVERTER_KW),
+    0x5020: ("set_inverter_nonidealities", INVERTER_KW),
 }
 
 

@@ -66,6 +66,7 @@ class BlockSdoServer(SdoServer):
     :param node: the local node (``get_data`` / ``set_data``).
     :param allowed: returns False while the NMT state forbids SDO (STOPPED).
     :param download_blksize: sub-block size this server proposes for block downloads.
+    :param send: ``send(cob_id, data)``; default: the network's ``send_message``.
     """
 
     def __init__(
@@ -75,9 +76,11 @@ class BlockSdoServer(SdoServer):
         node,
         allowed: Callable[[], bool] = lambda: True,
         download_blksize: int = MAX_BLKSIZE,
+        send: Callable[[int, bytes], None] | None = None,
     ) -> None:
         super().__init__(rx_cobid, tx_cobid, node)
         self._allowed = allowed
+        self._send = send
         self.download_blksize = download_blksize
         self._index = 0
         self._subindex = 0
@@ -141,6 +144,12 @@ class BlockSdoServer(SdoServer):
             self.abort()
             return
         super().on_request(can_id, data, timestamp)
+
+    def send_response(self, response: bytes) -> None:
+        if self._send is not None:
+            self._send(self.tx_cobid, bytes(response))
+        else:
+            self.network.send_message(self.tx_cobid, response)
 
     # -- block upload ---------------------------------------------------------------------
     def _block_upload(self, req: bytes) -> None:

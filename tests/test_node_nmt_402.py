@@ -1,0 +1,193 @@
+"""NMT (CiA 301 §7.2.8) and the CiA 402 device control of the virtual drive, driven by canopen.
+
+Truths: CiA 301 NMT state codes and service availability; CiA 402 statusword patterns and
+controlword commands as canopen's own p402 tables (State402) encode them.
+"""
+
+from __future__ import annotations
+
+import itertools
+import time
+
+import pytest
+from canopen.profiles.p402 import State402
+from canopen.sdo import SdoAbortedError, SdoCommunicationError
+from test_node_support import Bench, emcy_frames
+
+pytestmark = pytest.mark.timeout(60)
+
+
+def state_of(statusword: int) -> str:
+    """canopen's decoding of a statusword into a CiA 402 state name."""
+    for state, (mask, value) in State402.SW_MASK.items():
+        if statusword & mask == value:
+            return state
+    raise AssertionError(f"statusword 0x{statusword:04X} matches no CiA 402 state")
+
+
+@pytest.fixture
+def bench():
+    b = Bench(speed=1.0)
+    yield b
+    b.close()
+
+
+def test_boot_up_then_heartbeat_in_pre_operational(bench):
+    boot = bench.log.wait_for(0x701, 1.0, pred=lambda d: d == b"\x00")
+    assert boot is not None, "no boot-up message"
+    period_ms = bench.read("producer_heartbeat_time")
+    assert period_ms == 100
+    time.sleep(0.65)
+    beats = [t for t, d in bench.log.of(0x701) if d == b"\x7f"]
+    assert len(beats) >= 5
+    mean = (beats[-1] - beats[0]) / (len(beats) - 1)
+    assert 0.09 < mean < 0.11, mean  # schedule kept on average (shared, loaded machine)
+    gaps = [b - a for a, b in itertools.pairwise(beats)]
+    assert max(gaps) < 0.2, gaps
+
+
+def test_nmt_states_gate_sdo_and_pdo(bench):
+    # PRE-OPERATIONAL: SDO yes, PDO no
+    assert bench.read("modes_of_operation") == 3
+    time.sleep(0.05)
+    t0 = time.monotonic()
+    time.sleep(0.05)
+    assert bench.log.of(0x281, t0) == []
+    # OPERATIONAL: TPDOs flow
+    bench.nmt(0x01)
+    assert bench.log.wait_for(0x281, 1.0, since=time.monotonic()) is not None
+    assert bench.log.wait_for(0x701, 0.5, since=time.monotonic(), pred=lambda d: d == b"\x05")
+    # STOPPED: heartbeat 0x04, no SDO answer, no PDO
+    bench.nmt(0x02)
+    t1 = time.monotonic()
+    assert bench.log.wait_for(0x701, 0.5, since=t1, pred=lambda d: d == b"\x04")
+    with pytest.raises(SdoCommunicationError):
+        bench.read("statusword")
+    t2 = time.monotonic()
+    time.sleep(0.05)
+    assert bench.log.of(0x281, t2) == []
+    # back to PRE-OPERATIONAL: SDO answers again
+    bench.nmt(0x80)
+    assert bench.wait(lambda: bench.drive.nmt.state == 0x7F)
+    assert bench.read("modes_of_operation") == 3
+
+
+def test_reset_communication_and_reset_node(bench):
+    bench.write("producer_heartbeat_time", 50)
+    bench.write("current_controller.k_p", 0.5)
+    t0 = time.monotonic()
+    bench.nmt(0x82)  # reset communication: new boot-up, comm objects back to defaults
+    assert bench.log.wait_for(0x701, 1.0, since=t0, pred=lambda d: d == b"\x00")
+    assert bench.wait(lambda: bench.drive.nmt.state == 0x7F)
+    assert bench.read("producer_heartbeat_time") == 100
+    assert bench.read("current_controller.k_p") == pytest.approx(0.5)
+    t1 = time.monotonic()
+    bench.nmt(0x81)  # reset node: application parameters too
+    assert bench.log.wait_for(0x701, 1.0, since=t1, pred=lambda d: d == b"\x00")
+    assert bench.wait(lambda: bench.drive.nmt.state == 0x7F)
+    assert bench.read("current_controller.k_p") == pytest.approx(0.4647)
+
+
+def test_402_state_machine_transitions_as_canopen_decodes_them(bench):
+    cw = State402.CW_COMMANDS_CODE  # target state -> controlword, canopen's table
+    assert state_of(bench.read("statusword")) == "SWITCH ON DISABLED"
+    path = [
+        "READY TO SWITCH ON",
+        "SWITCHED ON",
+        "OPERATION ENABLED",
+        "SWITCHED ON",  # disable operation (0x605C = 1: slow-down ramp, motor at rest)
+        "READY TO SWITCH ON",
+        "SWITCH ON DISABLED",
+    ]
+    for target in path:
+        bench.write("controlword", cw[target])
+        assert bench.wait(lambda e=target: state_of(bench.read("statusword")) == e), target
+    # 0x0F straight from READY TO SWITCH ON: transitions 3 + 4
+    bench.write("controlword", 0x06)
+    bench.write("controlword", 0x0F)
+    assert state_of(bench.read("statusword")) == "OPERATION ENABLED"
+    assert bench.read("statusword") & (1 << 9)  # remote
+
+
+def test_mode_change_refused_while_operation_enabled(bench):
+    bench.enable(3)
+    with pytest.raises(SdoAbortedError) as exc:
+        bench.write("modes_of_operation", -1)
+    assert exc.value.code == 0x08000022
+    assert bench.read("modes_of_operation_display") == 3
+    bench.write("controlword", 0x07)  # disable operation
+    assert bench.wait(lambda: state_of(bench.read("statusword")) == "SWITCHED ON")
+    bench.write("modes_of_operation", -1)
+    assert bench.read("modes_of_operation_display") == -1
+    with pytest.raises(SdoAbortedError) as exc:
+        bench.write("modes_of_operation", 1)  # profile position: not supported
+    assert exc.value.code == 0x06090030
+    assert bench.read("modes_of_operation_display") == -1
+
+
+def test_current_mode_tracks_i_p_ref(bench):
+    bench.enable(-1)
+    bench.write("setpoints.i_p_ref", 15.0)
+    assert bench.wait(lambda: abs(bench.read("measurements.i_p") - 15.0) < 1.0, 2.0)
+    assert bench.read("measurements.i_p_ref") == pytest.approx(15.0)
+    assert bench.read("statusword") & (1 << 10)  # target reached
+
+
+def test_quick_stop_ramps_speed_down_then_switch_on_disabled(bench):
+    bench.drive.sim.set_load(k_gen=0.0)
+    bench.write("quick_stop_deceleration", 20000)
+    bench.enable(3)
+    bench.write("target_velocity", 300)
+    assert bench.wait(lambda: bench.read("velocity_actual_value") > 250, 5.0)
+    bench.write("controlword", State402.CW_COMMANDS_CODE["QUICK STOP ACTIVE"])
+    sw = bench.read("statusword")
+    assert state_of(sw) in ("QUICK STOP ACTIVE", "SWITCH ON DISABLED")
+    assert bench.wait(lambda: state_of(bench.read("statusword")) == "SWITCH ON DISABLED", 5.0)
+    # braked to standstill (coasting would leave ~270 rpm after 0.1 s with J/B ≈ 0.9 s)
+    assert abs(bench.read("measurements.speed")) < 15.0
+
+
+def test_fault_reaction_emcy_and_fault_reset(bench):
+    bench.enable(-1)
+    bench.write("setpoints.i_p_ref", 10.0)
+    t0 = time.monotonic()
+    bench.write("sim_fault.inject", 1)  # overcurrent trip at the next sample
+    assert bench.wait(lambda: state_of(bench.read("statusword")) == "FAULT")
+    got = bench.log.wait_for(0x81, 1.0, since=t0)
+    assert got is not None
+    (_t, code, reg) = emcy_frames(bench.log, since=t0)[0]
+    assert code == 0x2310 and reg & 0x03 == 0x03  # generic + current
+    assert bench.read("error_register") & 0x02
+    assert bench.read("error_code") == 0x2310
+    assert bench.read("pre_defined_error_field.number_of_errors") == 1
+    assert bench.read("pre_defined_error_field.standard_error_field_1") & 0xFFFF == 0x2310
+    # enable is refused in FAULT
+    bench.write("controlword", 0x0F)
+    assert state_of(bench.read("statusword")) == "FAULT"
+    t1 = time.monotonic()
+    bench.write("controlword", 0x80)  # fault reset (rising edge of bit 7)
+    assert state_of(bench.read("statusword")) == "SWITCH ON DISABLED"
+    assert bench.log.wait_for(0x81, 1.0, since=t1, pred=lambda d: d[:3] == b"\x00\x00\x00")
+    assert bench.read("error_register") == 0
+    assert bench.read("error_code") == 0
+    # history survives until cleared by writing 0 to sub0
+    assert bench.read("pre_defined_error_field.number_of_errors") == 1
+    with pytest.raises(SdoAbortedError) as exc:
+        bench.write("pre_defined_error_field.number_of_errors", 3)
+    assert exc.value.code == 0x06090030
+    bench.write("pre_defined_error_field.number_of_errors", 0)
+    assert bench.read("pre_defined_error_field.number_of_errors") == 0
+    # and the drive runs again
+    bench.write("controlword", 0x00)
+    bench.enable(-1)
+
+
+def test_dc_link_undervoltage_trips(bench):
+    bench.enable(-1)
+    t0 = time.monotonic()
+    bench.write("sim_fault.V_dc_supply", 30.0)  # below protection.undervoltage_trip 36 V
+    assert bench.wait(lambda: state_of(bench.read("statusword")) == "FAULT")
+    assert any(code == 0x3220 and reg & 0x04 for _, code, reg in emcy_frames(bench.log, since=t0))
+    bench.write("sim_fault.V_dc_supply", 48.0)
+    bench.write("controlword", 0x80)
+    assert state_of(bench.read("statusword")) == "SWITCH ON DISABLED"
