@@ -5,9 +5,11 @@ From a current-step trace (i_p [A] and speed [rpm] sampled every ``Ts``) fit
 torque, a current-sensor offset). A trace sampled every D loop samples (trace divider D, each
 loop sample Ts_model = 20 µs) with the current held over the D samples gives
 ``A = a^D`` and ``B = b (1 - a^D) / (1 - a)``; the 50 kHz model is recovered as
-``a = A^(1/D)``, ``b = B (1 - a) / (1 - A)``. Fit quality is reported both for the one-step
-prediction and for a free-run simulation of the identified model from the first measured speed
-(the comparison of Fig. 16).
+``a = A^(1/D)``, ``b = B (1 - a) / (1 - A)``. The least-squares (equation-error) estimate is then
+refined by Gauss–Newton on the free-run simulation error, because speed-measurement noise in the
+regressor biases the one-step fit (≈5 % on 1 - a with 1 rpm of noise; < 1.5 % after refinement).
+Fit quality is reported for the one-step prediction and for the free-run simulation of the
+identified model (the comparison of Fig. 16): R² and RMS.
 """
 
 from __future__ import annotations
@@ -32,9 +34,10 @@ class FirstOrderFit:
         a_D, b_D: the fitted decimated model (per trace sample of D loop samples).
         D: decimation (trace samples are D loop samples apart).
         Ts: trace sample period [s]; Ts_model: loop sample period [s].
-        r2: coefficient of determination of the free-run simulation against the measured speed.
+        r2: coefficient of determination of the free-run simulation (from the fitted initial
+            speed) against the measured speed.
         rms: RMS error of the free-run simulation [rpm].
-        one_step_rms: RMS of the one-step-ahead residuals [rpm].
+        one_step_rms: RMS of the one-step-ahead residuals of the least-squares stage [rpm].
         n_samples: number of trace samples used.
     """
 
@@ -93,6 +96,65 @@ def simulate_first_order(
     return w
 
 
+def _output_error_refine(
+    i: np.ndarray, w: np.ndarray, A: float, B: float, c: float, offset: bool, iters: int = 20
+) -> tuple[float, float, float, float]:
+    """Gauss–Newton on the free-run (output-error) cost from an equation-error start.
+
+    Equation-error least squares is biased when the measured speed is noisy (the noise is in the
+    regressor); minimising the simulation error over (A, B, c, w0) removes that bias.
+    Returns (A, B, c, w0).
+    """
+    n = i.size
+    w0 = float(w[0])
+    il = i.tolist()
+
+    def run(A: float, B: float, c: float, w0: float) -> tuple[np.ndarray, np.ndarray]:
+        y = np.empty(n)
+        J = np.empty((n, 4))
+        x, sa, sb, sc, s0 = w0, 0.0, 0.0, 0.0, 1.0
+        for k in range(n):
+            y[k] = x
+            J[k, 0], J[k, 1], J[k, 2], J[k, 3] = sa, sb, sc, s0
+            sa, sb, sc, s0 = x + A * sa, il[k] + A * sb, 1.0 + A * sc, A * s0
+            x = A * x + B * il[k] + c
+        return y, J
+
+    y, J = run(A, B, c, w0)
+    cost = float(np.sum((w - y) ** 2))
+    cols = [0, 1, 2, 3] if offset else [0, 1, 3]
+    for _ in range(iters):
+        Js = J[:, cols]
+        scale = np.maximum(np.max(np.abs(Js), axis=0), 1e-300)
+        step, *_ = np.linalg.lstsq(Js / scale, w - y, rcond=None)
+        step = step / scale
+        full = np.zeros(4)
+        full[cols] = step
+        lam = 1.0
+        improved = False
+        while lam > 1e-4:
+            A1, B1, c1, w01 = (
+                A + lam * full[0],
+                B + lam * full[1],
+                c + lam * full[2],
+                w0 + lam * full[3],
+            )
+            if 0.0 < A1 < 1.0:
+                y1, J1 = run(A1, B1, c1, w01)
+                cost1 = float(np.sum((w - y1) ** 2))
+                if cost1 < cost:
+                    improved = True
+                    break
+            lam *= 0.5
+        if not improved:
+            break
+        rel = abs(cost - cost1) / max(cost, 1e-300)
+        A, B, c, w0, y, J, cost = A1, B1, c1, w01, y1, J1, cost1
+        if rel < 1e-10:
+            break
+    return A, B, c, w0
+
+
 def fit_first_order(
     i_p: np.ndarray,
     speed: np.ndarray,
@@ -100,6 +162,7 @@ def fit_first_order(
     *,
     Ts_model: float = TS_MODEL,
     offset: bool = True,
+    refine: bool = True,
 ) -> FirstOrderFit:
     """Fit ``b/(z - a)`` at the loop rate to a trace sampled every ``Ts``.
 
@@ -109,6 +172,9 @@ def fit_first_order(
         Ts: trace sample period [s]; must be a whole multiple D of ``Ts_model``.
         Ts_model: loop sample period of the model [s] (20 µs).
         offset: also fit a constant term (recommended; handles load torque and sensor offsets).
+        refine: after the equation-error least squares (numpy lstsq on the one-step regression),
+            refine by Gauss–Newton on the free-run simulation error, which removes the bias that
+            speed-measurement noise causes in the one-step regression.
 
     Returns:
         :class:`FirstOrderFit`. Raises ValueError for malformed data, a trace without excitation
@@ -145,12 +211,15 @@ def fit_first_order(
         raise ValueError(
             f"fitted pole a^D = {a_D:.6g} is outside (0, 1): no stable first-order model fits"
         )
+    resid = y - X @ theta
+    one_step_rms = float(np.sqrt(np.mean(resid**2)))
+    w_start = float(w[0])
+    if refine:
+        a_D, b_D, c, w_start = _output_error_refine(i, w, a_D, b_D, c, offset)
     a = a_D ** (1.0 / D)
     # b = b_D (1 - a) / (1 - a^D), computed without cancellation
     b = b_D * math.expm1(math.log(a)) / math.expm1(D * math.log(a))
-    resid = y - X @ theta
-    one_step_rms = float(np.sqrt(np.mean(resid**2)))
-    w_sim = simulate_first_order(a_D, b_D, i, w[0], c)
+    w_sim = simulate_first_order(a_D, b_D, i, w_start, c)
     err = w - w_sim
     rms = float(np.sqrt(np.mean(err**2)))
     ss = float(np.sum((w - np.mean(w)) ** 2))
