@@ -275,6 +275,28 @@ def render_markdown(view: ObjectDictionaryView) -> str:
             ]
             add("| " + " | ".join(_md(c) for c in cells) + " |")
     add("")
+    add("## Default PDO mapping")
+    add("")
+    add("| PDO | COB-ID | transmission type | event timer | mapped objects (bits) |")
+    add("|---|---|---|---|---|")
+    for kind, map_base in (("RPDO", 0x1600), ("TPDO", 0x1A00)):
+        for n in range(512):
+            mapping = map_base + n
+            try:
+                count = view.by_index(mapping, 0).default
+            except KeyError:
+                break
+            comm = mapping - 0x200
+            cob = view.by_index(comm, 1)
+            ttype = view.by_index(comm, 2).default
+            timer = view.by_index(comm, 5)
+            refs = [view.by_index(mapping, i).default for i in range(1, int(count or 0) + 1)]
+            mapped = ", ".join(
+                f"`{view.by_reference(int(r)).name}` ({int(r) & 0xFF})" for r in refs
+            )
+            period = f"{timer.default} {timer.unit}" if timer.default else "-"
+            add(f"| {kind}{n + 1} | {cob.default_raw} | 0x{ttype:02X} | {period} | {mapped} |")
+    add("")
     add("## Enumerations")
     add("")
     add("| object | values |")

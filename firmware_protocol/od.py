@@ -397,6 +397,11 @@ class ObjectDictionaryView:
         self._by_name = {e.name: e for e in self._entries}
         self._by_index = {(e.index, e.subindex): e for e in self._entries}
         self._constraints = constraints
+        self._defaults: dict[str, Number] = {
+            e.name: e.default
+            for e in self._entries
+            if isinstance(e.default, (int, float)) and not isinstance(e.default, bool)
+        }
         for c in constraints:
             for n in c.names:
                 self.entry(n)  # every constraint refers to real objects
@@ -461,12 +466,8 @@ class ObjectDictionaryView:
 
     # -- checks -------------------------------------------------------------------------
     def defaults(self) -> dict[str, Number]:
-        """Default value of every numeric entry, by name."""
-        return {
-            e.name: e.default
-            for e in self._entries
-            if isinstance(e.default, (int, float)) and not isinstance(e.default, bool)
-        }
+        """Default value of every numeric entry, by name (a new dict on every call)."""
+        return dict(self._defaults)
 
     def check_constraints(self, values: Mapping[str, Number], changed: str | None = None) -> None:
         """Raise :class:`LimitError` if ``values`` break a cross-object rule.

@@ -207,6 +207,16 @@ def test_markdown_lists_every_object_once_with_its_attributes() -> None:
     for title in ("0x1000-0x1FFF", "0x2000-0x4FFF", "0x5000-0x5FFF", "0x6000-0x9FFF"):
         assert re.search(rf"^## .*\({title}", text, flags=re.M), title
     assert "current_controller.L_c < 2 * motor.L" in text
+    # the PDO table reads as contracts.md §1 states the defaults
+    pdo_rows = {
+        line.split("|")[1].strip(): line
+        for line in text.splitlines()
+        if re.match(r"\| [RT]PDO", line)
+    }
+    assert set(pdo_rows) == {"RPDO1", "RPDO2", "TPDO1", "TPDO2", "TPDO3", "TPDO4"}
+    assert re.search(r"`measurements.i_p` \(32\), `measurements.speed` \(32\)", pdo_rows["TPDO2"])
+    assert "| 1 ms |" in pdo_rows["TPDO2"] and "| 10 ms |" in pdo_rows["TPDO1"]
+    assert "$NODEID+0x200" in pdo_rows["RPDO1"] and "`controlword` (16)" in pdo_rows["RPDO1"]
 
 
 def _generate(*args: str) -> subprocess.CompletedProcess[str]:
