@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import logging
 import math
 import os
 import sys
@@ -631,7 +632,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--model-b", type=float, default=None)
     _outputs(p)
     p = add(
-        "identify", cmd_identify, "identify G(z) = b/(z - a) from a current step, suggest IP gains"
+        "identify-drive",
+        cmd_identify,
+        "run a current step on the drive, identify G(z) = b/(z - a), suggest IP gains",
     )
     p.add_argument("--from", dest="i_from", type=float, default=0.0)
     p.add_argument("--to", dest="i_to", type=float, default=10.0)
@@ -671,6 +674,10 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point; returns the exit code (see module docstring)."""
     ap = build_parser()
     args = ap.parse_args(argv)
+    # Library log lines (canopen, python-can) would break the one-line-error rule.
+    logging.getLogger().addHandler(logging.NullHandler())
+    for name in ("canopen", "can"):
+        logging.getLogger(name).setLevel(logging.CRITICAL)
     _apply_step_defaults(args)
     d: Drive | None = None
     try:

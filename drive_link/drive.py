@@ -342,6 +342,8 @@ class Drive:
         if mode not in cia402.MODES:
             raise InvalidValue(f"mode {mode!r}: one of {', '.join(cia402.MODES)}")
         value = cia402.MODES[mode]
+        if int(self.read("modes_of_operation_display")) == value:
+            return
         self.write("modes_of_operation", value)
         deadline = time.monotonic() + timeout
         while True:

@@ -5,6 +5,8 @@ the response the model predicts (:mod:`drive_link.design`) for the drive's prese
 
 from __future__ import annotations
 
+import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -12,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from . import design, metrics
-from .errors import InvalidValue, StateError
+from .errors import DriveTimeout, InvalidValue, StateError
 from .trace import TS, Trace, Trigger
 
 if TYPE_CHECKING:
@@ -83,6 +85,15 @@ class StepResult:
         return tr.to_png(path, title=title, overlay=over)
 
 
+def _ensure_mode(drive: Drive, mode: str) -> None:
+    """Select ``mode``; a drive that refuses mode changes while enabled is disabled first."""
+    if drive.mode == mode:
+        return
+    if drive.state == "OPERATION ENABLED":
+        drive.disable()
+    drive.set_mode(mode)
+
+
 def _require_enabled(drive: Drive, enable: bool) -> None:
     state = drive.state
     if state == "OPERATION ENABLED":
@@ -90,6 +101,40 @@ def _require_enabled(drive: Drive, enable: bool) -> None:
     if not enable:
         raise StateError(f"step test needs OPERATION ENABLED (drive is {state}); enable it first")
     drive.enable()
+
+
+def _record_step(
+    drive: Drive,
+    set_before: Callable[[], None],
+    set_after: Callable[[], None],
+    pre_s: float,
+    record_s: float,
+    timeout: float | None,
+    attempts: int = 3,
+) -> Trace:
+    """Arm on "setpoint step", wait for the pre-trigger part to fill, step, wait, upload.
+
+    The recorder ignores a step while its pre-trigger part is still filling (state "armed"
+    either way), so the wait is ``3 × pre_s + 20 ms``; if the step was still too early the
+    setpoint goes back and the step is repeated (``attempts`` times).
+    """
+    if timeout is None:
+        timeout = 1.0 + 3.0 * record_s
+    wait_pre = 3.0 * pre_s + 0.02
+    for attempt in range(attempts):
+        drive.trace.arm()
+        time.sleep(wait_pre * (attempt + 1))
+        set_after()
+        try:
+            drive.trace.wait(timeout)
+            return drive.trace.upload()
+        except DriveTimeout:
+            if attempt + 1 == attempts or drive.trace.state != "armed":
+                raise
+            drive.trace.stop()
+            set_before()
+            time.sleep(wait_pre)
+    raise AssertionError("unreachable")
 
 
 def current_step(
@@ -111,23 +156,23 @@ def current_step(
     The prediction is :func:`drive_link.design.predicted_step` for the drive's controller type,
     L_c, R_c, k_p, k_i and motor R, L, with the back-EMF e_L measured just before the step.
     """
-    import time
-
     if i_from == i_to:
         raise InvalidValue("current step needs i_from != i_to")
-    drive.set_mode("current")
+    _ensure_mode(drive, "current")
     drive.set_current(i_from)
     _require_enabled(drive, enable)
     time.sleep(settle_s)
     drive.trace.configure(
         ["i_p", "i_p_ref", "v_L", "e_L"], divider, length, pre_trigger, Trigger("setpoint_step")
     )
-    drive.trace.arm()
-    drive.set_current(i_to)
-    if timeout is None:
-        timeout = 2.0 + 3.0 * length * divider * TS
-    drive.trace.wait(timeout)
-    tr = drive.trace.upload()
+    tr = _record_step(
+        drive,
+        lambda: drive.set_current(i_from),
+        lambda: drive.set_current(i_to),
+        pre_trigger * divider * TS,
+        length * divider * TS,
+        timeout,
+    )
     g = drive.read_gains()
     R = float(drive.read("motor.R"))
     L = float(drive.read("motor.L"))
@@ -194,11 +239,9 @@ def speed_step(
     and the speed model ``model`` = (a, b) (default: the paper's, :data:`SPEED_MODEL_PAPER`;
     pass the result of ``drive-link identify`` for the machine at hand).
     """
-    import time
-
     if delta_rpm == 0:
         raise InvalidValue("speed step needs a non-zero delta")
-    drive.set_mode("speed")
+    _ensure_mode(drive, "speed")
     w0 = float(drive.read("target_velocity")) if start_rpm is None else float(start_rpm)
     w1 = w0 + float(delta_rpm)
     drive.set_speed(w0)
@@ -211,12 +254,14 @@ def speed_step(
         pre_trigger,
         Trigger("setpoint_step"),
     )
-    drive.trace.arm()
-    drive.set_speed(w1)
-    if timeout is None:
-        timeout = 2.0 + 3.0 * length * divider * TS
-    drive.trace.wait(timeout)
-    tr = drive.trace.upload()
+    tr = _record_step(
+        drive,
+        lambda: drive.set_speed(w0),
+        lambda: drive.set_speed(w1),
+        pre_trigger * divider * TS,
+        length * divider * TS,
+        timeout,
+    )
     g = drive.read_gains()
     a, b = model or SPEED_MODEL_PAPER
     k0 = tr.trigger_index
