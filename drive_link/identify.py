@@ -123,7 +123,10 @@ def _output_error_refine(
     y, J = run(A, B, c, w0)
     cost = float(np.sum((w - y) ** 2))
     cols = [0, 1, 2, 3] if offset else [0, 1, 3]
+    tiny = 1e-26 * float(np.sum(w**2))
     for _ in range(iters):
+        if cost <= tiny:  # already exact (noise-free data)
+            break
         Js = J[:, cols]
         scale = np.maximum(np.max(np.abs(Js), axis=0), 1e-300)
         step, *_ = np.linalg.lstsq(Js / scale, w - y, rcond=None)

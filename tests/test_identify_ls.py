@@ -42,8 +42,8 @@ def test_lfilter_truth_agrees_with_dlsim():
 
 
 def test_dlsim_trace_at_loop_rate_exact():
-    n = 20_000
-    i = _current(n, 5000)
+    n = 6000
+    i = _current(n, 1500)
     sys = (np.array([[A]]), np.array([[B]]), np.array([[1.0]]), np.array([[0.0]]), Ts)
     _, y, _ = signal.dlsim(sys, i, x0=[240.0])
     fit = fit_first_order(i, y[:, 0], Ts)
