@@ -17,16 +17,28 @@ from __future__ import annotations
 import configparser
 import difflib
 import functools
-import math
 import re
-import struct
 from collections.abc import Iterator, Mapping
-from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
 
 import canopen
 from canopen import objectdictionary as cod
+
+from .constraints import CONSTRAINTS, Constraint
+from .entry import (
+    ABORT_INVALID_VALUE,
+    ABORT_VALUE_TOO_HIGH,
+    ABORT_VALUE_TOO_LOW,
+    BIT_LENGTH,
+    REAL32,
+    SIGNED,
+    TYPE_NAMES,
+    Entry,
+    LimitError,
+    Number,
+    f32,
+)
 
 __all__ = [
     "ABORT_INVALID_VALUE",
@@ -45,323 +57,17 @@ __all__ = [
 EDS_PATH: Path = Path(__file__).with_name("bldc_drive.eds")
 """The EDS file shipped with the package."""
 
-#: CiA 301 SDO abort codes used by value checks.
-ABORT_INVALID_VALUE = 0x06090030
-ABORT_VALUE_TOO_HIGH = 0x06090031
-ABORT_VALUE_TOO_LOW = 0x06090032
-
-#: CiA 301 data type code -> name.
-TYPE_NAMES: dict[int, str] = {
-    0x01: "BOOLEAN",
-    0x02: "INTEGER8",
-    0x03: "INTEGER16",
-    0x04: "INTEGER32",
-    0x05: "UNSIGNED8",
-    0x06: "UNSIGNED16",
-    0x07: "UNSIGNED32",
-    0x08: "REAL32",
-    0x09: "VISIBLE_STRING",
-    0x0A: "OCTET_STRING",
-    0x0F: "DOMAIN",
-}
-
-_BIT_LENGTH = {0x01: 1, 0x02: 8, 0x03: 16, 0x04: 32, 0x05: 8, 0x06: 16, 0x07: 32, 0x08: 32}
-_INT_RANGE = {
-    0x01: (0, 1),
-    0x02: (-(2**7), 2**7 - 1),
-    0x03: (-(2**15), 2**15 - 1),
-    0x04: (-(2**31), 2**31 - 1),
-    0x05: (0, 2**8 - 1),
-    0x06: (0, 2**16 - 1),
-    0x07: (0, 2**32 - 1),
-}
-_SIGNED = {0x02, 0x03, 0x04}
-_REAL32 = 0x08
-_FLT_MAX = 3.4028234663852886e38
 _SUB_SECTION = re.compile(r"^([0-9A-Fa-f]{4})[Ss]ub([0-9A-Fa-f]+)$")
 _OBJ_SECTION = re.compile(r"^([0-9A-Fa-f]{4})$")
-
-Number = int | float
-
-
-class LimitError(ValueError):
-    """A value an object refuses, with the CiA 301 SDO abort code the drive answers with.
-
-    ``abort_code`` is 0x06090030 (invalid value: NaN, inf, wrong type, not in the enumeration),
-    0x06090031 (value too high) or 0x06090032 (value too low).
-    """
-
-    def __init__(self, abort_code: int, message: str) -> None:
-        super().__init__(f"{message} (SDO abort 0x{abort_code:08X})")
-        self.abort_code = abort_code
-        self.message = message
-
-
-def _f32(x: float) -> float:
-    """Round a Python float to the nearest IEEE-754 binary32 (the DSP's float)."""
-    return struct.unpack("<f", struct.pack("<f", x))[0]
-
-
-@dataclass(frozen=True)
-class Entry:
-    """One object or sub-object of the dictionary.
-
-    ``low``/``high`` are the inclusive static limits in the object's unit (``None`` = only the
-    data type's range applies); ``default`` is the EDS default with ``$NODEID`` resolved.
-    """
-
-    name: str
-    index: int
-    subindex: int
-    data_type: int
-    access: str
-    unit: str | None
-    low: Number | None
-    high: Number | None
-    default: Number | str | bytes | None
-    default_raw: str | None
-    pdo_mappable: bool
-    description: str
-    enum: Mapping[int, str] | None = None
-    persistent: bool = False
-    obj_flags: int = 0
-    object_name: str = ""
-    sub_name: str = ""
-
-    @property
-    def type_name(self) -> str:
-        """CiA 301 type name, e.g. ``"REAL32"``, ``"UNSIGNED8"``."""
-        return TYPE_NAMES.get(self.data_type, f"0x{self.data_type:04X}")
-
-    @property
-    def bit_length(self) -> int:
-        """Bit length as used in PDO mapping entries; 0 for variable-length types."""
-        return _BIT_LENGTH.get(self.data_type, 0)
-
-    @property
-    def is_real(self) -> bool:
-        """True for REAL32 objects."""
-        return self.data_type == _REAL32
-
-    @property
-    def readable(self) -> bool:
-        """True unless the object is write-only."""
-        return self.access != "wo"
-
-    @property
-    def writable(self) -> bool:
-        """True for rw/wo/rww/rwr objects."""
-        return self.access in ("rw", "wo", "rww", "rwr")
-
-    @property
-    def relative(self) -> bool:
-        """True when the default depends on the node-ID (``$NODEID`` in the EDS)."""
-        return self.default_raw is not None and "$NODEID" in self.default_raw.upper()
-
-    @property
-    def od_reference(self) -> int:
-        """``index << 16 | subindex << 8 | bit_length`` (PDO mapping / trace channel format)."""
-        if not self.bit_length:
-            raise ValueError(f"{self.name} ({self.type_name}) has no fixed bit length")
-        return (self.index << 16) | (self.subindex << 8) | self.bit_length
-
-    def check(self, value: object) -> Number | str | bytes:
-        """Validate ``value`` for a write; return it as the object's Python type.
-
-        Raises :class:`LimitError` with 0x06090030 for NaN/inf, a non-number, a non-integral
-        value for an integer type or a value outside the enumeration; 0x06090031 above the
-        high limit (or the type's range); 0x06090032 below the low limit. REAL32 values and
-        limits are compared after rounding to float32, as the drive stores them.
-        """
-        dt = self.data_type
-        if dt in (0x09,):
-            if not isinstance(value, str):
-                raise LimitError(ABORT_INVALID_VALUE, f"{self.name} expects a string")
-            return value
-        if dt in (0x0A, 0x0F):
-            if not isinstance(value, (bytes, bytearray)):
-                raise LimitError(ABORT_INVALID_VALUE, f"{self.name} expects bytes")
-            return bytes(value)
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            try:
-                import numpy as np  # numpy scalars are common on the host side
-
-                if isinstance(value, (np.integer, np.floating)):
-                    value = value.item()
-                else:
-                    raise TypeError
-            except (ImportError, TypeError):
-                raise LimitError(
-                    ABORT_INVALID_VALUE, f"{self.name} expects a number, got {value!r}"
-                ) from None
-        assert isinstance(value, (int, float))
-        if isinstance(value, float) and not math.isfinite(value):
-            raise LimitError(ABORT_INVALID_VALUE, f"{self.name} = {value} is not a finite number")
-        if dt == _REAL32:
-            return self._check_real(float(value))
-        return self._check_int(value)
-
-    def _check_real(self, value: float) -> float:
-        unit = f" {self.unit}" if self.unit else ""
-        if abs(value) > _FLT_MAX:
-            code = ABORT_VALUE_TOO_HIGH if value > 0 else ABORT_VALUE_TOO_LOW
-            raise LimitError(code, f"{self.name} = {value}{unit} does not fit in a REAL32")
-        v32 = _f32(value)
-        if self.high is not None and v32 > _f32(float(self.high)):
-            raise LimitError(
-                ABORT_VALUE_TOO_HIGH, f"{self.name} = {value:g}{unit} above {self.high:g}{unit}"
-            )
-        if self.low is not None and v32 < _f32(float(self.low)):
-            raise LimitError(
-                ABORT_VALUE_TOO_LOW, f"{self.name} = {value:g}{unit} below {self.low:g}{unit}"
-            )
-        return v32
-
-    def _check_int(self, value: Number) -> int:
-        if isinstance(value, float):
-            if not value.is_integer():
-                raise LimitError(
-                    ABORT_INVALID_VALUE, f"{self.name} ({self.type_name}) = {value} is not integral"
-                )
-            value = int(value)
-        t_low, t_high = _INT_RANGE[self.data_type]
-        high = t_high if self.high is None else min(t_high, int(self.high))
-        low = t_low if self.low is None else max(t_low, int(self.low))
-        unit = f" {self.unit}" if self.unit and self.unit != "1" else ""
-        if value > high:
-            raise LimitError(
-                ABORT_VALUE_TOO_HIGH, f"{self.name} = {value}{unit} above {high}{unit}"
-            )
-        if value < low:
-            raise LimitError(ABORT_VALUE_TOO_LOW, f"{self.name} = {value}{unit} below {low}{unit}")
-        if self.enum is not None and value not in self.enum:
-            allowed = ", ".join(f"{k} {v}" for k, v in sorted(self.enum.items()))
-            raise LimitError(ABORT_INVALID_VALUE, f"{self.name} = {value} is not one of: {allowed}")
-        return value
-
-
-_OPS = ("<", "<=", ">", ">=", "abs<=")
-
-
-@dataclass(frozen=True)
-class Constraint:
-    """A cross-object rule the EDS cannot express: ``lhs [* lhs_times] op factor * rhs``.
-
-    ``op`` is one of ``<``, ``<=``, ``>``, ``>=`` or ``abs<=`` (``|lhs| <= factor * rhs``).
-    Example: ``Constraint("current_controller.L_c", "<", 2, "motor.L")`` keeps the deadbeat
-    loop stable (0 < L_c < 2 L, Valle et al. 2020). Both the drive and the host enforce it.
-    """
-
-    lhs: str
-    op: str
-    factor: float
-    rhs: str
-    lhs_times: str | None = None
-    reason: str = ""
-    checked_on: tuple[str, ...] | None = None
-    """Names whose presence in the checked values triggers the rule (default: all of them)."""
-
-    def __post_init__(self) -> None:
-        if self.op not in _OPS:
-            raise ValueError(f"constraint operator {self.op!r} not in {_OPS}")
-
-    @property
-    def names(self) -> tuple[str, ...]:
-        """Every object name the rule reads."""
-        extra = (self.lhs_times,) if self.lhs_times else ()
-        return (self.lhs, *extra, self.rhs)
-
-    @property
-    def triggers(self) -> tuple[str, ...]:
-        """Names that trigger the rule when written (:attr:`checked_on` or :attr:`names`)."""
-        return self.checked_on if self.checked_on is not None else self.names
-
-    @property
-    def bounds_from_above(self) -> bool:
-        """True when the rule is an upper bound on ``lhs`` (a lower bound on ``rhs``)."""
-        return self.op in ("<", "<=", "abs<=")
-
-    def __str__(self) -> str:
-        left = f"{self.lhs} * {self.lhs_times}" if self.lhs_times else self.lhs
-        if self.op == "abs<=":
-            left, op = f"|{left}|", "<="
-        else:
-            op = self.op
-        right = self.rhs if self.factor == 1 else f"{self.factor:g} * {self.rhs}"
-        return f"{left} {op} {right}"
-
-    def holds(self, values: Mapping[str, Number]) -> bool:
-        """Evaluate the rule on ``values`` (every name in :attr:`names` must be present)."""
-        left = float(values[self.lhs])
-        if self.lhs_times:
-            left *= float(values[self.lhs_times])
-        right = self.factor * float(values[self.rhs])
-        if self.op == "<":
-            return left < right
-        if self.op == "<=":
-            return left <= right
-        if self.op == ">":
-            return left > right
-        if self.op == ">=":
-            return left >= right
-        return abs(left) <= right
-
-
-CONSTRAINTS: tuple[Constraint, ...] = (
-    Constraint(
-        "current_controller.L_c", "<", 2, "motor.L", reason="deadbeat loop stable for L_c < 2 L"
-    ),
-    Constraint(
-        "gain_set.L_c",
-        "<",
-        2,
-        "motor.L",
-        reason="staged L_c, checked when the staged set is written or applied (gain_set_apply)",
-        checked_on=("gain_set.L_c",),
-    ),
-    Constraint(
-        "setpoints.i_p_ref",
-        "abs<=",
-        1,
-        "speed_controller.current_limit",
-        reason="pseudo-current reference within the current limit",
-    ),
-    Constraint(
-        "target_velocity", "abs<=", 1, "max_motor_speed", reason="speed reference within 0x6080"
-    ),
-    Constraint("target_torque", "abs<=", 1, "max_torque", reason="torque reference within 0x6072"),
-    Constraint(
-        "protection.undervoltage_trip",
-        "<",
-        1,
-        "protection.overvoltage_trip",
-        reason="a DC-link window that is not empty",
-    ),
-    Constraint(
-        "trace_config.length",
-        "<=",
-        1,
-        "trace_config.capacity",
-        lhs_times="trace_config.channel_count",
-        reason="the trace fits in the recorder memory",
-    ),
-    Constraint(
-        "trace_config.pre_trigger",
-        "<",
-        1,
-        "trace_config.length",
-        reason="the trigger lies inside the record",
-    ),
-)
 
 
 def _parse_number(text: str, data_type: int) -> Number:
     text = text.strip()
-    if data_type == _REAL32:
+    if data_type == REAL32:
         return float(text)
     value = int(text, 0)
-    if data_type in _SIGNED and text.lower().startswith("0x"):
-        bits = _BIT_LENGTH[data_type]
+    if data_type in SIGNED and text.lower().startswith("0x"):
+        bits = BIT_LENGTH[data_type]
         if value >= 1 << (bits - 1):
             value -= 1 << bits
     return value
@@ -485,7 +191,7 @@ class ObjectDictionaryView:
         merged.update(values)
         for n in {n for c in self._constraints for n in c.names}:
             if self._by_name[n].is_real:  # compare as the drive does, in float32
-                merged[n] = _f32(float(merged[n]))
+                merged[n] = f32(float(merged[n]))
         for c in self._constraints:
             if not any(n in values for n in c.triggers):
                 continue
@@ -531,7 +237,7 @@ def _entry_from(
     high = _parse_number(section["HighLimit"], dt) if "HighLimit" in section else None
     enum = MappingProxyType(_parse_enum(section["Enum"])) if "Enum" in section else None
     default = var.default
-    if dt == _REAL32 and default is not None:
+    if dt == REAL32 and default is not None:
         default = float(default)
     return Entry(
         name=name,

@@ -1,0 +1,196 @@
+"""Render the C99 header of the OD for the DSP firmware (``bldc_drive_od.h``).
+
+Conventions: no ``uint8_t``/``int8_t`` (TMS320F28335's ``char`` is 16 bits, so 8-bit objects use
+``uint16_t``/``int16_t``), no ``double`` (REAL32 literals carry the ``f`` suffix), 32-bit integer
+literals carry ``UL``/``L`` (``int`` is 16 bits on C2000).
+"""
+
+from __future__ import annotations
+
+import re
+
+from .entry import Entry
+from .od import ObjectDictionaryView
+
+__all__ = ["HEADER_NAME", "macro_name", "render_header"]
+
+HEADER_NAME = "bldc_drive_od.h"
+
+_C_TYPES = {
+    0x01: "uint16_t",
+    0x02: "int16_t",  # INTEGER8: C2000 has no 8-bit type (char is 16 bits)
+    0x03: "int16_t",
+    0x04: "int32_t",
+    0x05: "uint16_t",  # UNSIGNED8: see INTEGER8
+    0x06: "uint16_t",
+    0x07: "uint32_t",
+    0x08: "float",
+}
+_ACCESS = {"ro": "OD_ACCESS_RO", "wo": "OD_ACCESS_WO", "rw": "OD_ACCESS_RW"}
+_ACCESS |= {"rwr": "OD_ACCESS_RW", "rww": "OD_ACCESS_RW", "const": "OD_ACCESS_CONST"}
+_SHORT_TYPE = {
+    0x01: "BOOL",
+    0x02: "I8",
+    0x03: "I16",
+    0x04: "I32",
+    0x05: "U8",
+    0x06: "U16",
+    0x07: "U32",
+    0x08: "REAL32",
+    0x09: "VISIBLE_STRING",
+    0x0A: "OCTET_STRING",
+    0x0F: "DOMAIN",
+}
+_WIDTH = 56
+
+
+def macro_name(name: str) -> str:
+    """C macro stem of an OD name: ``"current_controller.L_c"`` -> ``"OD_CURRENT_CONTROLLER__L_C"``.
+
+    The record/sub separator becomes a double underscore so that e.g. ``motor.rated_current``
+    (0x2000:5) and ``motor_rated_current`` (0x6075) stay distinct.
+    """
+    parts = [re.sub(r"[^0-9A-Za-z]+", "_", p).upper() for p in name.split(".")]
+    return "OD_" + "__".join(parts)
+
+
+def _c_comment(text: str) -> str:
+    return text.replace("*/", "* /")
+
+
+def _c_number(entry: Entry, value: float | int) -> str:
+    """A C literal of ``value`` typed for ``entry`` (``f`` floats, ``u``/``UL``/``L`` ints)."""
+    dt = entry.data_type
+    if dt == 0x08:
+        text = repr(float(value))
+        if "." not in text and "e" not in text:
+            text += ".0"
+        return f"{text}f" if float(value) >= 0 else f"({text}f)"
+    value = int(value)
+    if dt == 0x07:
+        return f"0x{value:08X}UL"
+    if dt == 0x04:
+        return f"({value}L)" if value < 0 else f"{value}L"
+    if dt in (0x02, 0x03):
+        return f"({value})" if value < 0 else f"{value}"
+    return f"{value}u"
+
+
+def _define(name: str, value: str, comment: str = "") -> str:
+    line = f"#define {name:<{_WIDTH}} {value}"
+    return f"{line} /* {_c_comment(comment)} */" if comment else line
+
+
+def _nodeid_offset(entry: Entry) -> int:
+    assert entry.default_raw is not None
+    text = re.sub(r"\$NODEID", "", entry.default_raw, flags=re.IGNORECASE)
+    return int(text.replace("+", "").replace(" ", ""), 0)
+
+
+def _object_heads(view: ObjectDictionaryView) -> dict[int, str]:
+    return {e.index: e.object_name for e in view.entries}
+
+
+def render_header(view: ObjectDictionaryView) -> str:
+    """C99 header for the DSP firmware: indices, types, access, defaults, limits, references.
+
+    No ``uint8_t``/``int8_t`` (8-bit objects use 16-bit C types, as C2000's ``char`` is 16 bits)
+    and no ``double``: REAL32 literals carry the ``f`` suffix.
+    """
+    lines: list[str] = []
+    add = lines.append
+    add(f"/* {HEADER_NAME} - CANopen object dictionary of the BLDC 5 kW / 48 V drive.")
+    add(" *")
+    add(" * GENERATED from bldc_drive.eds by `python -m firmware_protocol.generate`: do not edit.")
+    add(" * C99, float32 only, 8-bit objects as 16-bit C types (TMS320F28335: char is 16 bits).")
+    add(" * Macros: OD_<OBJECT>__<SUB>_<FIELD> for records/arrays, OD_<OBJECT>_<FIELD> otherwise.")
+    add(" * Fields: _INDEX, _SUB, _TYPE (CiA 301 code), _CTYPE, _ACCESS, _PDO (1 = mappable),")
+    add(" * _DEFAULT, _MIN/_MAX (static limits, inclusive), _REF (index<<16 | sub<<8 | bits).")
+    add(" * Units are given in the comments. Cross-object rules are listed at the end. */")
+    add("#ifndef BLDC_DRIVE_OD_H")
+    add("#define BLDC_DRIVE_OD_H")
+    add("")
+    add("#include <stdint.h>")
+    add("")
+    add("/* CiA 301 data type codes */")
+    for code, tname in sorted(_SHORT_TYPE.items()):
+        add(_define(f"OD_TYPE_{tname}", f"0x{code:04X}u"))
+    add("")
+    add("/* Access: bit0 readable, bit1 writable, bit2 constant */")
+    add(_define("OD_ACCESS_RO", "0x1u"))
+    add(_define("OD_ACCESS_WO", "0x2u"))
+    add(_define("OD_ACCESS_RW", "0x3u"))
+    add(_define("OD_ACCESS_CONST", "0x5u"))
+    add("")
+    add("/* SDO abort codes of the value checks (CiA 301) */")
+    add(_define("OD_ABORT_INVALID_VALUE", "0x06090030UL"))
+    add(_define("OD_ABORT_VALUE_TOO_HIGH", "0x06090031UL"))
+    add(_define("OD_ABORT_VALUE_TOO_LOW", "0x06090032UL"))
+    add(_define("OD_ABORT_READ_ONLY", "0x06010002UL"))
+    add(_define("OD_ABORT_STATE", "0x08000022UL"))
+    add("")
+    add("/* Device */")
+    add(_define("OD_DEFAULT_NODE_ID", f"{view.node_id}u"))
+    for key in ("NrOfRXPDO", "NrOfTXPDO"):
+        if key in view.device_info:
+            add(_define(f"OD_NR_OF_{key[4:].upper()}", f"{int(view.device_info[key], 0)}u"))
+    add("")
+
+    heads = _object_heads(view)
+    seen: dict[str, str] = {}
+
+    def define(name: str, value: str, comment: str = "") -> None:
+        if name in seen:
+            raise ValueError(f"C macro {name} generated twice ({seen[name]})")
+        seen[name] = value
+        add(_define(name, value, comment))
+
+    current = None
+    for e in view.entries:
+        if e.index != current:
+            current = e.index
+            add("")
+            add(f"/* ---- 0x{e.index:04X} {heads[e.index]} ---- */")
+            if e.object_name != e.name:
+                define(f"{macro_name(e.object_name)}_INDEX", f"0x{e.index:04X}u")
+        m = macro_name(e.name)
+        unit = e.unit or ""
+        head = f"0x{e.index:04X}:{e.subindex:02X} {e.name} {e.type_name} {e.access}"
+        if unit:
+            head += f" [{unit}]"
+        if e.description:
+            head += f" - {e.description}"
+        add(f"/* {_c_comment(head)} */")
+        define(f"{m}_INDEX", f"0x{e.index:04X}u")
+        define(f"{m}_SUB", f"0x{e.subindex:02X}u")
+        define(f"{m}_TYPE", f"OD_TYPE_{_SHORT_TYPE[e.data_type]}")
+        if e.data_type in _C_TYPES:
+            define(f"{m}_CTYPE", _C_TYPES[e.data_type])
+        define(f"{m}_ACCESS", _ACCESS[e.access])
+        define(f"{m}_PDO", "1u" if e.pdo_mappable else "0u")
+        if e.relative:
+            off = _nodeid_offset(e)
+            define(f"{m}_DEFAULT_NODEID_OFFSET", _c_number(e, off), "default = offset + node-ID")
+            define(f"{m}_DEFAULT(node_id)", f"({m}_DEFAULT_NODEID_OFFSET + (uint32_t)(node_id))")
+        elif isinstance(e.default, str):
+            define(f"{m}_DEFAULT", '"' + e.default.replace('"', '\\"') + '"')
+        elif isinstance(e.default, (int, float)):
+            define(f"{m}_DEFAULT", _c_number(e, e.default), unit)
+        if e.low is not None:
+            define(f"{m}_MIN", _c_number(e, e.low), unit)
+        if e.high is not None:
+            define(f"{m}_MAX", _c_number(e, e.high), unit)
+        if e.bit_length:
+            define(f"{m}_REF", f"0x{e.od_reference:08X}UL")
+        for value, label in sorted((e.enum or {}).items()):
+            define(f"{m}_{label.upper()}", _c_number(e, value))
+
+    add("")
+    add("/* ---- Cross-object constraints (checked at every write of either side, then the")
+    add(" *      abort code is TOO_HIGH for the bounded object, TOO_LOW for the bound) ---- */")
+    for c in view.constraints:
+        add(f"/* {_c_comment(str(c))}{' - ' + c.reason if c.reason else ''} */")
+        define(f"{macro_name(c.lhs)}_BOUND_FACTOR", f"{float(c.factor)!r}f")
+    add("")
+    add("#endif /* BLDC_DRIVE_OD_H */")
+    return "\n".join(lines) + "\n"

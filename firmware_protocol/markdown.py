@@ -1,0 +1,117 @@
+"""Render the Markdown OD reference (``OD.md``): one table per index range, the default PDO
+mapping, enumerations and cross-object constraints."""
+
+from __future__ import annotations
+
+from .entry import Entry
+from .od import ObjectDictionaryView
+
+__all__ = ["MARKDOWN_NAME", "render_markdown"]
+
+MARKDOWN_NAME = "OD.md"
+
+_RANGES = (
+    (0x1000, 0x1FFF, "CiA 301 communication objects (0x1000-0x1FFF)"),
+    (0x2000, 0x4FFF, "Manufacturer objects, real firmware and virtual drive (0x2000-0x4FFF)"),
+    (0x5000, 0x5FFF, "Virtual-drive-only objects (0x5000-0x5FFF, not on the real firmware)"),
+    (0x6000, 0x9FFF, "CiA 402 drive profile objects (0x6000-0x9FFF)"),
+)
+
+
+def _md(text: object) -> str:
+    return str(text).replace("|", "\\|").replace("\n", " ")
+
+
+def _md_value(e: Entry, value: float | int | str | bytes | None) -> str:
+    if value is None:
+        return ""
+    if isinstance(value, float):
+        return f"{value:g}"
+    if isinstance(value, int) and e.data_type == 0x07 and (value > 0xFFFF or e.relative):
+        return f"0x{value:08X}"
+    return str(value)
+
+
+def render_markdown(view: ObjectDictionaryView) -> str:
+    """The OD reference page: one table per index range, then enumerations and constraints."""
+    out: list[str] = []
+    add = out.append
+    add("# Object dictionary of the BLDC 5 kW / 48 V drive")
+    add("")
+    add("Generated from `firmware_protocol/bldc_drive.eds` by")
+    add("`python -m firmware_protocol.generate`; do not edit. Names are the Python view names")
+    add("(`firmware_protocol.load_od().entry(name)`); C macros in `bldc_drive_od.h` use")
+    add("`OD_<OBJECT>__<SUB>_...` (double underscore between record and sub-object).")
+    add("Limits are inclusive static limits; `$NODEID` defaults are shown for node-ID 1.")
+    add("PDO = may be mapped into a PDO (and recorded by the trace).")
+    for low, high, title in _RANGES:
+        rows = [e for e in view.entries if low <= e.index <= high]
+        if not rows:
+            continue
+        add("")
+        add(f"## {title}")
+        add("")
+        add("| name | index:sub | type | access | unit | default | limits | PDO | description |")
+        add("|---|---|---|---|---|---|---|---|---|")
+        for e in rows:
+            default = _md_value(e, e.default)
+            if e.relative:
+                default = f"{e.default_raw} ({default})"
+            limits = ""
+            if e.low is not None or e.high is not None:
+                limits = f"[{_md_value(e, e.low)}, {_md_value(e, e.high)}]"
+            cells = [
+                f"`{e.name}`",
+                f"0x{e.index:04X}:{e.subindex:02X}",
+                e.type_name,
+                e.access,
+                e.unit or "",
+                default,
+                limits,
+                "yes" if e.pdo_mappable else "",
+                e.description,
+            ]
+            add("| " + " | ".join(_md(c) for c in cells) + " |")
+    add("")
+    add("## Default PDO mapping")
+    add("")
+    add("| PDO | COB-ID | transmission type | event timer | mapped objects (bits) |")
+    add("|---|---|---|---|---|")
+    for kind, map_base in (("RPDO", 0x1600), ("TPDO", 0x1A00)):
+        for n in range(512):
+            mapping = map_base + n
+            try:
+                count = view.by_index(mapping, 0).default
+            except KeyError:
+                break
+            comm = mapping - 0x200
+            cob = view.by_index(comm, 1)
+            ttype = view.by_index(comm, 2).default
+            timer = view.by_index(comm, 5)
+            refs = [view.by_index(mapping, i).default for i in range(1, int(count or 0) + 1)]
+            mapped = ", ".join(
+                f"`{view.by_reference(int(r)).name}` ({int(r) & 0xFF})" for r in refs
+            )
+            period = f"{timer.default} {timer.unit}" if timer.default else "-"
+            add(f"| {kind}{n + 1} | {cob.default_raw} | 0x{ttype:02X} | {period} | {mapped} |")
+    add("")
+    add("## Enumerations")
+    add("")
+    add("| object | values |")
+    add("|---|---|")
+    for e in view.entries:
+        if e.enum:
+            values = ", ".join(f"{v} = {label}" for v, label in sorted(e.enum.items()))
+            add(f"| `{e.name}` | {_md(values)} |")
+    add("")
+    add("## Cross-object constraints")
+    add("")
+    add("Checked by the drive at every write of either side and by the host before sending;")
+    add("a violation aborts with 0x06090031 (bounded object too high) or 0x06090032")
+    add("(bound too low).")
+    add("")
+    add("| rule | reason |")
+    add("|---|---|")
+    for c in view.constraints:
+        add(f"| `{_md(str(c))}` | {_md(c.reason)} |")
+    return "\n".join(out) + "\n"
