@@ -76,21 +76,20 @@ void plant_set_segment_emf(plant_t *p, double theta_e)
 
 static double sgn_d(double x) { return (x > 0.0) ? 1.0 : ((x < 0.0) ? -1.0 : 0.0); }
 
-/* Phi(t) = exp(-a t) and G(t) = (1 - Phi)/R for a = R/L, accurate for small a t. */
-static void phi_g(double R, double L, double t, double *Phi, double *G)
+/* Phi(t) = exp(-R t / L) and G(t) = (1 - Phi)/R, accurate for small R t / L.
+ * r_over_l = R / L, inv_r = 1 / R. */
+static void phi_g(double r_over_l, double inv_r, double t, double *Phi, double *G)
 {
-    double x = R * t / L;
+    double x = r_over_l * t, em1;
     if (x < 0.02) {
-        /* series to x^7: relative error < 1e-16 for x < 0.02 */
-        double em1 = x * (1.0 - x / 2.0 * (1.0 - x / 3.0 * (1.0 - x / 4.0 * (1.0 - x / 5.0 *
-                     (1.0 - x / 6.0 * (1.0 - x / 7.0))))));
-        *Phi = 1.0 - em1;
-        *G = em1 / R;
+        /* 1 - exp(-x) by its series to x^7: relative error < 1e-16 for x < 0.02 */
+        em1 = x * (1.0 + x * (-0.5 + x * (1.0 / 6.0 + x * (-1.0 / 24.0 + x * (1.0 / 120.0
+              + x * (-1.0 / 720.0 + x * (1.0 / 5040.0)))))));
     } else {
-        double em1 = -expm1(-x);
-        *Phi = 1.0 - em1;
-        *G = em1 / R;
+        em1 = -expm1(-x);
     }
+    *Phi = 1.0 - em1;
+    *G = em1 * inv_r;
 }
 
 int plant_advance(plant_t *p, const int mode[3], const double v_drv[3], double dt)
@@ -99,6 +98,7 @@ int plant_advance(plant_t *p, const int mode[3], const double v_drv[3], double d
     int iter = 0;
     int nseg = 0;
     const double Vd = p->V_dc, VG = p->V_G;
+    const double r_over_l = p->R / p->L, inv_r = 1.0 / p->R;
     while (remaining > 1e-15 && iter < 24) {
         const double *e = p->e_seg;
         double v[3], u[3], Phi, G, t_seg, t_ev = remaining;
@@ -194,7 +194,7 @@ int plant_advance(plant_t *p, const int mode[3], const double v_drv[3], double d
         /* diode current-zero events */
         for (x = 0; x < 3; ++x) {
             if (diode[x] != 0 && u[x] * diode[x] < 0.0 && p->i[x] * diode[x] > 0.0) {
-                double t_star = (p->L / p->R) * log1p(-p->i[x] * p->R / u[x]);
+                double t_star = log1p(-p->i[x] * p->R / u[x]) / r_over_l;
                 if (t_star < t_ev) {
                     t_ev = t_star;
                     ev_leg = x;
@@ -202,7 +202,7 @@ int plant_advance(plant_t *p, const int mode[3], const double v_drv[3], double d
             }
         }
         t_seg = t_ev;
-        phi_g(p->R, p->L, t_seg, &Phi, &G);
+        phi_g(r_over_l, inv_r, t_seg, &Phi, &G);
         {
             double i_new[3], Tm = 0.0;
             for (x = 0; x < 3; ++x) {

@@ -344,13 +344,22 @@ class Simulator:
         with self._lock:
             self._L.w_ref_set = v
 
-    def set_speed(self, rpm: float) -> None:
-        """Force the shaft speed (rpm), e.g. to start a test at a steady operating point."""
+    def set_speed(self, rpm: float, theta_e: float | None = None) -> None:
+        """Force the shaft speed (rpm) and optionally the electrical angle (rad), e.g. to start
+        a test at an operating point or to apply a back-EMF step."""
         v = float(rpm)
-        if not math.isfinite(v):
-            raise ValueError(f"speed must be finite, got {rpm!r}")
+        if not math.isfinite(v) or abs(v) > 20000.0:
+            raise ValueError(f"speed must be finite and |speed| <= 20000 rpm, got {rpm!r}")
+        th = None
+        if theta_e is not None:
+            th = float(theta_e)
+            if not math.isfinite(th):
+                raise ValueError(f"theta_e must be finite, got {theta_e!r}")
+            th = th % (2.0 * math.pi)
         with self._lock:
             self._L.p.omega = v / RPM_PER_RAD_S
+            if th is not None:
+                self._L.p.theta_e = th
 
     # ------------------------------------------------------------------ running
     def run(
