@@ -187,14 +187,14 @@ class ObjectDictionaryView:
         ``L_c / 2``). Without ``changed`` the rule's left-hand side is taken as the written one.
         REAL32 values are rounded to float32 first, as the drive stores them.
         """
-        merged: dict[str, Number] = self.defaults()
-        merged.update(values)
-        for n in {n for c in self._constraints for n in c.names}:
-            if self._by_name[n].is_real:  # compare as the drive does, in float32
-                merged[n] = f32(float(merged[n]))
         for c in self._constraints:
             if not any(n in values for n in c.triggers):
                 continue
+            merged: dict[str, Number] = {}
+            for n in c.names:
+                value = values[n] if n in values else self._defaults[n]
+                # compare as the drive does: REAL32 values in float32
+                merged[n] = f32(float(value)) if self._by_name[n].is_real else value
             if c.holds(merged):
                 continue
             lhs_written = changed is None or changed in (c.lhs, c.lhs_times)
