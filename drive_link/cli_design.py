@@ -23,7 +23,7 @@ import re
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 import numpy as np
 
@@ -451,6 +451,23 @@ def _cmd_identify(args: argparse.Namespace) -> int:
 
 
 # --------------------------------------------------------------------------- registration
+# argparse takes "-1e-6" for an option (its negative-number pattern has no exponent); these
+# sub-commands have no option that looks like a number, so any signed number is a value.
+_NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|nan)$", re.IGNORECASE)
+
+
+def _one_line_errors(parser: argparse.ArgumentParser) -> None:
+    """Make ``parser`` report usage errors as one line on stderr and exit with status 2."""
+    prog = parser.prog
+
+    def error(message: str) -> NoReturn:
+        print(f"{prog}: error: {message}", file=sys.stderr)
+        raise SystemExit(2)
+
+    parser.error = error  # type: ignore[method-assign]
+    parser._negative_number_matcher = _NEGATIVE_NUMBER  # type: ignore[attr-defined]
+
+
 def add_parsers(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     """Register the ``design`` and ``identify`` sub-commands; each sets ``func``."""
     d = subparsers.add_parser(
@@ -481,6 +498,7 @@ def add_parsers(subparsers: argparse._SubParsersAction) -> None:  # type: ignore
     d.add_argument("--wn", default="2.3", help="IP natural frequency ω_n [rad/s] (2.3)")
     d.add_argument("--json", action="store_true", help="print JSON")
     d.set_defaults(func=_cmd_design)
+    _one_line_errors(d)
 
     i = subparsers.add_parser(
         "identify",
@@ -500,6 +518,7 @@ def add_parsers(subparsers: argparse._SubParsersAction) -> None:  # type: ignore
     i.add_argument("--wn", default=None, help="also design IP gains with this ω_n [rad/s]")
     i.add_argument("--json", action="store_true", help="print JSON")
     i.set_defaults(func=_cmd_identify)
+    _one_line_errors(i)
 
 
 def run_cli(argv: Sequence[str] | None = None) -> int:
