@@ -259,10 +259,12 @@ class PdoEngine:
         for t in self.tpdos:
             if t.event_s <= 0 or t.trans_type < 0xFE:
                 continue
-            if now >= t.next_due and now - t.last_sent >= t.inhibit_s:
+            # Due within half a loop period counts as due: the loop wakes with jitter around
+            # its 1 ms grid, and a 1 ms timer must not lose a frame to a tick a hair early.
+            if now >= t.next_due - 0.5e-3 and now - t.last_sent >= t.inhibit_s:
                 self._send_tpdo(t, now)
                 t.next_due += t.event_s
-                if t.next_due <= now:
+                if t.next_due < now - 5 * t.event_s:  # stalled: resynchronise, no burst
                     t.next_due = now + t.event_s
 
     def on_sync(self, can_id: int, data: bytes, timestamp: float) -> None:
