@@ -81,7 +81,7 @@ def _trim(p: Sequence[float] | np.ndarray) -> np.ndarray:
     return a[nz[0] :] if nz.size else np.zeros(1)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class DiscreteTF:
     """A discrete-time transfer function ``num(z) / den(z)``.
 
@@ -495,16 +495,16 @@ def margins(loop: DiscreteTF, *, n_grid: int = 20_000) -> Margins:
     else:
         gm, wg = float("inf"), float("nan")
     return Margins(
-        gain_margin_db=gm,
-        phase_margin_deg=pm,
-        sensitivity_peak=s_pk,
-        gain_crossover_hz=wc,
-        phase_crossover_hz=wg,
-        sensitivity_peak_hz=t_pk * to_hz,
-        phase_margins_deg=tuple(pms),
-        gain_crossovers_hz=tuple(wcs),
-        gain_margins_db=tuple(gms),
-        phase_crossovers_hz=tuple(wgs),
+        gain_margin_db=float(gm),
+        phase_margin_deg=float(pm),
+        sensitivity_peak=float(s_pk),
+        gain_crossover_hz=float(wc),
+        phase_crossover_hz=float(wg),
+        sensitivity_peak_hz=float(t_pk * to_hz),
+        phase_margins_deg=tuple(float(x) for x in pms),
+        gain_crossovers_hz=tuple(float(x) for x in wcs),
+        gain_margins_db=tuple(float(x) for x in gms),
+        phase_crossovers_hz=tuple(float(x) for x in wgs),
     )
 
 
