@@ -1938,7 +1938,7 @@
 #define OD_GAIN_SET_APPLY_ACCESS                                 OD_ACCESS_WO
 #define OD_GAIN_SET_APPLY_PDO                                    0u
 #define OD_GAIN_SET_APPLY_DEFAULT                                0u /* 1 */
-#define OD_GAIN_SET_APPLY_MIN                                    1u /* 1 */
+#define OD_GAIN_SET_APPLY_MIN                                    0u /* 1 */
 #define OD_GAIN_SET_APPLY_MAX                                    3u /* 1 */
 #define OD_GAIN_SET_APPLY_REF                                    0x20F10008UL
 #define OD_GAIN_SET_APPLY_CURRENT                                1u

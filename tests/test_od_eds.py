@@ -361,8 +361,13 @@ def test_contract_units_and_limits() -> None:
 def test_defaults_lie_within_limits_and_enums() -> None:
     view = load_od()
     for e in view.entries:
-        if e.access == "wo" or not isinstance(e.default, (int, float)):
-            continue  # a write-only command has no readable value
+        if not isinstance(e.default, (int, float)):
+            continue
+        # CiA 306 checkers compare DefaultValue with LowLimit/HighLimit for every object
+        assert e.low is None or e.low <= e.default, e.name
+        assert e.high is None or e.default <= e.high, e.name
+        if e.access == "wo":
+            continue  # a write-only command's default (0 = nothing requested) is never read
         assert e.check(e.default) == pytest.approx(e.default, rel=1e-6), e.name
 
 

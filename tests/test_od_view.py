@@ -159,7 +159,8 @@ def test_enumeration_abort_codes(view) -> None:
     assert ctype.check(ControllerType.PREDICTIVE) == 2
     assert _abort(ctype, 3) == TOO_HIGH
     apply = view.entry("gain_set_apply")
-    assert _abort(apply, 0) == TOO_LOW and apply.check(3) == 3
+    assert _abort(apply, 0) == INVALID and apply.check(3) == 3  # 0 = nothing to apply
+    assert _abort(apply, 4) == TOO_HIGH
 
 
 def test_strings_and_domains(view) -> None:
@@ -316,3 +317,12 @@ def test_load_od_validates_arguments(tmp_path) -> None:
     with pytest.raises(FileNotFoundError):
         load_od(tmp_path / "missing.eds")
     assert load_od() is load_od(EDS_PATH)  # cached and immutable
+
+
+def test_package_docstring_examples_run() -> None:
+    import doctest
+
+    import firmware_protocol
+
+    result = doctest.testmod(firmware_protocol)
+    assert result.attempted >= 3 and result.failed == 0
