@@ -75,6 +75,8 @@ class Bench:
         if sdo2:  # second SDO channel 0x1201 (before add_node, see the field notes)
             self.sdo2 = self.node.add_sdo(0x680 + node_id, 0x6B0 + node_id)
         self.net.add_node(self.node)
+        if sdo2:
+            self.sdo2.network = self.net  # canopen leaves it unset (field notes)
         self.node_id = node_id
         self.t_start = time.monotonic()
         self.drive = VirtualDrive(
