@@ -600,7 +600,7 @@ def predicted_step(
     k_i: float = PI_KI_PAPER,
     fs: float = FS_DEFAULT,
     e_L: float = 0.0,
-    feedforward: bool | None = None,
+    feedforward: bool = False,
     v_loss: float = 0.0,
     v_comp: float = 0.0,
     e_L_final: float | None = None,
@@ -622,8 +622,9 @@ def predicted_step(
         k_p, k_i: PI gains [V/A] (PI only).
         fs: sampling frequency [Hz].
         e_L: constant line back-EMF [V] (disturbance, eq. 9).
-        feedforward: add the back-EMF feed-forward (exact e_L). Default: True for the predictive
-            law (eq. 23 contains ``2 e_L(k)``), False for deadbeat and PI (the paper's choice).
+        feedforward: add the exact back-EMF feed-forward (Fig. 3; the ``2 e_L(k)`` term of eq. 23
+            for the predictive law). Default False, like the drive's
+            ``current_controller.emf_feedforward`` default; eq. (23) as printed needs True.
         v_loss: constant voltage lost in the inverter (blanking time, switch drops) [V].
         v_comp: the predictive law's non-ideality compensation term of eq. (25) [V]
             (see :func:`eq25_compensation`); predictive only.
@@ -645,7 +646,7 @@ def predicted_step(
     L_c = L if L_c is None else L_c
     R_c = R if R_c is None else R_c
     Phi, Gamma = phi_gamma(R, L, fs)
-    ff = (controller == "predictive") if feedforward is None else bool(feedforward)
+    ff = bool(feedforward)
     den, n_eps, n_e, n_c = _controller_parts(controller, L_c, R_c, k_p, k_i, fs, ff)
     Ac, Bc, Cc, Dc = _observer_form(den, [n_eps, n_e, n_c])
     m = Ac.shape[0]

@@ -110,7 +110,9 @@ def test_back_emf_step_follows_eq21():
 def test_predictive_without_feedforward_keeps_an_error():
     """Eq. (24) has no zero at z = 1: a constant back-EMF leaves a steady-state error."""
     e = 10.0
-    with_ff = design.predicted_step("predictive", n_samples=200, i_start=20, i_final=20, e_L=e)
+    with_ff = design.predicted_step(
+        "predictive", n_samples=200, i_start=20, i_final=20, e_L=e, feedforward=True
+    )
     no_ff = design.predicted_step(
         "predictive", n_samples=200, i_start=20, i_final=20, e_L=e, feedforward=False
     )
