@@ -79,7 +79,7 @@ ffibuilder.set_source(
     '#include "controllers.h"\n#include "plant.h"\n#include "loop.h"\n',
     sources=[str(Path("virtual_drive") / "csrc" / s) for s in _SOURCES],
     include_dirs=[str(Path("virtual_drive") / "csrc")],
-    extra_compile_args=["-std=c99", "-O2"],
+    extra_compile_args=["-std=c99", "-O3", "-fno-math-errno"],
     libraries=["m"],
 )
 
