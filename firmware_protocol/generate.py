@@ -62,7 +62,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         view = load_od(args.eds)
         generated = outputs(view)
     except (OSError, ValueError, KeyError) as exc:
-        print(f"error: cannot load {args.eds}: {exc}", file=sys.stderr)
+        print(f"error: cannot load {args.eds}: {' '.join(str(exc).split())}", file=sys.stderr)
         return 2
     if args.strict_eds is not None:
         try:

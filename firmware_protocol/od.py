@@ -101,6 +101,10 @@ class ObjectDictionaryView:
         self.file_info: Mapping[str, str] = MappingProxyType(dict(file_info or {}))
         self._entries = tuple(sorted(entries, key=lambda e: (e.index, e.subindex)))
         self._by_name = {e.name: e for e in self._entries}
+        if len(self._by_name) != len(self._entries):
+            seen: set[str] = set()
+            dup = sorted({e.name for e in self._entries if e.name in seen or seen.add(e.name)})
+            raise ValueError(f"duplicate object names in the EDS: {', '.join(dup)}")
         self._by_index = {(e.index, e.subindex): e for e in self._entries}
         self._constraints = constraints
         self._defaults: dict[str, Number] = {
@@ -264,13 +268,18 @@ def load_od(path: str | Path | None = None, node_id: int = 1) -> ObjectDictionar
     """Load the OD view from an EDS file (default: :data:`EDS_PATH`).
 
     ``node_id`` (1..127) resolves ``$NODEID`` in defaults such as COB-IDs. Views are cached
-    per file version and node-ID (they are immutable).
+    per file version and node-ID (they are immutable). Raises ``FileNotFoundError`` for a
+    missing file and ``ValueError`` for a file that is not a valid drive EDS (syntax, duplicate
+    names, a constraint naming a missing object).
     """
     if not 1 <= node_id <= 127:
         raise ValueError(f"node_id must be 1..127, got {node_id}")
     eds_path = (Path(path) if path is not None else EDS_PATH).resolve()
     stat = eds_path.stat()
-    return _load_cached(eds_path, node_id, stat.st_mtime_ns, stat.st_size)
+    try:
+        return _load_cached(eds_path, node_id, stat.st_mtime_ns, stat.st_size)
+    except (configparser.Error, KeyError, ValueError, TypeError) as exc:
+        raise ValueError(f"{eds_path} is not a valid drive EDS: {exc}") from exc
 
 
 @functools.lru_cache(maxsize=16)

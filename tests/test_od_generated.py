@@ -312,3 +312,19 @@ def test_strict_eds_export_keeps_the_od_and_only_cia306_keys(tmp_path: Path) -> 
         return rows
 
     assert flat(strict) == flat(full)
+
+
+def test_generate_rejects_a_malformed_eds_in_one_line(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.eds"
+    bad.write_text("[FileInfo]\nnot a key value line\n")
+    dup = tmp_path / "dup.eds"
+    dup.write_text(
+        EDS_PATH.read_text().replace("ParameterName=motor\n", "ParameterName=setpoints\n")
+    )
+    for path in (bad, dup):
+        result = _generate("--check", "--eds", str(path))
+        assert result.returncode == 2
+        assert result.stderr.count("\n") == 1 and "not a valid drive EDS" in result.stderr
+    assert "duplicate object names" in result.stderr
+    with pytest.raises(ValueError):
+        load_od(dup)
