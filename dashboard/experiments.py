@@ -19,6 +19,7 @@ from drive_link import Trigger, design, metrics
 from drive_link import identify as ident
 
 TS = 20e-6  #: loop period, s
+COMMUTATION_RETRIES = 4  #: current-step records repeated when a commutation disturbs them
 
 
 @contextmanager
@@ -58,6 +59,10 @@ def _record(
 ) -> Any:
     """Configure, arm, run ``action`` (e.g. a setpoint step), wait, upload; returns the Trace."""
     rec = bench.drive.trace
+    rec.stop()
+    # drive_link writes length before pre_trigger, and the drive requires pre_trigger < length
+    # at every write: clear the old pre_trigger first so a shorter record is accepted.
+    bench.drive.write("trace_config.pre_trigger", 0)
     rec.configure(channels, divider, length, pre_trigger, trigger)
     rec.arm()
     if pre_trigger:  # let the pre-trigger buffer fill before the step
@@ -119,37 +124,68 @@ def capture(bench: Bench, body: TraceIn) -> Capture:
     return bench.add_capture("trace", cols, meta)
 
 
+def first_commutation(t: np.ndarray, i_abc: np.ndarray) -> float | None:
+    """Time (s) of the first change of the non-conducting phase at t ≥ 0, or None.
+
+    ``i_abc``: phase currents (A), shape (n, 3). In six-step operation two phases conduct; the
+    third (smallest |i|) changes at every commutation, which disturbs i_p for a few samples.
+    """
+    idle = np.argmin(np.abs(i_abc), axis=1)
+    k0 = int(np.searchsorted(t, 0.0))
+    change = np.flatnonzero(idle[k0 + 1 :] != idle[k0:-1])
+    return float(t[k0 + 1 + change[0]]) if change.size else None
+
+
 def current_step(bench: Bench, body: CurrentStepIn, average_samples: int = 1) -> dict[str, Any]:
     """Current step from_A → to_A in current mode, recorded at 50 kHz (divider 1), with its
-    metrics and the model's predicted response (drive_link.design.predicted_step) overlaid."""
+    metrics and the model's predicted response (drive_link.design.predicted_step) overlaid.
+
+    The phase currents are recorded too: a commutation disturbs i_p for a few samples, so a
+    record with one in its first 80 % is repeated (up to COMMUTATION_RETRIES times); one in the
+    last 20 % is cut off (5 samples of margin) and ``commutation_at_s`` says where.
+    """
     if body.from_A == body.to_A:
         raise ValueError("from_A and to_A must differ")
     g = read_gains(bench)
     n_post = max(10, round(body.duration_ms * 1e-3 / TS))
     pre = max(5, n_post // 10)
     length = pre + n_post
-    if 2 * length > 16384:
+    channels = ["measurements.i_p", "measurements.i_p_ref"] + [
+        f"measurements.i_{ph}" for ph in "abc"
+    ]
+    if len(channels) * length > 16384:
         raise ValueError("duration too long for the recorder at 50 kHz")
     with bench.lock, _busy(bench, "current step"):
-        bench.set_current(body.from_A)
-        if not str(bench.drive.state).upper().startswith("OPERATION ENABLED"):
-            bench.drive.enable(timeout=2.0)
-        time.sleep(0.05 / _speed_factor(bench) + 0.02)
-        tr = _record(
-            bench,
-            ["measurements.i_p", "measurements.i_p_ref"],
-            divider=1,
-            length=length,
-            pre_trigger=pre,
-            trigger=Trigger(mode="setpoint_step"),
-            action=lambda: bench.set_current(body.to_A),
-        )
-    t = np.asarray(tr.t, dtype=np.float64)
+        for _attempt in range(COMMUTATION_RETRIES):
+            bench.set_current(body.from_A)
+            if str(bench.drive.state).upper() != "OPERATION ENABLED":
+                bench.drive.enable(timeout=2.0)
+            time.sleep(0.05 / _speed_factor(bench) + 0.02)
+            tr = _record(
+                bench,
+                channels,
+                divider=1,
+                length=length,
+                pre_trigger=pre,
+                trigger=Trigger(mode="setpoint_step"),
+                action=lambda: bench.set_current(body.to_A),
+            )
+            t = np.asarray(tr.t, dtype=np.float64)
+            i_abc = np.column_stack([_column(tr, f"i_{ph}") for ph in "abc"])
+            t_comm = first_commutation(t, i_abc)
+            if t_comm is None or t_comm >= 0.8 * t[-1]:
+                break
+        else:
+            raise RuntimeError(
+                f"a commutation fell inside the record {COMMUTATION_RETRIES} times: "
+                "shorten duration_ms or lower the speed"
+            )
     i_p = _column(tr, "i_p")
     i_ref = _column(tr, "i_p_ref")
+    n_after = int(np.sum(t >= 0))
     pred = design.predicted_step(
         g["type"],
-        n_samples=int(np.sum(t >= 0)),
+        n_samples=n_after,
         i_start=body.from_A,
         i_final=body.to_A,
         R=g["motor_R"],
@@ -160,14 +196,19 @@ def current_step(bench: Bench, body: CurrentStepIn, average_samples: int = 1) ->
         k_i=g["k_i"],
     )
     model = np.full(t.size, float(body.from_A))
-    model[t >= 0] = pred.i_p[: int(np.sum(t >= 0))]
+    model[t >= 0] = pred.i_p[:n_after]
     avg = metrics.moving_average(i_p, average_samples)
-    m = metrics.step_metrics(t, avg, reference=body.to_A, t_step=0.0, y_initial=body.from_A)
-    post = t >= 0
+    use = t < (t_comm - 5 * TS) if t_comm is not None else np.ones(t.size, bool)
+    m = metrics.step_metrics(
+        t[use], avg[use], reference=body.to_A, t_step=0.0, y_initial=body.from_A
+    )
+    post = use & (t >= 0)
     rms = float(np.sqrt(np.mean((avg[post] - model[post]) ** 2)))
+    cols = {"t": t, "i_p": i_p, "i_p_avg": avg, "i_p_ref": i_ref, "model": model}
+    cols.update({f"i_{ph}": i_abc[:, k] for k, ph in enumerate("abc")})
     cap = bench.add_capture(
         "current_step",
-        {"t": t, "i_p": i_p, "i_p_avg": avg, "i_p_ref": i_ref, "model": model},
+        cols,
         {
             "controller": g["type"],
             "from_A": body.from_A,
@@ -175,6 +216,7 @@ def current_step(bench: Bench, body: CurrentStepIn, average_samples: int = 1) ->
             "L_c": g["L_c"],
             "R_c": g["R_c"],
             "average_samples": average_samples,
+            "commutation_at_s": t_comm,
         },
     )
     md = as_dict(m)
@@ -188,6 +230,7 @@ def current_step(bench: Bench, body: CurrentStepIn, average_samples: int = 1) ->
             "steady_state_error_A": md["steady_state_error"],
             "y_final_A": md["y_final"],
         },
+        "commutation_at_s": t_comm,
         "model_rms_error_A": rms,
         "model_stable": bool(pred.stable),
     }

@@ -277,7 +277,7 @@ def test_current_step_deadbeat_and_pi(client, hdr):
     client.put("/api/mode", json={"mode": "current"}, headers=hdr)
     client.post("/api/command", json={"command": "enable"}, headers=hdr)
     r = client.post(
-        "/api/steps/current", json={"from_A": 15, "to_A": 20, "duration_ms": 2}, headers=hdr
+        "/api/steps/current", json={"from_A": 15, "to_A": 20, "duration_ms": 1.5}, headers=hdr
     )
     assert r.status_code == 200, r.text
     db = r.json()
@@ -287,7 +287,7 @@ def test_current_step_deadbeat_and_pi(client, hdr):
     assert client.put("/api/gains", json={"type": "pi"}, headers=hdr).status_code == 200
     try:
         r = client.post(
-            "/api/steps/current", json={"from_A": 15, "to_A": 20, "duration_ms": 3}, headers=hdr
+            "/api/steps/current", json={"from_A": 15, "to_A": 20, "duration_ms": 1.5}, headers=hdr
         )
         pi = r.json()
         os_ref, ts_ref = pi_overshoot_oracle()
