@@ -160,23 +160,23 @@
 #define OD_MANUFACTURER_DEVICE_NAME_PDO                          0u
 #define OD_MANUFACTURER_DEVICE_NAME_DEFAULT                      "BLDC 5kW 48V drive"
 
-/* ---- 0x1009 manufacturer_hardware_version ---- */
-/* 0x1009:00 manufacturer_hardware_version VISIBLE_STRING const */
-#define OD_MANUFACTURER_HARDWARE_VERSION_INDEX                   0x1009u
-#define OD_MANUFACTURER_HARDWARE_VERSION_SUB                     0x00u
-#define OD_MANUFACTURER_HARDWARE_VERSION_TYPE                    OD_TYPE_VISIBLE_STRING
-#define OD_MANUFACTURER_HARDWARE_VERSION_ACCESS                  OD_ACCESS_CONST
-#define OD_MANUFACTURER_HARDWARE_VERSION_PDO                     0u
-#define OD_MANUFACTURER_HARDWARE_VERSION_DEFAULT                 "F28335 rev A"
+/* ---- 0x1009 hardware_version ---- */
+/* 0x1009:00 hardware_version VISIBLE_STRING const */
+#define OD_HARDWARE_VERSION_INDEX                                0x1009u
+#define OD_HARDWARE_VERSION_SUB                                  0x00u
+#define OD_HARDWARE_VERSION_TYPE                                 OD_TYPE_VISIBLE_STRING
+#define OD_HARDWARE_VERSION_ACCESS                               OD_ACCESS_CONST
+#define OD_HARDWARE_VERSION_PDO                                  0u
+#define OD_HARDWARE_VERSION_DEFAULT                              "F28335 rev A"
 
-/* ---- 0x100A manufacturer_software_version ---- */
-/* 0x100A:00 manufacturer_software_version VISIBLE_STRING const */
-#define OD_MANUFACTURER_SOFTWARE_VERSION_INDEX                   0x100Au
-#define OD_MANUFACTURER_SOFTWARE_VERSION_SUB                     0x00u
-#define OD_MANUFACTURER_SOFTWARE_VERSION_TYPE                    OD_TYPE_VISIBLE_STRING
-#define OD_MANUFACTURER_SOFTWARE_VERSION_ACCESS                  OD_ACCESS_CONST
-#define OD_MANUFACTURER_SOFTWARE_VERSION_PDO                     0u
-#define OD_MANUFACTURER_SOFTWARE_VERSION_DEFAULT                 "0.1.0"
+/* ---- 0x100A software_version ---- */
+/* 0x100A:00 software_version VISIBLE_STRING const */
+#define OD_SOFTWARE_VERSION_INDEX                                0x100Au
+#define OD_SOFTWARE_VERSION_SUB                                  0x00u
+#define OD_SOFTWARE_VERSION_TYPE                                 OD_TYPE_VISIBLE_STRING
+#define OD_SOFTWARE_VERSION_ACCESS                               OD_ACCESS_CONST
+#define OD_SOFTWARE_VERSION_PDO                                  0u
+#define OD_SOFTWARE_VERSION_DEFAULT                              "0.1.0"
 
 /* ---- 0x1010 store_parameters ---- */
 #define OD_STORE_PARAMETERS_INDEX                                0x1010u

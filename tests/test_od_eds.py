@@ -99,6 +99,9 @@ def test_contract_python_names_resolve() -> None:
     [
         ("device_type", 0x1000, 0, 7, "ro", 0x00020192),
         ("error_register", 0x1001, 0, 5, "ro", 0),
+        ("manufacturer_device_name", 0x1008, 0, 9, None, None),
+        ("hardware_version", 0x1009, 0, 9, None, None),
+        ("software_version", 0x100A, 0, 9, None, None),
         ("cob_id_emcy", 0x1014, 0, 7, None, 0x81),
         ("consumer_heartbeat_time.consumer_1", 0x1016, 1, 7, "rw", 0),
         ("producer_heartbeat_time", 0x1017, 0, 6, "rw", 100),
