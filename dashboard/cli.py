@@ -45,6 +45,12 @@ def build_parser() -> argparse.ArgumentParser:
         default=0,
         help="virtual: TCP port of the loopback hub (default: any free)",
     )
+    p.add_argument(
+        "--join-hub",
+        type=int,
+        metavar="PORT",
+        help="join a running loopback hub on 127.0.0.1:PORT (virtual-drive run --hub)",
+    )
     p.add_argument("--interface", help="python-can interface of the real bus (e.g. socketcan)")
     p.add_argument("--channel", help="python-can channel (e.g. can0)")
     p.add_argument("--bitrate", type=int, default=1_000_000, help="bit/s (default 1000000)")
@@ -84,6 +90,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         virtual_subprocess=args.virtual_subprocess,
         speed_factor=args.speed_factor,
         hub_port=args.hub_port,
+        join_hub=args.join_hub,
         interface=args.interface,
         channel=args.channel,
         bitrate=args.bitrate,

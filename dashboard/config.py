@@ -28,6 +28,7 @@ class BenchConfig:
     speed_factor: virtual drive only, simulated seconds per wall-clock second.
     virtual_subprocess: run the virtual drive as ``virtual-drive run`` in a child process.
     hub_port: TCP port of the loopback hub on 127.0.0.1 (0 = any free port).
+    join_hub: TCP port of an already running loopback hub to join (instead of interface).
     token: access token; required (and checked on every request) when ``allow_remote``.
     """
 
@@ -42,6 +43,7 @@ class BenchConfig:
     speed_factor: float = 1.0
     virtual_subprocess: bool = False
     hub_port: int = 0
+    join_hub: int | None = None
     allow_remote: bool = False
     token: str | None = None
     live_window_s: float = 4.0
@@ -63,5 +65,7 @@ class BenchConfig:
             raise ValueError(f"node id {self.node_id} is outside 1..127")
         if self.speed_factor <= 0:
             raise ValueError("--speed-factor must be > 0")
-        if not self.virtual and self.interface is None:
-            raise ValueError("give --virtual, or --interface (and --channel) of the CAN bus")
+        if not self.virtual and self.interface is None and self.join_hub is None:
+            raise ValueError(
+                "give --virtual, --join-hub PORT, or --interface (and --channel) of the CAN bus"
+            )

@@ -29,6 +29,14 @@ def open_bench(config: BenchConfig) -> Iterator[Bench]:
             )
             where = "in-process" if not config.virtual_subprocess else "subprocess"
             desc = f"loopback hub 127.0.0.1:{port} (virtual drive, {where})"
+        elif config.join_hub is not None:
+            drive = Drive.connect(
+                host="127.0.0.1",
+                port=config.join_hub,
+                bitrate=config.bitrate,
+                node_id=config.node_id,
+            )
+            desc = f"loopback hub 127.0.0.1:{config.join_hub}"
         else:
             drive = Drive.connect(
                 interface=config.interface,
