@@ -29,11 +29,10 @@ import can
 
 role, port, count, tune = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), sys.argv[4] == "1"
 bus = can.Bus(interface="socketcand", host="127.0.0.1", port=port, channel="vcan0", tcp_tune=tune)
-READY = 0x7E0
 out = {}
 if role == "sink":
     time.sleep(0.1)
-    bus.send(can.Message(arbitration_id=READY, is_extended_id=False))
+    print("joined", flush=True)
     n, first, last = 0, None, None
     while n < count:
         m = bus.recv(10.0)
@@ -45,7 +44,6 @@ if role == "sink":
         n += 1
     out = {"n": n, "span": (last - first) if n > 1 else None}
 elif role == "source":
-    assert bus.recv(20.0).arbitration_id == READY
     rng = __import__("random").Random(1)
     for i in range(count):
         bus.send(can.Message(arbitration_id=0x181, data=bytes(rng.randrange(256) for _ in range(8)),
@@ -53,7 +51,7 @@ elif role == "source":
     time.sleep(0.5)
 elif role == "responder":
     time.sleep(0.1)
-    bus.send(can.Message(arbitration_id=READY, is_extended_id=False))
+    print("joined", flush=True)
     served = 0
     while served < count:
         m = bus.recv(10.0)
@@ -65,7 +63,6 @@ elif role == "responder":
             served += 1
     out = {"served": served}
 elif role == "requester":
-    assert bus.recv(20.0).arbitration_id == READY
     rtts = []
     req = can.Message(arbitration_id=0x601, data=bytes([0x40, 0, 0x10, 0, 0, 0, 0, 0]),
                       is_extended_id=False)
@@ -85,15 +82,17 @@ print(json.dumps(out))
 """
 
 
+def _spawn(role: str, port: int, count: int, tune: bool) -> subprocess.Popen:
+    args = [sys.executable, "-c", CLIENT, role, str(port), str(count), "1" if tune else "0"]
+    return subprocess.Popen(args, stdout=subprocess.PIPE, text=True)
+
+
 def _pair(port: int, roles: tuple[str, str], count: int, tune: bool) -> dict:
-    procs = {
-        r: subprocess.Popen(
-            [sys.executable, "-c", CLIENT, r, str(port), str(count), "1" if tune else "0"],
-            stdout=subprocess.PIPE,
-            text=True,
-        )
-        for r in roles
-    }
+    """Start roles[1] (the listening side); once it has joined the bus, roles[0]."""
+    first = _spawn(roles[1], port, count, tune)
+    if first.stdout.readline().strip() != "joined":
+        raise SystemExit(f"bench_hub: {roles[1]} could not join the hub")
+    procs = {roles[1]: first, roles[0]: _spawn(roles[0], port, count, tune)}
     results = {}
     for r, p in procs.items():
         out, _ = p.communicate(timeout=300)
