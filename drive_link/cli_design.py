@@ -28,6 +28,7 @@ from typing import Any, NoReturn
 import numpy as np
 
 from drive_link import design
+from drive_link.design import analyse_current_loop
 from drive_link.identify import fit_first_order
 from drive_link.metrics import step_metrics
 
@@ -86,113 +87,6 @@ def _fmt(x: float | None, spec: str = ".4g", unit: str = "") -> str:
 
 
 # --------------------------------------------------------------------------- design
-def analyse_current_loop(
-    controller: str,
-    *,
-    R: float,
-    L: float,
-    L_c: float,
-    R_c: float,
-    k_p: float,
-    k_i: float,
-    fs: float,
-    i_start: float = 15.0,
-    i_final: float = 20.0,
-    n_samples: int | None = None,
-) -> dict[str, Any]:
-    """Stability, margins and predicted step figures of one current loop (JSON-ready dict).
-
-    Units: R [Ω], L, L_c [H], R_c [Ω], k_p, k_i [V/A], fs [Hz], currents [A]; times in the result
-    are in s, frequencies in Hz, margins in dB and degrees. ``n_samples=None`` predicts the step
-    until the slowest closed-loop pole has decayed to 1e-4.
-    """
-    loop = design.current_loop_tf(controller, R=R, L=L, L_c=L_c, R_c=R_c, k_p=k_p, k_i=k_i, fs=fs)  # type: ignore[arg-type]
-    cl = design.feedback(loop)
-    poles = cl.poles()
-    stable = design.is_stable(cl)
-    m = design.margins(loop)
-    Phi, Gamma = design.phi_gamma(R, L, fs)
-    out: dict[str, Any] = {
-        "controller": controller,
-        "R": R,
-        "L": L,
-        "L_c": L_c,
-        "R_c": R_c,
-        "fs": fs,
-        "Phi": Phi,
-        "Gamma": Gamma,
-        "stable": stable,
-        "jury_stable": design.jury_stable(cl.den),
-        "max_pole_radius": float(np.max(np.abs(poles))) if poles.size else 0.0,
-        "poles": [[float(p.real), float(p.imag)] for p in poles],
-        "gain_margin_db": m.gain_margin_db,
-        "phase_margin_deg": m.phase_margin_deg,
-        "sensitivity_peak": m.sensitivity_peak,
-        "gain_crossover_hz": m.gain_crossover_hz,
-        "phase_crossover_hz": m.phase_crossover_hz,
-        "phase_margins_deg": list(m.phase_margins_deg),
-        "gain_crossovers_hz": list(m.gain_crossovers_hz),
-    }
-    if controller == "deadbeat":
-        Phi_c, Gamma_c = design.phi_gamma(R_c, L_c, fs)
-        out["Phi_c"], out["Gamma_c"] = Phi_c, Gamma_c
-    if controller == "pi":
-        out["k_p"], out["k_i"] = k_p, k_i
-    step: dict[str, Any] = {
-        "overshoot_pct": None,
-        "rise_time_s": None,
-        "settling_time_s": None,
-        "steady_state_error_A": None,
-        "steady_state_error_pct": None,
-        "step_samples": None,
-    }
-    if stable:
-        r_max = float(np.max(np.abs(poles))) if poles.size else 0.0
-        if n_samples is None:  # long enough for the slowest pole to decay to 1e-4
-            n_samples = 50 if r_max < 1e-3 else math.ceil(math.log(1e-4) / math.log(r_max))
-            n_samples = min(max(n_samples, 50), 200_000)
-        r = design.predicted_step(
-            controller,  # type: ignore[arg-type]
-            n_samples=n_samples,
-            i_start=i_start,
-            i_final=i_final,
-            R=R,
-            L=L,
-            L_c=L_c,
-            R_c=R_c,
-            k_p=k_p,
-            k_i=k_i,
-            fs=fs,
-        )
-        y0 = design.predicted_step(
-            controller,  # type: ignore[arg-type]
-            n_samples=1,
-            i_start=i_start,
-            i_final=i_start,
-            R=R,
-            L=L,
-            L_c=L_c,
-            R_c=R_c,
-            k_p=k_p,
-            k_i=k_i,
-            fs=fs,
-        ).i_p_final
-        sm = step_metrics(r.t, r.i_p, reference=i_final, y_initial=y0, y_final=r.i_p_final)
-        step = {
-            "overshoot_pct": sm.overshoot_pct,
-            "rise_time_s": sm.rise_time,
-            "settling_time_s": sm.settling_time,
-            "steady_state_error_A": sm.steady_state_error,
-            "steady_state_error_pct": (
-                100.0 * sm.steady_state_error / abs(i_final) if i_final != 0.0 else None
-            ),
-            "step_samples": n_samples,
-        }
-    out.update(step)
-    out["step_from_A"], out["step_to_A"] = i_start, i_final
-    return out
-
-
 def _design_ip(args: argparse.Namespace) -> dict[str, Any]:
     a = _num("--a", args.a)
     b = _num("--b", args.b)
