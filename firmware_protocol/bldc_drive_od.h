@@ -2211,36 +2211,36 @@
 #define OD_SIM_LOAD__T_LOAD_MIN                                  (-50.0f) /* N*m */
 #define OD_SIM_LOAD__T_LOAD_MAX                                  50.0f /* N*m */
 #define OD_SIM_LOAD__T_LOAD_REF                                  0x50000120UL
-/* 0x5000:02 sim_load.k_gen REAL32 rw [N*m/rpm] - DC-generator load torque proportional to speed */
+/* 0x5000:02 sim_load.k_gen REAL32 rw [N*m/rpm] - DC-generator load torque k_gen * speed, default 90 % of the speed-proportional torque identified in the paper (a = 0.9999785) */
 #define OD_SIM_LOAD__K_GEN_INDEX                                 0x5000u
 #define OD_SIM_LOAD__K_GEN_SUB                                   0x02u
 #define OD_SIM_LOAD__K_GEN_TYPE                                  OD_TYPE_REAL32
 #define OD_SIM_LOAD__K_GEN_CTYPE                                 float
 #define OD_SIM_LOAD__K_GEN_ACCESS                                OD_ACCESS_RW
 #define OD_SIM_LOAD__K_GEN_PDO                                   0u
-#define OD_SIM_LOAD__K_GEN_DEFAULT                               0.0f /* N*m/rpm */
+#define OD_SIM_LOAD__K_GEN_DEFAULT                               0.006921f /* N*m/rpm */
 #define OD_SIM_LOAD__K_GEN_MIN                                   0.0f /* N*m/rpm */
 #define OD_SIM_LOAD__K_GEN_MAX                                   1.0f /* N*m/rpm */
 #define OD_SIM_LOAD__K_GEN_REF                                   0x50000220UL
-/* 0x5000:03 sim_load.J REAL32 rw [kg*m^2] - total inertia, default from the paper's identified b = 3.33715e-4 */
+/* 0x5000:03 sim_load.J REAL32 rw [kg*m^2] - total inertia, default from the paper's identified b = 3.33715e-4 rpm/(A sample) */
 #define OD_SIM_LOAD__J_INDEX                                     0x5000u
 #define OD_SIM_LOAD__J_SUB                                       0x03u
 #define OD_SIM_LOAD__J_TYPE                                      OD_TYPE_REAL32
 #define OD_SIM_LOAD__J_CTYPE                                     float
 #define OD_SIM_LOAD__J_ACCESS                                    OD_ACCESS_RW
 #define OD_SIM_LOAD__J_PDO                                       0u
-#define OD_SIM_LOAD__J_DEFAULT                                   0.0683f /* kg*m^2 */
+#define OD_SIM_LOAD__J_DEFAULT                                   0.06831f /* kg*m^2 */
 #define OD_SIM_LOAD__J_MIN                                       1e-05f /* kg*m^2 */
 #define OD_SIM_LOAD__J_MAX                                       10.0f /* kg*m^2 */
 #define OD_SIM_LOAD__J_REF                                       0x50000320UL
-/* 0x5000:04 sim_load.B REAL32 rw [N*m*s/rad] - viscous friction, default from the paper's a = 0.9999785 */
+/* 0x5000:04 sim_load.B REAL32 rw [N*m*s/rad] - viscous friction, default 10 % of the speed-proportional torque identified in the paper (a = 0.9999785) */
 #define OD_SIM_LOAD__B_INDEX                                     0x5000u
 #define OD_SIM_LOAD__B_SUB                                       0x04u
 #define OD_SIM_LOAD__B_TYPE                                      OD_TYPE_REAL32
 #define OD_SIM_LOAD__B_CTYPE                                     float
 #define OD_SIM_LOAD__B_ACCESS                                    OD_ACCESS_RW
 #define OD_SIM_LOAD__B_PDO                                       0u
-#define OD_SIM_LOAD__B_DEFAULT                                   0.0734f /* N*m*s/rad */
+#define OD_SIM_LOAD__B_DEFAULT                                   0.007344f /* N*m*s/rad */
 #define OD_SIM_LOAD__B_MIN                                       0.0f /* N*m*s/rad */
 #define OD_SIM_LOAD__B_MAX                                       10.0f /* N*m*s/rad */
 #define OD_SIM_LOAD__B_REF                                       0x50000420UL

@@ -466,3 +466,21 @@ def test_structure_types(od: canopen.ObjectDictionary) -> None:
     assert isinstance(od[0x2010], ODRecord) and isinstance(od[0x1018], ODRecord)
     assert od[0x1003][0].access_type == "rw"  # write 0 clears the history (CiA 301)
     assert len([k for k in od[0x1003] if k]) == 8
+
+
+def test_sim_load_defaults_reproduce_the_papers_identified_speed_model() -> None:
+    """Valle et al. §IV: G(z) = b / (z - a), a ~ 0.9999785, b = 3.33715e-4 rpm/(A sample) at
+    Ts = 20 us. With T_e = K_t i_p (K_t = K_rpm * 60 / 2 pi, line-to-line BLDC) and
+    J dw/dt = T_e - (B + k_gen * 60 / 2 pi) w, the OD's default mechanics must give that model."""
+    view = load_od()
+    Ts = 20e-6
+    rpm_per_rad_s = 60 / (2 * math.pi)
+    K_t = view.entry("motor.K_rpm").default * rpm_per_rad_s
+    J = view.entry("sim_load.J").default
+    B_total = (
+        view.entry("sim_load.B").default + view.entry("sim_load.k_gen").default * rpm_per_rad_s
+    )
+    a = math.exp(-B_total / J * Ts)
+    b = K_t / J * Ts * rpm_per_rad_s
+    assert a == pytest.approx(0.9999785, abs=2e-8)
+    assert b == pytest.approx(3.33715e-4, rel=1e-3)
