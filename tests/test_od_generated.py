@@ -5,6 +5,8 @@ neither drifts."""
 from __future__ import annotations
 
 import configparser
+import contextlib
+import io
 import re
 import shutil
 import subprocess
@@ -15,6 +17,7 @@ import canopen
 import pytest
 
 from firmware_protocol import EDS_PATH, load_od
+from firmware_protocol.generate import main as generate_main
 from firmware_protocol.generate import render_header, render_markdown
 
 pytestmark = pytest.mark.timeout(120)
@@ -220,12 +223,21 @@ def test_markdown_lists_every_object_once_with_its_attributes() -> None:
 
 
 def _generate(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "firmware_protocol.generate", *args],
+    """Run the generator in-process (the ``python -m`` entry is covered once below)."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = generate_main(list(args))
+    return subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
+
+
+def test_python_m_entry_point_checks_the_repo() -> None:
+    result = subprocess.run(
+        [sys.executable, "-m", "firmware_protocol.generate", "--check"],
         capture_output=True,
         text=True,
         timeout=60,
     )
+    assert result.returncode == 0, result.stderr
 
 
 def test_generate_check_passes_on_the_repo_and_fails_on_drift(tmp_path: Path) -> None:
