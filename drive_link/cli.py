@@ -431,6 +431,7 @@ def cmd_identify(args: argparse.Namespace, d: Drive) -> int:
     import time
 
     from . import design, identify
+    from .steps import _record_step
     from .trace import TS, Trigger
 
     d.set_mode("current")
@@ -441,11 +442,15 @@ def cmd_identify(args: argparse.Namespace, d: Drive) -> int:
     d.trace.configure(
         ["i_p", "speed"], args.divider, args.length, args.pre_trigger, Trigger("setpoint_step")
     )
-    d.trace.arm()
-    d.set_current(args.i_to)
     try:
-        d.trace.wait(2.0 + 3.0 * args.length * args.divider * TS)
-        tr = d.trace.upload(_progress_bar(args))
+        tr = _record_step(
+            d,
+            lambda: d.set_current(args.i_from),
+            lambda: d.set_current(args.i_to),
+            args.pre_trigger * args.divider * TS,
+            args.length * args.divider * TS,
+            None,
+        )
     finally:
         d.set_current(args.i_from)
     fit = identify.fit_first_order(

@@ -147,12 +147,14 @@ def current_step(
     settle_s: float = 0.05,
     enable: bool = True,
     timeout: float | None = None,
+    extra: tuple[str, ...] = (),
 ) -> StepResult:
     """Pseudo-current step i_from → i_to (A) in "current" mode.
 
     Sets the mode and i_from, enables (if ``enable``), waits ``settle_s`` s, arms the recorder
-    (channels i_p, i_p_ref, v_L, e_L; ``divider`` loop samples per trace sample, ``length``
-    samples, ``pre_trigger`` before the step) on "setpoint step", writes i_to and uploads.
+    (channels i_p, i_p_ref, v_L, e_L and ``extra``, e.g. "hall_sector"; ``divider`` loop
+    samples per trace sample, ``length`` samples, ``pre_trigger`` before the step) on
+    "setpoint step", writes i_to and uploads.
     The prediction is :func:`drive_link.design.predicted_step` for the drive's controller type,
     L_c, R_c, k_p, k_i and motor R, L, with the back-EMF e_L measured just before the step.
     """
@@ -163,7 +165,11 @@ def current_step(
     _require_enabled(drive, enable)
     time.sleep(settle_s)
     drive.trace.configure(
-        ["i_p", "i_p_ref", "v_L", "e_L"], divider, length, pre_trigger, Trigger("setpoint_step")
+        ["i_p", "i_p_ref", "v_L", "e_L", *extra],
+        divider,
+        length,
+        pre_trigger,
+        Trigger("setpoint_step"),
     )
     tr = _record_step(
         drive,

@@ -186,9 +186,13 @@ class Recorder:
         d.write("trace_config.pre_trigger", int(pre_trigger))
         for i, n in enumerate(names, start=1):
             obj = d.table[n]
-            d.write(f"trace_channels.channel_{i}", od_reference(obj.index, obj.subindex, 32))
+            d.write(
+                f"trace_channels.channel_{i}", od_reference(obj.index, obj.subindex, obj.bits or 32)
+            )
         src = d.table[self.resolve(trig.source)]
-        d.write("trace_config.trigger_source", od_reference(src.index, src.subindex, 32))
+        d.write(
+            "trace_config.trigger_source", od_reference(src.index, src.subindex, src.bits or 32)
+        )
         d.write("trace_config.trigger_level", float(trig.level))
         d.write("trace_config.trigger_edge", TRIGGER_EDGES[trig.edge])
         d.write("trace_config.trigger_mode", TRIGGER_MODES[trig.mode])
