@@ -154,6 +154,35 @@ static void apply_pattern(loop_t *L, float m, int sec, int on, double u0, double
     if (u1 <= u0) {
         return;
     }
+    if (on && L->model == LOOP_MODEL_PWM && L->T_BT == 0.0 && os_dt == 0.0) {
+        /* Fast path without blanking time: the edges are already ordered,
+         * r_hi <= r_lo <= f_lo <= f_hi for the legs with the larger / smaller duty. */
+        int x_hi = (dp >= dm) ? xp : xm, x_lo = (dp >= dm) ? xm : xp;
+        double d_hi = (dp >= dm) ? dp : dm, d_lo = (dp >= dm) ? dm : dp;
+        double edge[6];
+        int open = 3 - xp - xm, k;
+        edge[0] = 0.0;
+        edge[1] = (d_hi >= 1.0) ? 0.0 : 0.5 * (1.0 - d_hi) * Ts;
+        edge[2] = (d_lo <= 0.0) ? 0.5 * Ts : 0.5 * (1.0 - d_lo) * Ts;
+        edge[3] = (d_lo <= 0.0) ? 0.5 * Ts : 0.5 * (1.0 + d_lo) * Ts;
+        edge[4] = (d_hi >= 1.0) ? Ts : 0.5 * (1.0 + d_hi) * Ts;
+        edge[5] = Ts;
+        mode[x_hi] = PLANT_DRIVEN;
+        mode[x_lo] = PLANT_DRIVEN;
+        mode[open] = PLANT_OPEN;
+        vdrv[open] = 0.0;
+        for (k = 0; k < 5; ++k) {
+            double a = (edge[k] > u0) ? edge[k] : u0;
+            double b = (edge[k + 1] < u1) ? edge[k + 1] : u1;
+            if (b - a < 1e-15) {
+                continue;
+            }
+            vdrv[x_hi] = (k >= 1 && k <= 3) ? Vd : 0.0;
+            vdrv[x_lo] = (k == 2) ? Vd : 0.0;
+            L->segments += plant_advance(&L->p, mode, vdrv, b - a);
+        }
+        return;
+    }
     bp[nb++] = u0;
     bp[nb++] = u1;
     if (on && L->model == LOOP_MODEL_PWM) {
