@@ -172,7 +172,12 @@ class Entry:
         if isinstance(value, float) and not math.isfinite(value):
             raise LimitError(ABORT_INVALID_VALUE, f"{self.name} = {value} is not a finite number")
         if dt == REAL32:
-            return self._check_real(float(value))
+            try:
+                as_float = float(value)
+            except OverflowError:  # an int beyond any float
+                code = ABORT_VALUE_TOO_HIGH if value > 0 else ABORT_VALUE_TOO_LOW
+                raise LimitError(code, f"{self.name} = {value} does not fit in a REAL32") from None
+            return self._check_real(as_float)
         return self._check_int(value)
 
     def _check_real(self, value: float) -> float:

@@ -110,6 +110,7 @@ def test_real32_abort_codes(view) -> None:
     assert _abort(e, math.inf) == INVALID
     assert _abort(e, -math.inf) == INVALID
     assert _abort(e, 1e39) == TOO_HIGH  # not representable as REAL32
+    assert _abort(e, 10**400) == TOO_HIGH and _abort(e, -(10**400)) == TOO_LOW
     assert _abort(e, "1e-5") == INVALID
     assert _abort(e, None) == INVALID
     assert e.check(20e-6) == pytest.approx(20e-6)
