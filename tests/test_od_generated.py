@@ -340,3 +340,38 @@ def test_generate_rejects_a_malformed_eds_in_one_line(tmp_path: Path) -> None:
     assert "duplicate object names" in result.stderr
     with pytest.raises(ValueError):
         load_od(dup)
+
+
+def test_every_value_macro_fits_its_c_type_without_conversion(gcc: str, tmp_path: Path) -> None:
+    """``OD_X_CTYPE v = OD_X_DEFAULT/MIN/MAX;`` compiles with -Wconversion -Wsign-conversion."""
+    text = HEADER.read_text()
+    stems = sorted(set(re.findall(r"#define (OD_\w+)_CTYPE\b", text)))
+    body = []
+    for stem in stems:
+        for field in ("DEFAULT", "MIN", "MAX"):
+            if re.search(rf"#define {stem}_{field}\s", text):
+                body.append(f"    {{ {stem}_CTYPE v = {stem}_{field}; sink(&v, sizeof v); }}")
+    assert len(body) > 300
+    src = tmp_path / "conv.c"
+    src.write_text(
+        "\n".join(
+            [
+                '#include "bldc_drive_od.h"',
+                "#include <stddef.h>",
+                "void sink(const void *p, size_t n);",
+                "void use_all(void);",
+                "void use_all(void) {",
+                *body,
+                "}",
+            ]
+        )
+        + "\n"
+    )
+    flags = [*GCC_FLAGS, "-Wconversion", "-Wsign-conversion", "-Wfloat-conversion"]
+    build = subprocess.run(
+        [gcc, *flags, f"-I{PKG}", "-c", str(src), "-o", str(tmp_path / "conv.o")],
+        capture_output=True,
+        text=True,
+        timeout=90,
+    )
+    assert build.returncode == 0, build.stderr[:3000]
