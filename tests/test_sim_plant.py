@@ -229,3 +229,46 @@ def test_averaged_model_and_model_switch():
     r = sim.run(100)
     np.testing.assert_allclose(r["i_p"], 30.0, atol=0.05)
     assert sim.model == "pwm"
+
+
+def test_outgoing_phase_decays_through_diodes_at_commutation():
+    """At each commutation the outgoing phase's current decays to zero through its freewheel
+    diode within a few samples, without changing sign on the way; afterwards only the small
+    open-phase diode currents of unipolar PWM remain (either diode, as the back-EMF says)."""
+    sim = _steady_speed_sim(1000.0)
+    n_os = 8
+    r = sim.run(int(60 / 1000 / 4 / Ts), oversample=n_os)  # one electrical turn
+    sec = r["hall_sector"].astype(int)
+    changes = np.nonzero(np.diff(sec) != 0)[0] + 1
+    assert len(changes) >= 5
+    open_phase = {1: "os_i_c", 2: "os_i_b", 3: "os_i_a", 4: "os_i_c", 5: "os_i_b", 6: "os_i_a"}
+    for k in changes[:5]:
+        out = open_phase[sec[k]]  # was conducting in the previous sector, now open
+        seg = r[out][k * n_os : (k + 25) * n_os]
+        i0 = seg[0]
+        assert abs(i0) > 40.0
+        zero_at = int(np.argmax(seg * np.sign(i0) <= 0.0))  # first zero / sign change
+        assert 0 < zero_at < 20 * n_os  # decays within a few samples
+        assert abs(seg[zero_at - 1]) < 0.2 * abs(i0)  # monotone-ish, no jump through zero
+        # (then only the open-phase diode blips of unipolar PWM remain: |i| << i_p)
+        assert np.abs(seg[zero_at:]).max() < 0.2 * abs(i0)
+
+
+def test_reverse_rotation_and_braking_signs():
+    """Signed i_p: negative i_p gives negative torque, both when reversing and when braking."""
+    sim = Simulator(model="averaged")
+    sim.set_mode("speed")
+    sim.set_speed_ref(-300.0)
+    r = sim.run(150_000)
+    assert sim.fault is None
+    assert r["speed"][-1] == pytest.approx(-300.0, abs=10.0)
+    K_t = 0.0125 * 60 / (2 * np.pi)
+    i_p = r["i_p"][-2000:].mean()
+    assert i_p < 0.0
+    assert r["T_e"][-2000:].mean() == pytest.approx(K_t * i_p, rel=0.05)
+    # regenerative braking while turning forwards
+    sim = _steady_speed_sim(1000.0)
+    sim.set_current_ref(-50.0)
+    r = sim.run(2000)
+    assert r["i_p"][-500:].mean() == pytest.approx(-50.0, abs=0.5)
+    assert r["T_e"][-500:].mean() == pytest.approx(-50.0 * K_t, rel=0.05)
