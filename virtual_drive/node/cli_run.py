@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import logging
 import signal
+import socket
 import sys
 import threading
 
@@ -96,13 +97,23 @@ def run_command(args: argparse.Namespace) -> int:
             return _fail(f"cannot start the hub on 127.0.0.1:{args.hub_port}: {exc}")
         args.interface, args.host, args.port = "socketcand", "127.0.0.1", hub.port
         args.bitrate = None
+    logging.getLogger("canopen").setLevel(max(logging.WARNING, logging.root.level))
     kw = bus_kwargs(args)
+    shown = ", ".join(f"{k}={v}" for k, v in kw.items()) or "python-can configuration"
+    if kw.get("interface") == "socketcand" and "port" in kw:
+        # python-can retries a refused socketcand connection for 10 s with a warning per try:
+        # check the server is there first and fail with one line.
+        try:
+            socket.create_connection((kw["host"], kw["port"]), timeout=2.0).close()
+        except OSError as exc:
+            if hub is not None:
+                hub.stop()
+            return _fail(f"cannot open the CAN bus ({shown}): {exc.strerror or exc}")
     try:
         bus = can.Bus(**kw)
     except Exception as exc:  # python-can raises many types (CanError, OSError, ValueError...)
         if hub is not None:
             hub.stop()
-        shown = ", ".join(f"{k}={v}" for k, v in kw.items()) or "python-can configuration"
         reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         return _fail(f"cannot open the CAN bus ({shown}): {reason}")
 

@@ -1,0 +1,214 @@
+"""The ``virtual-drive run`` process across processes over the loopback hub: CANopen master
+in this process (canopen over python-can socketcand), drive in a child process. Store and kill
+-9, corrupt parameter files, atomic writes, bus errors, clean SIGTERM."""
+
+from __future__ import annotations
+
+import json
+import os
+import random
+import re
+import signal
+import subprocess
+import sys
+import time
+
+import can
+import canopen
+import numpy as np
+import pytest
+
+from firmware_protocol import load_od
+from virtual_drive.node import spawn_virtual_drive, storage
+
+pytestmark = pytest.mark.timeout(90)
+
+SAVE = 0x65766173
+LOAD = 0x64616F6C
+
+
+class HubProcess:
+    """``virtual-drive hub --port 0`` in its own process (as on a bench: hub, drive and master
+    in three processes, so none steals the others' interpreter time)."""
+
+    def __init__(self) -> None:
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "virtual_drive.cli", "hub", "--port", "0"],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL,
+            text=True,
+        )
+        line = self.proc.stdout.readline()
+        m = re.search(r"port=(\d+)", line)
+        assert m, line
+        self.port = int(m.group(1))
+
+    def join_kwargs(self) -> dict:
+        return dict(
+            interface="socketcand", host="127.0.0.1", port=self.port, channel="vcan0",
+            tcp_tune=True,
+        )  # fmt: skip
+
+    def stop(self) -> None:
+        self.proc.send_signal(signal.SIGTERM)
+        self.proc.wait(10)
+
+
+@pytest.fixture(scope="module")
+def hub():
+    h = HubProcess()
+    yield h
+    h.stop()
+
+
+@pytest.fixture
+def master(hub):
+    bus = can.Bus(**hub.join_kwargs())
+    net = canopen.Network(bus)
+    net.connect()
+    node = canopen.RemoteNode(1, load_od().canopen_od(1))
+    net.add_node(node)
+    node.sdo.RESPONSE_TIMEOUT = 1.0
+    yield net, node
+    net.disconnect()
+
+
+def test_402_and_trace_block_upload_across_processes(hub, master):
+    net, node = master
+    with spawn_virtual_drive(port=hub.port) as proc:
+        assert "ready" in proc.ready_line
+        node.nmt.send_command(0x01)
+        node.sdo[0x6060].raw = -1
+        for cw in (0x06, 0x07, 0x0F):
+            node.sdo[0x6040].raw = cw
+        assert node.sdo[0x6041].raw & 0x6F == 0x27
+        node.sdo[0x2030][1].raw = 15.0
+        time.sleep(0.05)
+        # capture the 15 -> 20 A step: 2 channels, 1000 samples, 100 before the step
+        tc = node.sdo[0x2100]
+        tc[4].raw = 0
+        tc[3].raw = 1000
+        tc[4].raw = 100
+        tc[8].raw = 2  # setpoint step
+        tc[9].raw = 1  # arm
+        time.sleep(0.1)  # a step is a trigger once the 100 pre-trigger samples are in
+        node.sdo[0x2030][1].raw = 20.0
+        deadline = time.monotonic() + 3
+        while tc[10].raw != 3 and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert tc[10].raw == 3
+        with node.sdo.open(0x2102, 0, "rb", block_transfer=True) as f:
+            data = f.read()
+        trace = np.frombuffer(data, "<f4").reshape(-1, 2)
+        assert trace.shape == (1000, 2)
+        assert tc[11].raw == 100
+        assert np.all(trace[:100, 1] == 15.0) and np.all(trace[100:, 1] == 20.0)
+        assert abs(trace[-1, 0] - 20.0) < 1.0
+        # live TPDO2 stream at 1 kHz over the emulated 1 Mbit/s bus
+        got = []
+        net.subscribe(0x281, lambda cid, d, ts: got.append(time.monotonic()))
+        time.sleep(1.0)
+        net.unsubscribe(0x281)
+        rate = len(got) / (got[-1] - got[0]) if len(got) > 1 else 0
+        assert 600 < rate < 1150, rate  # 3 processes on a shared 2-core machine
+        assert proc.stop() == 0  # SIGTERM: clean exit
+
+
+def test_store_kill9_restart_and_restore_defaults(hub, master, tmp_path):
+    _net, node = master
+    store = tmp_path / "params.json"
+    proc = spawn_virtual_drive(port=hub.port, store=store)
+    try:
+        node.sdo[0x2010][4].raw = 0.33  # current_controller.k_p
+        node.sdo[0x2020][3].raw = 80.0  # speed_controller.current_limit
+        node.sdo[0x1017].raw = 250
+        node.sdo[0x1010][1].raw = SAVE
+        node.sdo[0x2010][4].raw = 0.44  # changed after the save: not stored
+    finally:
+        assert proc.kill() == -signal.SIGKILL
+    proc = spawn_virtual_drive(port=hub.port, store=store)
+    try:
+        assert node.sdo[0x2010][4].raw == pytest.approx(0.33)
+        assert node.sdo[0x2020][3].raw == pytest.approx(80.0)
+        assert node.sdo[0x1017].raw == 250
+        node.sdo[0x1011][1].raw = LOAD  # restore defaults: active after reset
+        assert node.sdo[0x2010][4].raw == pytest.approx(0.33)
+        node.nmt.send_command(0x81)
+        time.sleep(0.3)
+        assert node.sdo[0x2010][4].raw == pytest.approx(0.4647)
+        assert node.sdo[0x1017].raw == 100
+    finally:
+        proc.stop()
+
+
+def test_corrupt_store_reported_and_defaults_used(hub, master, tmp_path):
+    _net, node = master
+    store = tmp_path / "params.json"
+    storage.save(store, {(0x2010, 4): np.float32(0.25).tobytes()})
+    doc = json.loads(store.read_text())
+    doc["params"]["2010:04"] = np.float32(0.5).tobytes().hex()  # checksum no longer matches
+    store.write_text(json.dumps(doc))
+    proc = spawn_virtual_drive(port=hub.port, store=store)
+    try:
+        assert node.sdo[0x2010][4].raw == pytest.approx(0.4647)
+    finally:
+        proc.stop()
+    assert "checksum" in proc.stderr_tail
+    store.write_bytes(b'{"format": "bldc-bench-drive-par')  # torn file
+    proc = spawn_virtual_drive(port=hub.port, store=store)
+    try:
+        assert node.sdo[0x2010][4].raw == pytest.approx(0.4647)
+    finally:
+        proc.stop()
+    assert "defaults used" in proc.stderr_tail
+
+
+_SAVER = """
+import importlib.util, sys
+spec = importlib.util.spec_from_file_location("storage", sys.argv[2])  # stdlib-only module
+storage = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(storage)
+path = sys.argv[1]
+a = {(0x2010, 4): bytes(4000 * [1])}
+b = {(0x2010, 4): bytes(4000 * [2]), (0x2020, 1): bytes(4)}
+print("go", flush=True)
+while True:
+    storage.save(path, a)
+    storage.save(path, b)
+"""
+
+
+def test_store_is_atomic_under_kill9(tmp_path):
+    path = tmp_path / "params.json"
+    a = {(0x2010, 4): bytes(4000 * [1])}
+    b = {(0x2010, 4): bytes(4000 * [2]), (0x2020, 1): bytes(4)}
+    rng = random.Random(1)
+    for _ in range(4):
+        proc = subprocess.Popen(
+            [sys.executable, "-c", _SAVER, str(path), storage.__file__],
+            stdout=subprocess.PIPE,
+            text=True,
+        )
+        assert proc.stdout.readline().strip() == "go"
+        time.sleep(rng.uniform(0.02, 0.2))
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait()
+        assert storage.load(path) in (a, b)
+    leftovers = [p for p in tmp_path.iterdir() if p.name != "params.json"]
+    assert len(leftovers) <= 4  # at most one temp file per kill, never the real file torn
+
+
+def test_bus_errors_exit_non_zero_with_one_line():
+    r = subprocess.run(
+        [sys.executable, "-m", "virtual_drive.cli", "--interface", "socketcand",
+         "--host", "127.0.0.1", "--port", "1", "--channel", "vcan0"],
+        capture_output=True, text=True, timeout=30,
+    )  # fmt: skip
+    assert r.returncode == 1
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("virtual-drive: error: cannot open the CAN bus")
+    r = subprocess.run(
+        [sys.executable, "-m", "virtual_drive.cli", "run", "--interface", "nosuchbus"],
+        capture_output=True, text=True, timeout=30,
+    )  # fmt: skip
+    assert r.returncode == 1 and "nosuchbus" in r.stderr
