@@ -208,10 +208,10 @@ def _cmd_design(args: argparse.Namespace) -> int:
         head += f", k_p = {k_p:.6g}, k_i = {k_i:.6g}"
     print(head)
     jury = "stable" if r["jury_stable"] else "not stable"
-    print(
-        f"  closed loop: {'stable' if r['stable'] else 'UNSTABLE'} "
-        f"(max |pole| = {r['max_pole_radius']:.6f}; Jury: {jury})"
-    )
+    verdict = "stable" if r["stable"] else "UNSTABLE"
+    if r["marginal"]:
+        verdict = "MARGINAL (a pole on the unit circle, e.g. R_c = 0 cancels the integrator)"
+    print(f"  closed loop: {verdict} (max |pole| = {r['max_pole_radius']:.6f}; Jury: {jury})")
     pms = ", ".join(f"{p:.1f}°" for p in r["phase_margins_deg"]) or "none"
     print(
         f"  gain margin {_fmt(r['gain_margin_db'], '.2f', 'dB')} "
@@ -231,7 +231,7 @@ def _cmd_design(args: argparse.Namespace) -> int:
             f"steady-state error {_fmt(r['steady_state_error_A'], '.3g', 'A')}"
         )
     else:
-        print("  no step prediction: the loop is unstable")
+        print("  no step prediction: the loop is not asymptotically stable")
     return 0
 
 

@@ -292,11 +292,13 @@ def closed_loop_mismatch(
 
 
 # --------------------------------------------------------------------------- stability
-def is_stable(system: DiscreteTF | Sequence[float] | np.ndarray, *, tol: float = 0.0) -> bool:
-    """True if every root (closed-loop pole) lies strictly inside the unit circle.
+def is_stable(system: DiscreteTF | Sequence[float] | np.ndarray, *, tol: float = 1e-9) -> bool:
+    """True if every root (closed-loop pole) lies inside the unit circle, ``|p| < 1 - tol``.
 
     ``system`` is a closed-loop :class:`DiscreteTF` (its denominator is used) or a characteristic
-    polynomial in descending powers of z. ``tol`` shrinks the allowed radius to ``1 - tol``.
+    polynomial in descending powers of z. Poles within ``tol`` of the circle are marginal and
+    reported as not stable (root-finding cannot tell which side they are on); e.g. R_c = 0 makes
+    the deadbeat controller's zero at Phi_c = 1 cancel its integrator, leaving a pole at z = 1.
     """
     den = system.den if isinstance(system, DiscreteTF) else _trim(system)
     if den.size <= 1:
@@ -309,7 +311,10 @@ def jury_stable(coefficients: Sequence[float] | np.ndarray) -> bool:
 
     Returns True if all roots lie strictly inside the unit circle, decided from the Jury table
     (Åström & Wittenmark, Computer-Controlled Systems, §3.2) without computing roots. Critical
-    (on-circle) and singular cases are reported as not stable.
+    (on-circle) and singular cases are reported as not stable. Limitation: the table loses
+    precision for clustered poles within ~1e-5 of z = 1 (e.g. an IP speed loop with
+    ω_n < 0.5 rad/s at 50 kHz) and may then answer False; :func:`is_stable` (roots) is the
+    reference, this is the paper's cross-check.
     """
     a = _trim(coefficients)
     if not np.all(np.isfinite(a)):
@@ -322,18 +327,20 @@ def jury_stable(coefficients: Sequence[float] | np.ndarray) -> bool:
     if a[0] < 0:  # pragma: no cover - a[0] is 1 after normalisation
         a = -a
     n = a.size - 1
-    # necessary conditions: A(1) > 0, (-1)^n A(-1) > 0
-    if np.polyval(a, 1.0) <= 0.0 or ((-1) ** n) * np.polyval(a, -1.0) <= 0.0:
+    scale = float(np.sum(np.abs(a)))
+    # necessary conditions: A(1) > 0, (-1)^n A(-1) > 0 (beyond rounding: roots on the circle
+    # at z = ±1 are marginal, not stable)
+    eps = 1e-14 * scale
+    if np.polyval(a, 1.0) <= eps or ((-1) ** n) * np.polyval(a, -1.0) <= eps:
         return False
     row = a.copy()
-    scale = np.max(np.abs(row))
     while row.size > 1:
-        # Schur–Cohn/Jury reduction: a_{k-1,i} = a_{k,i} - alpha_k a_{k,k-i}, alpha = a_k / a_0
+        # Schur–Cohn/Jury reduction: a_{k-1,i} = a_{k,i} - alpha_k a_{k,k-i}, alpha = a_k / a_0;
+        # every leading coefficient must stay positive, beyond the reduction's rounding error
         alpha = row[-1] / row[0]
-        if row[0] <= 0.0 or abs(row[0]) <= 1e-14 * scale:
-            return False
+        lead = row[0]
         row = (row - alpha * row[::-1])[:-1]
-        if row[0] <= 1e-14 * scale:
+        if row[0] <= 1e-13 * lead:
             return False
     return True
 
@@ -429,6 +436,11 @@ def margins(loop: DiscreteTF, *, n_grid: int = 20_000) -> Margins:
     """
     if n_grid < 100:
         raise ValueError("n_grid must be >= 100")
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        return _margins(loop, n_grid)
+
+
+def _margins(loop: DiscreteTF, n_grid: int) -> Margins:
     Ts = loop.Ts
     eps = 1e-9
     theta = np.unique(
@@ -892,10 +904,11 @@ def analyse_current_loop(
     until the slowest closed-loop pole has decayed to 1e-4. L_c, R_c default to L, R.
 
     Keys: controller, R, L, L_c, R_c, fs, Phi, Gamma, (Phi_c, Gamma_c | k_p, k_i), stable,
-    jury_stable, max_pole_radius, poles ([re, im] pairs), gain_margin_db, phase_margin_deg,
-    sensitivity_peak, gain_crossover_hz, phase_crossover_hz, phase_margins_deg,
-    gain_crossovers_hz, overshoot_pct, rise_time_s, settling_time_s, steady_state_error_A,
-    steady_state_error_pct, step_samples, step_from_A, step_to_A (step figures None if unstable).
+    marginal (a pole within 1e-9 of the unit circle), jury_stable, max_pole_radius, poles
+    ([re, im] pairs), gain_margin_db, phase_margin_deg, sensitivity_peak, gain_crossover_hz,
+    phase_crossover_hz, phase_margins_deg, gain_crossovers_hz, overshoot_pct, rise_time_s,
+    settling_time_s, steady_state_error_A, steady_state_error_pct, step_samples, step_from_A,
+    step_to_A (step figures None unless asymptotically stable).
     """
     L_c = L if L_c is None else L_c
     R_c = R if R_c is None else R_c
@@ -915,6 +928,7 @@ def analyse_current_loop(
         "Phi": Phi,
         "Gamma": Gamma,
         "stable": stable,
+        "marginal": bool(poles.size and abs(float(np.max(np.abs(poles))) - 1.0) <= 1e-9),
         "jury_stable": jury_stable(cl.den),
         "max_pole_radius": float(np.max(np.abs(poles))) if poles.size else 0.0,
         "poles": [[float(p.real), float(p.imag)] for p in poles],

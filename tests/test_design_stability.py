@@ -157,3 +157,29 @@ def test_jury_marginal_cases_are_not_stable():
     assert not design.is_stable([1.0, -1.0])
     with pytest.raises(ValueError):
         design.jury_stable([1.0, math.nan])
+
+
+def test_zero_resistance_estimate_cancels_the_integrator():
+    """R_c = 0: Phi_c = 1, so C_db's zero at z = 1 cancels its integrator (a pole stays at 1)."""
+    cl = design.closed_loop_mismatch(R, L, L, 0.0, 50e3)
+    assert np.min(np.abs(np.roots(cl.den) - 1.0)) < 1e-6
+    assert not design.is_stable(cl)
+    assert not design.jury_stable(cl.den)
+    report = design.analyse_current_loop("deadbeat", R_c=0.0)
+    assert report["marginal"] is True
+    assert report["overshoot_pct"] is None
+    # a tiny but non-zero R_c keeps the integrator: asymptotically stable again
+    assert design.is_stable(design.closed_loop_mismatch(R, L, L, 1e-4, 50e3))
+
+
+def test_slow_but_stable_poles_are_stable():
+    # IP loops: poles within 1e-4 .. 1e-6 of z = 1 are still inside the circle
+    for wn in (0.5, 1.0, 2.3, 10.0):
+        for xi in (0.7, 1.0, 1.5):
+            k_p, k_i = design.ip_gains(0.9999785, 3.33715e-4, xi, wn, 50e3)
+            cl = design.ip_closed_loop(0.9999785, 3.33715e-4, k_p, k_i)
+            assert design.is_stable(cl)
+            assert design.jury_stable(cl.den)
+    # omega_n = 0.1 rad/s: double pole at 1 - 2e-6; the roots still resolve it
+    k_p, k_i = design.ip_gains(0.9999785, 3.33715e-4, 1.0, 0.1, 50e3)
+    assert design.is_stable(design.ip_closed_loop(0.9999785, 3.33715e-4, k_p, k_i))
