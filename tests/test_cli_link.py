@@ -1,0 +1,154 @@
+"""The `drive-link` command across processes: a `virtual-drive run` child on the loopback hub,
+`python -m drive_link.cli` children talking to it. Checks outputs, files, exit codes and the
+one-line error rule (no tracebacks)."""
+
+from __future__ import annotations
+
+import csv
+import json
+import subprocess
+import sys
+
+import pytest
+
+pytestmark = pytest.mark.timeout(120)
+
+L = 14.8e-6
+
+
+@pytest.fixture(scope="module")
+def hub_drive(tmp_path_factory):
+    from virtual_drive.hub import Hub
+    from virtual_drive.node import spawn_virtual_drive
+
+    store = tmp_path_factory.mktemp("store") / "params.json"
+    with Hub(port=0) as hub:
+        proc = spawn_virtual_drive(port=hub.port, node_id=1, store=store)
+        try:
+            yield hub
+        finally:
+            proc.stop()
+
+
+def run(hub, *args: str, timeout: float = 60.0) -> subprocess.CompletedProcess:
+    cmd = [sys.executable, "-m", "drive_link.cli", args[0], "--host", "127.0.0.1"]
+    cmd += ["--port", str(hub.port), *args[1:]]
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+
+
+def one_line_error(p: subprocess.CompletedProcess) -> str:
+    assert p.stdout == ""
+    assert p.stderr.count("\n") == 1 and "Traceback" not in p.stderr, p.stderr
+    return p.stderr
+
+
+def test_status_scan_and_json(hub_drive):
+    p = run(hub_drive, "status", "--json")
+    assert p.returncode == 0, p.stderr
+    st = json.loads(p.stdout)
+    assert st["node_id"] == 1 and st["state"] in ("SWITCH ON DISABLED", "SWITCHED ON")
+    assert st["gains"]["L_c"] == pytest.approx(L, rel=1e-6)
+    p = run(hub_drive, "scan", "--json")
+    assert p.returncode == 0, p.stderr
+    assert {"node_id": 1, "device_type": 0x00020192}.items() <= json.loads(p.stdout)[0].items()
+
+
+def test_enable_setpoint_disable(hub_drive):
+    p = run(hub_drive, "set-current", "5", "--enable", "--json")
+    assert p.returncode == 0, p.stderr
+    assert json.loads(p.stdout) == {"i_p_ref": 5.0, "state": "OPERATION ENABLED"}
+    p = run(hub_drive, "read", "measurements.i_p", "statusword", "--json")
+    vals = json.loads(p.stdout)
+    assert (
+        vals["measurements.i_p"] == pytest.approx(5.0, abs=0.5)
+        and vals["statusword"] & 0x6F == 0x27
+    )
+    p = run(hub_drive, "disable")
+    assert p.returncode == 0 and p.stdout.strip() == "SWITCHED ON"
+
+
+def test_bad_input_one_line_and_exit_codes(hub_drive, tmp_path):
+    p = run(hub_drive, "write", "current_controller.L_c", "1e-3")
+    assert p.returncode == 7 and "stability range" in one_line_error(p)
+    p = run(hub_drive, "write", "setpoints.i_p_ref", "abc")
+    assert p.returncode == 7 and "not a number" in one_line_error(p)
+    p = run(hub_drive, "read", "current_controller.Lc")
+    assert p.returncode == 1 and "no object named" in one_line_error(p)
+    p = run(hub_drive, "status", "--node", "5", "--sdo-timeout", "0.05")
+    assert p.returncode == 4 and "no answer from node 5" in one_line_error(p)
+    p = subprocess.run(
+        [sys.executable, "-m", "drive_link.cli", "status", "--host", "127.0.0.1", "--port", "1"],
+        capture_output=True,
+        text=True,
+        timeout=30,
+    )
+    assert p.returncode == 3 and "no hub at 127.0.0.1:1" in one_line_error(p)
+    # the drive refuses (SDO abort with its meaning) when the client check is bypassed
+    p = run(hub_drive, "write", "modes_of_operation", "1")
+    assert p.returncode == 6 and "0x06090030 (invalid value for parameter)" in one_line_error(p)
+
+
+def test_gains_margin_check_and_force(hub_drive):
+    p = run(hub_drive, "set-gains", f"L_c={1.6 * L}")
+    assert p.returncode == 8
+    assert "L_c = 1.6 L > 1.5 L" in one_line_error(p)
+    assert json.loads(run(hub_drive, "gains", "--json").stdout)["L_c"] == pytest.approx(L, rel=1e-6)
+    p = run(hub_drive, "set-gains", f"L_c={1.6 * L}", "--force", "--json")
+    assert p.returncode == 0, p.stderr
+    out = json.loads(p.stdout)
+    assert out["gains"]["L_c"] == pytest.approx(1.6 * L, rel=1e-6) and out["warnings"]
+    p = run(hub_drive, "set-gains", f"L_c={L}", "k_p=0.5", "--json")
+    assert p.returncode == 0 and json.loads(p.stdout)["gains"]["k_p"] == pytest.approx(0.5)
+
+
+def test_trace_and_step_files(hub_drive, tmp_path):
+    p = run(
+        hub_drive,
+        "trace",
+        "--channels",
+        "i_p,speed",
+        "--length",
+        "1000",
+        "--divider",
+        "5",
+        "--csv",
+        str(tmp_path / "t.csv"),
+        "--png",
+        str(tmp_path / "t.png"),
+        "--json",
+    )
+    assert p.returncode == 0, p.stderr
+    out = json.loads(p.stdout)
+    assert out["samples"] == 1000 and out["dt"] == pytest.approx(100e-6)
+    rows = list(csv.reader((tmp_path / "t.csv").open()))
+    assert (
+        rows[0] == ["t [s]", "measurements.i_p [A]", "measurements.speed [rpm]"]
+        and len(rows) == 1001
+    )
+    assert (tmp_path / "t.png").read_bytes()[:4] == b"\x89PNG"
+    p = run(
+        hub_drive,
+        "step",
+        "current",
+        "--from",
+        "10",
+        "--to",
+        "15",
+        "--csv",
+        str(tmp_path / "s.csv"),
+        "--png",
+        str(tmp_path / "s.png"),
+        "--json",
+    )
+    assert p.returncode == 0, p.stderr
+    out = json.loads(p.stdout)
+    assert out["kind"] == "current" and out["to"] == 15.0
+    assert out["metrics"]["rise_time"] < 1e-4  # deadbeat: two 20 µs samples
+    assert "measurements.i_p_predicted [A]" in next(csv.reader((tmp_path / "s.csv").open()))
+    run(hub_drive, "disable")
+
+
+def test_progress_bar_on_stderr(hub_drive):
+    p = run(hub_drive, "trace", "--channels", "i_p", "--length", "2000", "--progress")
+    assert p.returncode == 0, p.stderr
+    assert "upload [" in p.stderr and "100.0 %" in p.stderr
