@@ -228,11 +228,11 @@ def fit_first_order(
     ss = float(np.sum((w - np.mean(w)) ** 2))
     r2 = 1.0 - float(np.sum(err**2)) / ss if ss > 0 else math.nan
     return FirstOrderFit(
-        a=a,
-        b=b,
-        offset=c,
-        a_D=a_D,
-        b_D=b_D,
+        a=float(a),
+        b=float(b),
+        offset=float(c),
+        a_D=float(a_D),
+        b_D=float(b_D),
         D=D,
         Ts=float(Ts),
         Ts_model=float(Ts_model),
