@@ -175,6 +175,21 @@ class HubStats:
     protocol_errors: int  #: bad elements answered with ``< error ... >``
     bus_busy_s: float  #: emulated bus time used by frames, s (all channels)
 
+    @property
+    def received(self) -> int:
+        """Alias of :attr:`frames_received`."""
+        return self.frames_received
+
+    @property
+    def forwarded(self) -> int:
+        """Alias of :attr:`frames_forwarded`."""
+        return self.frames_forwarded
+
+    @property
+    def dropped(self) -> int:
+        """Alias of :attr:`frames_dropped`."""
+        return self.frames_dropped
+
 
 _WAIT_OPEN, _WAIT_MODE, _RAW, _CLOSED = range(4)
 
