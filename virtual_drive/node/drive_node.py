@@ -145,6 +145,7 @@ class DriveLocalNode(LocalNode):
             store, after = self._drive._before_write(index, subindex, obj, bytes(data))
             if store:
                 self.data_store.setdefault(index, {})[subindex] = bytes(data)
+            self._drive._pcache.clear()
             if after is not None:
                 after()
 
@@ -189,6 +190,7 @@ class VirtualDrive:
         self.live: dict[str, float] = {name: 0.0 for name in MEASUREMENTS.values()}
         self.live["hall_sector"] = 1
         self.store_error: str | None = None
+        self._pcache: dict[tuple[int, int], Any] = {}
 
         self.network = canopen.Network(bus)
         self.node = DriveLocalNode(node_id, self.od, self)
@@ -289,11 +291,18 @@ class VirtualDrive:
         return self.node.stored(e.index, e.subindex)
 
     def _value(self, index: int, sub: int = 0) -> Any:
-        return self.node.stored(index, sub)
+        """Present parameter value (cached; every write to the data store clears the cache)."""
+        key = (index, sub)
+        try:
+            return self._pcache[key]
+        except KeyError:
+            value = self._pcache[key] = self.node.stored(index, sub)
+            return value
 
     def _load_parameters(self) -> None:
         """Stored parameters (or defaults) into the data store and the simulator."""
         self.node.data_store.clear()
+        self._pcache.clear()
         stored: dict[tuple[int, int], bytes] = {}
         if self.store_path is not None:
             try:
@@ -313,6 +322,7 @@ class VirtualDrive:
                 logger.error("stored 0x%04X:%02X ignored: %s", index, sub, exc)
                 continue
             self.node.data_store.setdefault(index, {})[sub] = raw
+        self._pcache.clear()
         self._push_plant()
         self._configure_communication()
 
@@ -372,6 +382,7 @@ class VirtualDrive:
         for (index, sub), raw in stored.items():
             if index < 0x2000 and index in self.od:
                 self.node.data_store.setdefault(index, {})[sub] = raw
+        self._pcache.clear()
         self._configure_communication()
 
     def _reset_application(self) -> None:
@@ -601,6 +612,7 @@ class VirtualDrive:
                 if key in speed_kw:
                     var = self.node._find_object(0x2020, sub)
                     store.setdefault(0x2020, {})[sub] = var.encode_raw(speed_kw[key])
+            self._pcache.clear()
         logger.info("gain set %d applied at t = %.6f s", which, self.sim.time)
 
     def _apply_current_limit_with(self, speed_limit: float) -> None:
