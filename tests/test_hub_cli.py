@@ -89,8 +89,8 @@ def test_non_loopback_host_exits_nonzero_with_one_line():
         ["hub", "--bitrate", "0"],
         ["hub", "--port", "70000"],
         ["hub", "--port", "abc"],
-        ["nosuchcommand"],
-        [],
+        ["hub", "--seed", "x"],
+        ["hub", "--no-such-option"],
     ],
 )
 def test_bad_arguments_are_one_line_errors(args, capsys):
