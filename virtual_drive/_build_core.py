@@ -34,8 +34,9 @@ typedef struct {
 } cc_speed_t;
 
 typedef struct {
-    double R; double L; double k_e; int pole_pairs; double emf_rounding;
-    double J; double B_tot; double T_load; double V_dc; double V_G;
+    double R; double L; double r_over_l; double inv_r; double k_e; int pole_pairs;
+    double emf_rounding;
+    double J; double B_tot; double mech_gain; double T_load; double V_dc; double V_G;
     double i[3]; double omega; double theta_e;
     double e_seg[3]; double F_seg[3];
     double Te_int; double i_abs_max; int nonfinite;
@@ -79,7 +80,7 @@ ffibuilder.set_source(
     '#include "controllers.h"\n#include "plant.h"\n#include "loop.h"\n',
     sources=[str(Path("virtual_drive") / "csrc" / s) for s in _SOURCES],
     include_dirs=[str(Path("virtual_drive") / "csrc")],
-    extra_compile_args=["-std=c99", "-O3", "-fno-math-errno"],
+    extra_compile_args=["-std=c99", "-O3", "-fno-math-errno", "-fno-semantic-interposition"],
     libraries=["m"],
 )
 

@@ -38,8 +38,10 @@ void loop_update_mech(loop_t *L)
 {
     if (L->p.B_tot > 0.0) {
         L->a_m = exp(-L->p.B_tot * L->Ts / L->p.J);
+        L->p.mech_gain = -expm1(-L->p.B_tot * L->Ts / L->p.J) / L->p.B_tot;
     } else {
         L->a_m = 1.0;
+        L->p.mech_gain = 0.0;
     }
 }
 
@@ -269,29 +271,26 @@ int loop_run(loop_t *L, int n, float **sig, double *t_out)
 {
     int k;
     const double Ts = L->Ts;
+    plant_update(&L->p); /* R, L may have been changed between chunks */
     for (k = 0; k < n; ++k) {
         plant_t *p = &L->p;
         int sec = plant_hall_sector(p->theta_e);
         double e[3], e_L, i_p, speed, Te, i_ref = 0.0, w_ref = L->w_ref_set;
         float m = 0.0f;
         int on = 0, x;
-        plant_emf(p, p->theta_e, e);
-        e_L = e[sec_plus[sec]] - e[sec_minus[sec]];
-        i_p = pseudo_current(p->i, sec, p->omega);
-        speed = p->omega * RPM_PER_RAD_S;
-        Te = 0.0;
-        if (p->omega != 0.0) {
+        {
+            double F[3];
+            plant_emf_shapes(p, p->theta_e, F);
+            Te = 0.0;
             for (x = 0; x < 3; ++x) {
-                Te += e[x] * p->i[x];
-            }
-            Te /= p->omega;
-        } else {
-            for (x = 0; x < 3; ++x) {
-                Te += plant_emf_shape(p->theta_e - (2.0 * PI_D / 3.0) * x, p->emf_rounding)
-                      * p->i[x];
+                e[x] = p->k_e * p->omega * F[x];
+                Te += F[x] * p->i[x];
             }
             Te *= p->k_e;
         }
+        e_L = e[sec_plus[sec]] - e[sec_minus[sec]];
+        i_p = pseudo_current(p->i, sec, p->omega);
+        speed = p->omega * RPM_PER_RAD_S;
         /* protection */
         if (L->fault_code == 0) {
             if (p->nonfinite || !(i_p == i_p)) {

@@ -21,6 +21,12 @@ static double wrap_2pi(double x)
     return (x < 0.0) ? x + TWO_PI_D : x;
 }
 
+void plant_update(plant_t *p)
+{
+    p->r_over_l = p->R / p->L;
+    p->inv_r = 1.0 / p->R;
+}
+
 double plant_emf_shape(double theta, double w)
 {
     double sgn = 1.0, T, x;
@@ -50,7 +56,7 @@ int plant_hall_sector(double theta_e)
 {
     double u = wrap_2pi(theta_e - PI_D / 6.0);
     int s;
-    s = (int)(u / (PI_D / 3.0));
+    s = (int)(u * (3.0 / PI_D));
     if (s > 5) {
         s = 5;
     }
@@ -65,11 +71,23 @@ void plant_emf(const plant_t *p, double theta_e, double e[3])
     }
 }
 
+void plant_emf_shapes(const plant_t *p, double theta_e, double F[3])
+{
+    int x;
+    if (theta_e >= TWO_PI_D || theta_e < 0.0) {
+        theta_e = wrap_2pi(theta_e);
+    }
+    for (x = 0; x < 3; ++x) {
+        double th = theta_e - phase_shift[x];
+        F[x] = plant_emf_shape(th < 0.0 ? th + TWO_PI_D : th, p->emf_rounding);
+    }
+}
+
 void plant_set_segment_emf(plant_t *p, double theta_e)
 {
     int x;
+    plant_emf_shapes(p, theta_e, p->F_seg);
     for (x = 0; x < 3; ++x) {
-        p->F_seg[x] = plant_emf_shape(theta_e - phase_shift[x], p->emf_rounding);
         p->e_seg[x] = p->k_e * p->omega * p->F_seg[x];
     }
 }
@@ -101,33 +119,83 @@ int plant_advance(plant_t *p, const int mode[3], const double v_drv[3], double d
     int iter = 0;
     int nseg = 0;
     const double Vd = p->V_dc, VG = p->V_G;
-    const double r_over_l = p->R / p->L, inv_r = 1.0 / p->R;
-    /* Fast path (the common case, same result as the general loop below): two driven legs,
-     * the third open with zero current and its open-circuit voltage inside the rails. */
-    if (VG == 0.0 && dt > 0.0) {
+    const double r_over_l = p->r_over_l, inv_r = p->inv_r;
+    /* Fast path for the six-step case (same physics as the general loop below, specialised):
+     * legs a, b driven, leg z open, no switch drop.  Leg z either floats (i_z = 0, case B,
+     * while its open-circuit voltage stays inside the rails) or conducts through one diode
+     * (case A) until its current reaches zero. */
+    if (VG == 0.0) {
         int z = (mode[0] == PLANT_OPEN) ? 0 : ((mode[1] == PLANT_OPEN) ? 1 : 2);
-        int a = (z + 1) % 3, b = (z + 2) % 3;
-        if (mode[z] == PLANT_OPEN && mode[a] == PLANT_DRIVEN && mode[b] == PLANT_DRIVEN
-            && p->i[z] == 0.0) {
+        int a = (z == 0) ? 1 : 0, b = (z == 2) ? 1 : 2;
+        if (mode[z] == PLANT_OPEN && mode[a] == PLANT_DRIVEN && mode[b] == PLANT_DRIVEN) {
             const double *e = p->e_seg;
-            double v_open = 0.5 * (v_drv[a] + v_drv[b] - e[a] - e[b]) + e[z];
-            if (v_open <= Vd && v_open >= 0.0) {
-                double Phi, G, ul = 0.5 * (v_drv[a] - v_drv[b] - e[a] + e[b]);
-                double i0 = p->i[a], i1, ai;
-                phi_g(r_over_l, inv_r, dt, &Phi, &G);
-                i1 = Phi * i0 + G * ul;
-                p->i[a] = i1;
-                p->i[b] = -i1;
-                p->Te_int += p->k_e * (p->F_seg[a] - p->F_seg[b]) * 0.5 * (i0 + i1) * dt;
-                ai = fabs(i1);
+            const double va = v_drv[a], vb = v_drv[b];
+            while (remaining > 1e-15 && iter < 24) {
+                double Phi, G, t_seg = remaining, ia0 = p->i[a], ib0 = p->i[b], iz0 = p->i[z];
+                double ia1, ib1, iz1, vz, ai;
+                int dz;
+                ++iter;
+                if (iz0 > I_EPS) {
+                    dz = 1;
+                } else if (iz0 < -I_EPS) {
+                    dz = -1;
+                } else {
+                    double v_open = 0.5 * (va + vb - e[a] - e[b]) + e[z];
+                    iz0 = 0.0;
+                    dz = (v_open > Vd) ? -1 : ((v_open < 0.0) ? 1 : 0);
+                }
+                if (dz == 0) { /* case B: one loop current through a and b */
+                    double ul = 0.5 * (va - vb - e[a] + e[b]);
+                    phi_g(r_over_l, inv_r, t_seg, &Phi, &G);
+                    ia1 = Phi * ia0 + G * ul;
+                    ib1 = -ia1;
+                    iz1 = 0.0;
+                    ia0 = 0.5 * (ia0 - ib0);
+                } else { /* case A: leg z clamped by its diode */
+                    double vn, ua, ub, uz;
+                    vz = (dz > 0) ? 0.0 : Vd;
+                    vn = (va + vb + vz - e[0] - e[1] - e[2]) * (1.0 / 3.0);
+                    ua = va - vn - e[a];
+                    ub = vb - vn - e[b];
+                    uz = vz - vn - e[z];
+                    if (uz * dz < 0.0 && iz0 != 0.0
+                        && fabs(iz0) * p->L < t_seg * (fabs(uz) + p->R * fabs(iz0))) {
+                        double t_star = log1p(-iz0 * p->R / uz) / r_over_l;
+                        if (t_star < t_seg) {
+                            t_seg = t_star;
+                        }
+                    }
+                    phi_g(r_over_l, inv_r, t_seg, &Phi, &G);
+                    iz1 = (t_seg < remaining) ? 0.0 : Phi * iz0 + G * uz;
+                    ia1 = Phi * ia0 + G * ua;
+                    ib1 = Phi * ib0 + G * ub;
+                    { /* star constraint against rounding */
+                        double r = 0.5 * (ia1 + ib1 + iz1);
+                        ia1 -= r;
+                        ib1 -= r;
+                    }
+                }
+                p->Te_int += p->k_e * 0.5 * t_seg
+                             * (p->F_seg[a] * (ia0 + ia1) + p->F_seg[b] * (ib0 + ib1)
+                                + p->F_seg[z] * (iz0 + iz1));
+                p->i[a] = ia1;
+                p->i[b] = ib1;
+                p->i[z] = iz1;
+                ai = fabs(ia1) > fabs(ib1) ? fabs(ia1) : fabs(ib1);
+                if (fabs(iz1) > ai) {
+                    ai = fabs(iz1);
+                }
                 if (ai > p->i_abs_max) {
                     p->i_abs_max = ai;
                 }
-                if (!(i1 == i1) || ai > 1e12) {
+                if (!(ai == ai) || ai > 1e12) {
                     p->nonfinite = 1;
+                    break;
                 }
-                return 1;
+                remaining -= t_seg;
+                ++nseg;
             }
+            return nseg;
         }
     }
     while (remaining > 1e-15 && iter < 24) {
@@ -279,7 +347,7 @@ void plant_mech_step(plant_t *p, double Ts, double a_m)
     double Te = p->Te_int / Ts;
     double w0 = p->omega;
     if (p->B_tot > 0.0) {
-        p->omega = a_m * w0 + (1.0 - a_m) * (Te - p->T_load) / p->B_tot;
+        p->omega = a_m * w0 + p->mech_gain * (Te - p->T_load);
     } else {
         p->omega = w0 + Ts * (Te - p->T_load) / p->J;
     }

@@ -35,11 +35,14 @@ typedef struct {
     /* parameters (SI) */
     double R;            /* Ohm per phase */
     double L;            /* H per phase */
+    double r_over_l;     /* 1/s, R / L (derived, set by plant_update) */
+    double inv_r;        /* 1/Ohm, 1 / R (derived) */
     double k_e;          /* V s/rad per phase (mechanical rad/s) */
     int pole_pairs;
     double emf_rounding; /* rad electrical, [0, pi/3] */
     double J;            /* kg m^2 */
     double B_tot;        /* N m s/rad: friction B plus DC-generator load k_gen */
+    double mech_gain;    /* rad/s per N m: (1 - a_m) / B_tot, set by loop_update_mech */
     double T_load;       /* N m, constant load torque */
     double V_dc;         /* V */
     double V_G;          /* V, switch / diode drop */
@@ -55,11 +58,17 @@ typedef struct {
     int nonfinite;
 } plant_t;
 
+/* Recompute the derived constants (r_over_l, inv_r) after R or L changed. */
+void plant_update(plant_t *p);
+
 /* Trapezoid shape F(theta) in [-1, 1] for phase a, with rounding width w (rad). */
 double plant_emf_shape(double theta, double w);
 
 /* Hall sector 1..6 from the electrical angle. */
 int plant_hall_sector(double theta_e);
+
+/* Shape values F_x(theta_e) of the three phases. */
+void plant_emf_shapes(const plant_t *p, double theta_e, double F[3]);
 
 /* Set the back-EMF used by plant_advance (e_seg, F_seg) for the angle theta_e (rad). */
 void plant_set_segment_emf(plant_t *p, double theta_e);
