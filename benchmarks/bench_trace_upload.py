@@ -1,0 +1,112 @@
+"""Trace upload speed: 64 KiB of 0x2102 trace_data over the loopback hub at an emulated
+1 Mbit/s, SDO block upload (canopen's own block client) vs segmented upload.
+
+Three processes, as on a bench: the hub (``virtual-drive hub``), the drive
+(``virtual-drive run``) and this script as the CANopen master.
+
+    python benchmarks/bench_trace_upload.py [--repeat 3] [--no-segmented]
+
+Physical limit of CAN 2.0A at 1 Mbit/s for block transfer: 51–63 kB/s (111–135 bits per
+8-byte frame, 7 data bytes each). Goal: block upload >= 45 kB/s. kB = 1000 bytes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import signal
+import subprocess
+import sys
+import time
+
+import can
+import canopen
+
+from firmware_protocol import load_od
+from virtual_drive.node import spawn_virtual_drive
+
+SIZE = 65536
+
+
+def start_hub(bitrate: int) -> tuple[subprocess.Popen, int]:
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "virtual_drive.cli", "hub", "--port", "0",
+         "--bitrate", str(bitrate)],
+        stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+    )  # fmt: skip
+    line = proc.stdout.readline()
+    m = re.search(r"port=(\d+)", line)
+    if not m:
+        proc.kill()
+        raise SystemExit(f"hub did not start: {line!r}")
+    return proc, int(m.group(1))
+
+
+def capture_64k(node: canopen.RemoteNode) -> None:
+    """4 channels x 4096 samples x 4 bytes = 64 KiB, immediate trigger."""
+    tc = node.sdo[0x2100]
+    tc[4].raw = 0
+    tc[3].raw = 1
+    tc[1].raw = 4
+    for k, sub in enumerate((1, 10, 5, 6), 1):  # i_p, i_p_ref, speed, v_L
+        node.sdo[0x2101][k].raw = (0x2040 << 16) | (sub << 8) | 32
+    tc[3].raw = 4096
+    tc[8].raw = 0
+    tc[9].raw = 1
+    deadline = time.monotonic() + 5
+    while tc[10].raw != 3:
+        if time.monotonic() > deadline:
+            raise SystemExit("trace did not complete")
+        time.sleep(0.01)
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=3, help="block uploads to time")
+    ap.add_argument("--bitrate", type=int, default=1_000_000, help="emulated bit rate (bit/s)")
+    ap.add_argument("--no-segmented", action="store_true", help="skip the slow segmented run")
+    args = ap.parse_args()
+
+    hub, port = start_hub(args.bitrate)
+    drive = None
+    net = None
+    try:
+        drive = spawn_virtual_drive(port=port)
+        bus = can.Bus(interface="socketcand", host="127.0.0.1", port=port, channel="vcan0",
+                      tcp_tune=True)
+        net = canopen.Network(bus)
+        net.connect()
+        node = canopen.RemoteNode(1, load_od().canopen_od(1))
+        net.add_node(node)
+        node.sdo.RESPONSE_TIMEOUT = 2.0
+        capture_64k(node)
+        print(f"hub at {args.bitrate / 1e6:g} Mbit/s, {SIZE} bytes of trace_data (0x2102)")
+        rates = []
+        for k in range(args.repeat):
+            t0 = time.perf_counter()
+            with node.sdo.open(0x2102, 0, "rb", block_transfer=True) as f:
+                data = f.read()
+            dt = time.perf_counter() - t0
+            assert len(data) == SIZE, len(data)
+            rates.append(SIZE / dt / 1000)
+            print(f"block upload {k + 1}: {dt:.3f} s, {SIZE / dt / 1000:.1f} kB/s")
+        print(f"block upload: best {max(rates):.1f} kB/s, median "
+              f"{sorted(rates)[len(rates) // 2]:.1f} kB/s (goal >= 45, limit 51-63)")
+        if not args.no_segmented:
+            t0 = time.perf_counter()
+            data2 = node.sdo.upload(0x2102, 0)
+            dt = time.perf_counter() - t0
+            assert data2 == data
+            print(f"segmented upload: {dt:.3f} s, {SIZE / dt / 1000:.1f} kB/s")
+        return 0
+    finally:
+        if net is not None:
+            net.disconnect()
+        if drive is not None:
+            drive.stop()
+        hub.send_signal(signal.SIGTERM)
+        hub.wait(10)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
