@@ -342,8 +342,9 @@ class Hub:
     @property
     def stats(self) -> HubStats:
         """A snapshot of the hub's counters."""
-        pending = sum(len(c.queue) for c in list(self._clients.values()))
-        pending += sum(len(b.deliveries) for b in list(self._buses.values()))
+        pending = 0
+        for b in list(self._buses.values()):
+            pending += len(b.deliveries) + sum(len(c.queue) for c in list(b.senders))
         return HubStats(
             clients=len(self._clients),
             clients_total=self._n_clients_total,
@@ -429,6 +430,7 @@ class Hub:
                 s.close()
         self._listener = self._wake_r = self._wake_w = None
         self._thread = None
+        self._buses.clear()  # frames still in flight are lost with the bus
 
     def __enter__(self) -> Hub:
         if self._listener is None:
