@@ -234,3 +234,26 @@ def test_saturated_step_anti_windup_is_time_optimal_without_overshoot():
         assert n_settle <= n_min + 3
         assert i_p.max() < 150.0 * 1.01
         np.testing.assert_allclose(i_p[n_settle + 5 :], 150.0, atol=0.1)
+
+
+@pytest.mark.parametrize("ctype", ["deadbeat", "pi"])
+def test_back_emf_feedforward_removes_the_dip(ctype):
+    """With feed-forward of the (measured) e_L the 1 V back-EMF step is cancelled as soon as
+    the loop delay allows (the first samples still see Gamma * 1 V per sample); without it the
+    deadbeat loop leaves the dip to decay with the plant's 2.4 ms time constant (eq. 21)."""
+    res = {}
+    for ff in (False, True):
+        sim = standstill_sim(type=ctype, emf_feedforward=ff)
+        sim.set_motor(emf_rounding=0.0)
+        sim.set_speed(0.0, theta_e=np.deg2rad(32.0))
+        sim.set_current_ref(15.0)
+        sim.run(1000)
+        sim.set_speed(1.0 / MotorParams().K_rpm)
+        res[ff] = sim.run(300)["i_p"] - 15.0
+    _, Gam = phi_gamma(R, L)
+    assert res[True][1] == pytest.approx(-Gam * 1.0, abs=0.02)  # before any reaction
+    k_done = 10 if ctype == "deadbeat" else 40  # the PI's own response is ~0.4 ms
+    assert np.abs(res[True][k_done:]).max() < 0.05
+    assert np.abs(res[False]).max() > 1.3 * np.abs(res[True]).max()
+    if ctype == "deadbeat":
+        assert np.abs(res[False][100]) > 0.3  # still there after 2 ms
