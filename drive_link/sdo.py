@@ -26,6 +26,21 @@ from .errors import BusError, DriveTimeout, SdoAbort
 Progress = Callable[[int, "int | None"], None]
 
 
+class _Client(SdoClient):
+    """canopen's client without the abort frame after a response timeout.
+
+    After a lost frame canopen sends an abort (0x05040000) and, on a retry, the new request
+    right behind it; nothing requires that abort (the server times the transfer out itself and
+    every initiate request starts afresh, CiA 301 §7.2.4.3), and on a lossy or slow link the
+    back-to-back pair only adds load. Other aborts (CRC, protocol errors) are still sent.
+    """
+
+    def abort(self, abort_code: int = 0x08000000) -> None:
+        if abort_code == 0x05040000:
+            return
+        super().abort(abort_code)
+
+
 class SdoChannel:
     """One SDO client channel (request COB-ID ``rx_cobid``, response COB-ID ``tx_cobid``).
 
@@ -48,7 +63,7 @@ class SdoChannel:
         self.retries = retries
         self.lock = threading.RLock()
         self._network = network
-        self.client = SdoClient(rx_cobid, tx_cobid, canopen.ObjectDictionary())
+        self.client = _Client(rx_cobid, tx_cobid, canopen.ObjectDictionary())
         self.client.network = network
         self.client.RESPONSE_TIMEOUT = timeout
         self.client.MAX_RETRIES = 1
