@@ -58,6 +58,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--host", default="127.0.0.1", help="API bind address (default 127.0.0.1)")
     p.add_argument("--port", type=int, default=8000, help="API port (default 8000)")
     p.add_argument("--gui-port", type=int, default=8080, help="GUI port (default 8080; 0 = any)")
+    p.add_argument("--no-3d", action="store_true", help="no 3D rotor view (lighter browsers)")
     p.add_argument(
         "--allow-remote", action="store_true", help="allow a non-loopback --host (needs --token)"
     )
@@ -94,6 +95,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         interface=args.interface,
         channel=args.channel,
         bitrate=args.bitrate,
+        scene_3d=not args.no_3d,
         node_id=args.node,
         allow_remote=args.allow_remote,
         token=args.token,

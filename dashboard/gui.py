@@ -9,6 +9,7 @@ control lease; values shown after an action are the ones read back from the driv
 from __future__ import annotations
 
 import contextlib
+import io
 import secrets
 import threading
 import time
@@ -66,7 +67,11 @@ class BenchGui:
     # ------------------------------------------------------------------ lifecycle
     def start(self) -> None:
         # viser has no authentication: the GUI stays on loopback even when the API is remote.
-        self.server = viser.ViserServer(host="127.0.0.1", port=self.config.gui_port, verbose=False)
+        # Its URL banner prints even with verbose=False: keep stdout for the one URL we print.
+        with contextlib.redirect_stdout(io.StringIO()):
+            self.server = viser.ViserServer(
+                host="127.0.0.1", port=self.config.gui_port, verbose=False
+            )
         self.port = self.server.get_port()
         self.server.gui.configure_theme(
             control_layout="fixed", control_width="large", show_share_button=False, show_logo=False
@@ -239,7 +244,7 @@ class BenchGui:
             self._build_identify_tab()
         with tabs.add_tab("Captures"):
             self._build_captures_tab()
-        self.scene = RotorScene(self.server)
+        self.scene = RotorScene(self.server) if self.config.scene_3d else None
 
     def _build_speed_tab(self) -> None:
         gui = self.server.gui
@@ -549,14 +554,19 @@ class BenchGui:
             try:
                 w = self.bench.drive.live.window(self.config.live_window_s, names)
                 t = np.asarray(w["t"], dtype=np.float64)
+                cols = [np.asarray(w[n], dtype=np.float64) for n in names]
+                ok = np.isfinite(t)
+                for c in cols:  # NaN before a stream's first frame inside the window
+                    ok &= np.isfinite(c)
+                t, cols = t[ok], [c[ok] for c in cols]
                 if len(t) >= 2:
                     x = t - t[-1]
-                    cols = [np.nan_to_num(np.asarray(w[n], dtype=np.float64)) for n in names]
                     self.speed_plot.data = (x, cols[0], cols[1])
                     self.current_plot.data = (x, cols[2], cols[3])
                     self.frames_sent += 1
                     self.last_live = w
-                    self.scene.update(float(cols[0][-1]), w)
+                    if self.scene is not None:
+                        self.scene.update(float(cols[0][-1]), w)
             except Exception:
                 pass
             self._stop.wait(max(0.0, next_t - time.monotonic()))

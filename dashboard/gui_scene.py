@@ -27,6 +27,8 @@ def _wxyz_z(angle: float) -> tuple[float, float, float, float]:
 class RotorScene:
     """Rotor (4 pole pairs → 8 magnets) inside 3 phase coil groups."""
 
+    min_period_s = 0.1
+
     def __init__(self, server: viser.ViserServer, pole_pairs: int = 4) -> None:
         self.pole_pairs = pole_pairs
         self.angle = 0.0
@@ -67,15 +69,23 @@ class RotorScene:
     def update(self, speed_rpm: float, live: dict[str, np.ndarray] | None = None) -> None:
         """Advance the rotor by the measured speed since the last call and light the phases."""
         now = time.monotonic()
+        if now - self._t < self.min_period_s:
+            return  # each scene change is a 3D re-render in the browser: ≤ 10 per second
         dt, self._t = now - self._t, now
         if not math.isfinite(speed_rpm):
+            return
+        if abs(speed_rpm) < 0.5:  # standing still: send nothing (no re-render)
+            if self._sector != -1:
+                self._light(-1)
             return
         self.angle = (self.angle + speed_rpm / 60.0 * 2 * math.pi * dt) % (2 * math.pi)
         self.rotor.wxyz = _wxyz_z(self.angle)
         theta_e = (self.angle * self.pole_pairs) % (2 * math.pi)
-        sector = int(theta_e // (math.pi / 3)) % 6 if abs(speed_rpm) > 0.5 else -1
-        if sector == self._sector:
-            return
+        sector = int(theta_e // (math.pi / 3)) % 6
+        if sector != self._sector:
+            self._light(sector)
+
+    def _light(self, sector: int) -> None:
         self._sector = sector
         on = SIX_STEP[sector] if sector >= 0 else ()
         for ph in range(3):

@@ -1,0 +1,196 @@
+"""End to end in a real headless Chromium (/usr/bin/chromium, never a downloaded browser).
+
+Starts ``drive-dashboard --virtual`` as a user would, opens the printed URL, enables the drive,
+presses the speed step button, sees the speed plot move and the speed reach the setpoint, then
+changes L_c and sees the drive's read-back and the margins change; the margins shown are checked
+against python-control (test-only oracle). Screenshots: artifacts/dashboard_e2e.png and
+docs/bench.png (the README's picture).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+import shutil
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import control as ct
+import httpx
+import pytest
+
+CHROMIUM = "/usr/bin/chromium"
+FLAGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--no-first-run",
+]
+ROOT = Path(__file__).resolve().parents[1]
+SPEED_FACTOR = 2.0
+TS, R, L = 20e-6, 6.2e-3, 14.8e-6
+
+pytestmark = [
+    pytest.mark.timeout(180),
+    pytest.mark.skipif(not os.path.exists(CHROMIUM), reason="needs Debian's chromium"),
+]
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def bench():
+    """``drive-dashboard --virtual`` in a child process; yields (gui_url, api_url)."""
+    api_port = free_port()
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "dashboard.cli",
+            "--virtual",
+            "--speed-factor",
+            str(SPEED_FACTOR),
+            "--port",
+            str(api_port),
+            "--gui-port",
+            "0",
+            "--no-3d",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
+        text=True,
+    )
+    try:
+        line = ""
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and not line.startswith("open "):
+            line = proc.stdout.readline()
+            if not line and proc.poll() is not None:
+                raise RuntimeError(f"drive-dashboard exited with {proc.returncode}")
+        m = re.match(r"open (http://127\.0\.0\.1:\d+/)", line)
+        assert m, f"no URL printed: {line!r}"
+        yield m.group(1), f"http://127.0.0.1:{api_port}"
+    finally:
+        proc.terminate()
+        try:
+            proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+
+
+@pytest.fixture(scope="module")
+def page(bench):
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True)
+        pg = browser.new_page(viewport={"width": 1400, "height": 1000})
+        pg.goto(bench[0])
+        pg.get_by_role("button", name="Enable").wait_for(timeout=30_000)
+        yield pg
+        browser.close()
+
+
+def click(page, locator) -> None:
+    """A real mouse click in the middle of the element (viser re-renders the panel at 4 Hz,
+    which keeps Playwright's own click waiting for a stable hit target)."""
+    locator.scroll_into_view_if_needed()
+    box = locator.bounding_box()
+    page.mouse.click(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+    time.sleep(0.1)  # viser batches GUI messages in 50 ms windows
+
+
+def status(page) -> str:
+    return page.inner_text("body")
+
+
+def wait_text(page, pattern: str, timeout: float = 20.0) -> re.Match:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        m = re.search(pattern, status(page))
+        if m:
+            return m
+        time.sleep(0.1)
+    raise AssertionError(f"page never showed {pattern!r}; it shows:\n{status(page)[:1500]}")
+
+
+def test_speed_step_in_the_browser(page):
+    click(page, page.get_by_role("button", name="Enable"))
+    wait_text(page, r"OPERATION ENABLED")
+    plot = page.locator(".uplot").first
+    before = plot.screenshot()
+    click(page, page.get_by_role("button", name="+ step"))
+    seen: list[float] = []
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:
+        m = re.search(r"speed ([-\d.]+) rpm \(set (-?\d+)\)", status(page))
+        if m and m.group(2) == "500":
+            seen.append(float(m.group(1)))
+            if abs(seen[-1] - 500.0) < 5.0:
+                break
+        time.sleep(0.1)
+    assert seen and abs(seen[-1] - 500.0) < 5.0, f"speed never reached 500 rpm: {seen[-5:]}"
+    assert any(20.0 < s < 480.0 for s in seen), f"no intermediate speed seen: {seen}"
+    after = plot.screenshot()
+    assert after != before  # the speed plot moved
+    time.sleep(0.5)
+    assert plot.screenshot() != after  # and keeps scrolling (live)
+
+
+def current_margins(ratio: float) -> tuple[float, float, float]:
+    """GM (dB), PM (°), ‖S‖∞ of the deadbeat loop with L_c = ratio·L (python-control)."""
+    Phi, Gamma = math.exp(-R * TS / L), (1 - math.exp(-R * TS / L)) / (2 * R)
+    Lc = ratio * L
+    Phi_c, Gamma_c = math.exp(-R * TS / Lc), (1 - math.exp(-R * TS / Lc)) / (2 * R)
+    loop = ct.minreal(
+        ct.tf([1, -Phi_c, 0], [Gamma_c, 0, -Gamma_c], TS) * ct.tf([Gamma], [1, -Phi, 0], TS),
+        verbose=False,
+    )
+    gm, pm, _, _ = ct.margin(loop)
+    return 20 * math.log10(gm), pm
+
+
+def test_change_L_c_and_see_readback_and_margins(page, bench):
+    click(page, page.get_by_role("tab", name="Tuning"))
+    pattern = r"Current \(deadbeat, L_c/L = ([\d.]+)\): stable · GM ([\d.]+) dB · PM ([-\d.]+)°"
+    m0 = wait_text(page, pattern)
+    assert float(m0.group(1)) == pytest.approx(1.0, abs=1e-3)
+    assert float(m0.group(3)) == pytest.approx(60.0, abs=0.2)
+    box = page.get_by_label("L_c (µH)", exact=True)
+    click(page, box)
+    page.keyboard.press("Control+A")
+    page.keyboard.type("22.2")
+    page.keyboard.press("Tab")
+    m1 = wait_text(
+        page, r"Current \(deadbeat, L_c/L = 1\.500\): stable · GM ([\d.]+) dB · PM ([-\d.]+)°"
+    )
+    gm, pm = current_margins(1.5)
+    assert float(m1.group(1)) == pytest.approx(gm, abs=0.01)
+    assert float(m1.group(2)) == pytest.approx(pm, abs=0.1)
+    assert float(m1.group(2)) != pytest.approx(float(m0.group(3)), abs=1.0)  # margins changed
+    click(page, page.get_by_role("button", name="Apply gains"))
+    wait_text(page, r"L_c 22\.2 µH \(L_c/L 1\.5000\)")  # read back from the drive
+    g = httpx.get(f"{bench[1]}/api/gains").json()
+    assert g["L_c"] == pytest.approx(22.2e-6, rel=1e-6)
+    click(page, page.get_by_role("tab", name="Speed"))
+    close = page.get_by_role("button", name=re.compile("close", re.I))
+    if close.count():
+        click(page, close.first)  # viser's "software WebGL" notice
+    page.get_by_text("In control:").scroll_into_view_if_needed()
+    time.sleep(0.5)
+    out = ROOT / "artifacts"
+    out.mkdir(exist_ok=True)
+    page.screenshot(path=str(out / "dashboard_e2e.png"))
+    shutil.copyfile(out / "dashboard_e2e.png", ROOT / "docs" / "bench.png")
