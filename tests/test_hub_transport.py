@@ -3,6 +3,7 @@
 * 10,000 frames from one process to another through the hub: all arrive, in order, none echoed.
 * Bit-rate pacing: a burst of N identical frames whose length is hand-counted (121 bits, see
   test_hub_frame_bits) takes N × 121 / bitrate seconds at the receiver, within 10 %.
+Throughput at a saturated 1 Mbit/s bus is measured by benchmarks/bench_hub.py, not timed here.
 """
 
 from __future__ import annotations
@@ -141,16 +142,3 @@ def test_pacing_matches_emulated_bit_rate_within_ten_percent():
     assert (count - 1) * frame_time - 20e-6 <= stamp_span <= 1.10 * (count - 1) * frame_time
     # and no frame arrived before the bus could have finished it
     assert receiver["last_wall"] - sender["t_start"] >= count * frame_time - 1e-3
-
-
-def test_hub_keeps_up_with_a_saturated_one_megabit_bus():
-    count, bits = 4000, 121
-    frame_time = bits / 1_000_000  # 8,264 frames/s
-    with Hub(port=0) as hub:
-        _, receiver = _run_pair(hub.port, count, "car")
-    assert len(receiver["frames"]) == count
-    # the hub read the burst fast enough to keep the emulated bus busy all the time ...
-    stamp_span = receiver["last_stamp"] - receiver["first_stamp"]
-    assert stamp_span == pytest.approx((count - 1) * frame_time, rel=0.10)
-    # ... and delivered the last frame soon after the bus finished it (not falling behind)
-    assert -0.005 <= receiver["last_wall"] - receiver["last_stamp"] < 0.1
