@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import threading
 import time
+from collections import deque
 
 import can
 import canopen
@@ -61,6 +62,7 @@ class HeartbeatMonitor:
         self.period: float | None = None  # s, smoothed interval between heartbeats
         self.boot_count = 0
         self.count = 0
+        self.arrivals: deque[float] = deque(maxlen=256)  # monotonic times of recent heartbeats
         network.subscribe(self.cob_id, self._on_frame)
 
     def close(self) -> None:
@@ -84,6 +86,7 @@ class HeartbeatMonitor:
             self.last_state = state
             self.last_time = now
             self.count += 1
+            self.arrivals.append(now)
             self._cond.notify_all()
 
     @property

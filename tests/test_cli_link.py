@@ -152,3 +152,10 @@ def test_progress_bar_on_stderr(hub_drive):
     p = run(hub_drive, "trace", "--channels", "i_p", "--length", "2000", "--progress")
     assert p.returncode == 0, p.stderr
     assert "upload [" in p.stderr and "100.0 %" in p.stderr
+
+
+def test_check_passes_across_processes(hub_drive):
+    p = run(hub_drive, "check", "--json", timeout=90)
+    results = json.loads(p.stdout)
+    assert p.returncode == 0, [r for r in results if not r["ok"]]
+    assert {r["name"] for r in results} >= {"nmt_bootup", "limits", "trace", "pdo_rates"}
