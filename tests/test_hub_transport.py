@@ -126,7 +126,7 @@ def test_ten_thousand_frames_between_processes_in_order_none_lost():
 
 
 def test_pacing_matches_emulated_bit_rate_within_ten_percent():
-    count, bitrate, bits = 2000, 250_000, 121  # 121 bits: hand count in test_hub_frame_bits
+    count, bitrate, bits = 2000, 125_000, 121  # 121 bits: hand count in test_hub_frame_bits
     frame_time = bits / bitrate
     with Hub(port=0, bitrate=bitrate) as hub:
         sender, receiver = _run_pair(hub.port, count, "car")
