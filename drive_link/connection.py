@@ -74,6 +74,8 @@ class Connection:
         self.network.NOTIFIER_CYCLE = 0.1
         self.network.connect()
         self.refs = 0
+        #: node-IDs with an open Drive on this bus (scan leaves their SDO channels alone)
+        self.active_nodes: dict[int, int | None] = {}  # node-ID → device_type
 
     def close(self) -> None:
         """Stop the notifier; shut the bus down if this connection opened it."""

@@ -123,6 +123,7 @@ class Drive:
             lambda: int(self.read("statusword")), lambda cw: self.write("controlword", cw)
         )
         self.trace = Recorder(self)
+        conn.active_nodes[node_id] = None
 
     # ------------------------------------------------------------------ lifecycle
     @classmethod
@@ -166,6 +167,7 @@ class Drive:
         try:
             drive._probe()
             drive._setup_trace_channel()
+            drive._setup_emcy()
             if heartbeat_ms:
                 drive.host_id = host_id
                 drive._producer = HeartbeatProducer(conn.bus, host_id, int(heartbeat_ms))
@@ -177,10 +179,24 @@ class Drive:
     def _probe(self) -> None:
         try:
             self.device_type = int(self.read("device_type"))
+            self._conn.active_nodes[self.node_id] = self.device_type
         except DriveTimeout:
             raise NodeNotFound(
                 f"no answer from node {self.node_id} (SDO to 0x{0x600 + self.node_id:03X})"
             ) from None
+
+    def _setup_emcy(self) -> None:
+        """Listen on the drive's configured EMCY COB-ID (0x1014) if it is not 0x80 + N."""
+        try:
+            cob = int(self.read("cob_id_emcy"))
+        except DriveError:
+            return
+        if cob & 0x80000000 or (cob & 0x7FF) == self._emcy.cob_id:
+            return
+        history = self._emcy.history
+        self._emcy.close()
+        self._emcy = EmcyListener(self._conn.network, cob & 0x7FF)
+        self._emcy.history = history
 
     def _setup_trace_channel(self) -> None:
         """Use the drive's second SDO server (0x1201) for uploads if it has a valid one."""
@@ -220,6 +236,7 @@ class Drive:
         self.sdo.close()
         if self.sdo_trace is not self.sdo:
             self.sdo_trace.close()
+        self._conn.active_nodes.pop(self.node_id, None)
         connection.release(self._conn)
 
     def __enter__(self) -> Drive:

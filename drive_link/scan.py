@@ -85,8 +85,9 @@ def scan(
         for cob, cb in subs:
             net.subscribe(cob, cb)
         try:
+            busy = set(skip) | set(conn.active_nodes)
             for nid in node_ids:
-                if nid not in skip:
+                if nid not in busy:
                     net.send_message(0x600 + nid, _PROBE)
         except (can.CanError, RuntimeError, OSError) as exc:
             raise BusError(f"CAN send failed while scanning: {exc}") from None
@@ -103,4 +104,7 @@ def scan(
                 pass
         connection.release(conn)
     with lock:
+        for nid, device_type in conn.active_nodes.items():  # known from the open Drive
+            if nid in node_ids and nid not in skip:
+                found.setdefault(nid, NodeInfo(nid)).device_type = device_type
         return [found[k] for k in sorted(found)]
