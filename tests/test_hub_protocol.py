@@ -220,3 +220,36 @@ def test_too_many_errors_drop_the_client(hub):
     assert hub.stats.clients_dropped == 1
     ok = RawClient(hub.port)  # the hub still accepts clients
     ok.close()
+
+
+def test_element_split_across_tcp_segments_is_reassembled(hub):
+    a, b = RawClient(hub.port), RawClient(hub.port)
+    for piece in (b"< se", b"nd 1", b"23 2 de ", b"ad >< send 0", b"01 0 >"):
+        a.send(piece)
+        time.sleep(0.02)
+    assert b.frames(0.3) == [("123", b"\xde\xad"), ("001", b"")]
+    a.close()
+    b.close()
+
+
+def test_python_can_reads_a_long_burst_without_cut_elements(hub, caplog):
+    # python-can's socketcand client reads 1024 bytes at a time and logs a warning for each
+    # element cut in two (and for any bytes it cannot parse); the hub's lines must avoid both.
+    rx = can.Bus(**hub.join_kwargs())
+    tx = RawClient(hub.port)
+    time.sleep(Hub.handshake_hold_s + 0.05)
+    caplog.set_level("WARNING", logger="can.interfaces.socketcand")
+    count = 1500
+    tx.send(
+        b"".join(
+            f"< send {i % 0x7FF:x} {i % 9} ".encode() + b"1 " * (i % 9) + b">" for i in range(count)
+        )
+    )
+    time.sleep(0.3)  # let a backlog build up in the socket, so every read is a full 1024 bytes
+    got = 0
+    while rx.recv(1.0) is not None:
+        got += 1
+    assert got == count
+    assert [r.getMessage() for r in caplog.records if r.name.startswith("can.")] == []
+    rx.shutdown()
+    tx.close()
