@@ -1,0 +1,131 @@
+"""Benchmark of the host library: prints figures, asserts nothing.
+
+    python -m drive_link.bench                      # own loopback hub + `virtual-drive run` child
+    python -m drive_link.bench --host 127.0.0.1 --port 29536 --node 1   # any drive on a hub
+    python -m drive_link.bench --interface socketcan --channel can0     # a real bus
+
+Figures: expedited SDO read latency (median / p99), trace upload throughput by SDO block
+upload vs segmented upload, status-read latency while a block upload runs on the second SDO
+channel, scan time, measured TPDO rates and bus load.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import statistics
+import tempfile
+import threading
+import time
+
+from .drive import Drive
+from .scan import scan
+
+
+def _pct(xs: list[float], q: float) -> float:
+    xs = sorted(xs)
+    return xs[min(len(xs) - 1, int(q * len(xs)))]
+
+
+def run(d: Drive, n_reads: int = 300) -> dict[str, float]:
+    """Measure on an open drive; returns the figures (also printed)."""
+    out: dict[str, float] = {}
+    lat = []
+    for _ in range(n_reads):
+        t0 = time.perf_counter()
+        d.read("statusword")
+        lat.append((time.perf_counter() - t0) * 1e3)
+    out["sdo_read_median_ms"] = statistics.median(lat)
+    out["sdo_read_p99_ms"] = _pct(lat, 0.99)
+
+    cap = int(d.read("trace_config.capacity"))
+    d.trace.configure(["i_p"], divider=1, length=cap, trigger="immediate")
+    d.trace.arm()
+    d.trace.wait(10.0)
+    lat2: list[float] = []
+    stop = threading.Event()
+
+    def status() -> None:
+        while not stop.is_set():
+            t0 = time.perf_counter()
+            d.read("statusword")
+            lat2.append((time.perf_counter() - t0) * 1e3)
+
+    th = threading.Thread(target=status)
+    th.start()
+    t0 = time.perf_counter()
+    try:
+        raw = d.sdo_trace.upload_block(0x2102, 0)
+    finally:
+        dt = time.perf_counter() - t0
+        stop.set()
+        th.join()
+    out["block_upload_bytes"] = len(raw)
+    out["block_upload_kB_s"] = len(raw) / dt / 1e3
+    out["status_read_during_upload_median_ms"] = statistics.median(lat2) if lat2 else float("nan")
+    out["status_reads_during_upload"] = len(lat2)
+
+    d.trace.configure(["i_p"], divider=1, length=2048, trigger="immediate")
+    d.trace.arm()
+    d.trace.wait(10.0)
+    t0 = time.perf_counter()
+    raw = d.sdo_trace.upload(0x2102, 0)
+    out["segmented_upload_kB_s"] = len(raw) / (time.perf_counter() - t0) / 1e3
+
+    t0 = time.perf_counter()
+    nodes = scan(d.bus, timeout=0.2)
+    out["scan_s"] = time.perf_counter() - t0
+    out["scan_nodes"] = len(nodes)
+
+    d.nmt("start")
+    live = d.refresh_live()
+    time.sleep(0.3)
+    live.reset_counters()
+    time.sleep(1.0)
+    st = live.stats
+    for name, s in st["tpdo"].items():
+        out[f"{name}_hz"] = s["frames"] / 1.0
+    out["bus_load_pct"] = 100 * (st.get("bus_load") or 0.0)
+    for k, v in out.items():
+        print(f"{k:>38}: {v:.4g}" if isinstance(v, float) else f"{k:>38}: {v}")
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of ``python -m drive_link.bench``."""
+    ap = argparse.ArgumentParser(prog="python -m drive_link.bench", description=__doc__)
+    ap.add_argument("--interface")
+    ap.add_argument("--channel")
+    ap.add_argument("--bitrate", type=int)
+    ap.add_argument("--host")
+    ap.add_argument("--port", type=int)
+    ap.add_argument("--node", type=int, default=1)
+    ap.add_argument("--reads", type=int, default=300)
+    args = ap.parse_args(argv)
+    with contextlib.ExitStack() as stack:
+        if args.interface is None and args.port is None:
+            from virtual_drive.hub import Hub
+            from virtual_drive.node import spawn_virtual_drive
+
+            hub = stack.enter_context(Hub(port=0))
+            store = tempfile.mktemp(suffix=".json")
+            proc = spawn_virtual_drive(port=hub.port, node_id=args.node, store=store)
+            stack.callback(proc.stop)
+            args.host, args.port = "127.0.0.1", hub.port
+            print(f"virtual drive (child process) on loopback hub 127.0.0.1:{hub.port}, 1 Mbit/s")
+        d = Drive.connect(
+            interface=args.interface,
+            channel=args.channel,
+            bitrate=args.bitrate,
+            host=args.host,
+            port=args.port,
+            node_id=args.node,
+            heartbeat_ms=None,
+        )
+        stack.callback(d.close)
+        run(d, args.reads)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
