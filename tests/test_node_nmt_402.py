@@ -9,6 +9,7 @@ from __future__ import annotations
 import itertools
 import time
 
+import numpy as np
 import pytest
 from canopen.profiles.p402 import State402
 from canopen.sdo import SdoAbortedError, SdoCommunicationError
@@ -191,3 +192,35 @@ def test_dc_link_undervoltage_trips(bench):
     bench.write("sim_fault.V_dc_supply", 48.0)
     bench.write("controlword", 0x80)
     assert state_of(bench.read("statusword")) == "SWITCH ON DISABLED"
+
+
+def test_profile_torque_mode_scales_rated_current(bench):
+    bench.write("target_torque", 120)  # 120 ‰ of motor_rated_current 100 A = 12 A
+    bench.enable(4)
+    assert bench.wait(lambda: abs(bench.read("measurements.i_p") - 12.0) < 1.0, 2.0)
+    assert bench.read("measurements.i_p_ref") == pytest.approx(12.0)
+    bench.write("max_current", 100)  # cap |i_p*| at 10 % of rated = 10 A
+    assert bench.wait(lambda: bench.read("measurements.i_p_ref") == pytest.approx(10.0), 1.0)
+
+
+def test_profile_velocity_acceleration_ramp(bench):
+    """speed_ref follows 0x6083 at its slope (rpm/s), recorded by the drive's own recorder."""
+    bench.write("profile_acceleration", 20000)
+    bench.write("trace_config.pre_trigger", 0)
+    bench.write("trace_config.length", 1)
+    bench.write("trace_config.channel_count", 1)
+    bench.write("trace_channels.channel_1", 0x20400B20)  # measurements.speed_ref
+    bench.write("trace_config.length", 2000)  # 40 ms
+    bench.write("trace_config.trigger_mode", 2)  # setpoint step (first change of speed_ref)
+    bench.enable(3)
+    time.sleep(0.05)
+    bench.write("trace_config.command", 1)
+    time.sleep(0.02)
+    bench.write("target_velocity", 1000)
+    assert bench.wait(lambda: bench.read("trace_config.state") == 3, 2.0)
+    ref = np.frombuffer(bench.node.sdo.upload(0x2102, 0), "<f4")
+    # applied per simulation chunk (about 1 ms): a rising staircase with the configured slope
+    assert np.all(np.diff(ref) >= 0)
+    slope = (ref[-1] - ref[0]) / (len(ref) * 20e-6)
+    assert slope == pytest.approx(20000.0, rel=0.1), slope
+    assert ref.max() <= 1000.0

@@ -138,3 +138,27 @@ def test_mapping_rules(bench):
     with pytest.raises(SdoAbortedError) as exc:
         bench.write("tpdo1_communication.transmission_type", 250)
     assert exc.value.code == 0x06090030
+
+
+def test_sync_tpdo_every_second_sync(bench):
+    bench.write("tpdo1_communication.transmission_type", 2)  # synchronous, every 2nd SYNC
+    bench.nmt(0x01)
+    time.sleep(0.05)
+    t0 = time.monotonic()
+    for _ in range(6):
+        bench.net.send_message(0x080, b"")
+        time.sleep(0.01)
+    time.sleep(0.02)
+    assert len(bench.log.of(0x181, t0)) == 3  # and no more on its (ignored) event timer
+
+
+def test_emcy_cob_id_invalid_bit_silences_emcy(bench):
+    bench.write("cob_id_emcy", 0x80000081)
+    bench.nmt(0x01)
+    bench.enable(-1)
+    t0 = time.monotonic()
+    bench.write("sim_fault.inject", 1)
+    assert bench.wait(lambda: bench.read("statusword") & 0x4F == 0x08)
+    time.sleep(0.05)
+    assert bench.log.of(0x81, t0) == []
+    assert bench.read("error_code") == 0x2310  # bookkeeping still done

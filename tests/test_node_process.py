@@ -212,3 +212,30 @@ def test_bus_errors_exit_non_zero_with_one_line():
         capture_output=True, text=True, timeout=30,
     )  # fmt: skip
     assert r.returncode == 1 and "nosuchbus" in r.stderr
+
+
+def test_bare_command_with_own_hub_and_sigint():
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "virtual_drive.cli", "--hub", "--hub-port", "0"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        line = proc.stdout.readline()
+        assert "ready" in line, line
+        port = int(re.search(r"port=(\d+)", line.split("hub:")[1]).group(1))
+        bus = can.Bus(interface="socketcand", host="127.0.0.1", port=port, channel="vcan0")
+        net = canopen.Network(bus)
+        net.connect()
+        try:
+            node = canopen.RemoteNode(1, load_od().canopen_od(1))
+            net.add_node(node)
+            node.sdo.RESPONSE_TIMEOUT = 1.0
+            assert node.sdo[0x6041].raw & 0x4F == 0x40  # SWITCH ON DISABLED
+        finally:
+            net.disconnect()
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(15) == 0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()

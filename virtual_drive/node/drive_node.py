@@ -353,7 +353,7 @@ class VirtualDrive:
         now = time.monotonic()
         self.hb_producer.set_period(self._value(0x1017), now)
         self.hb_consumer.configure([self._value(0x1016, 1)])
-        self.emcy.cob_id = self._value(0x1014) & 0x7FF
+        self.emcy.set_cob_id(self._value(0x1014))
         self._bind_sdo2()
         self.pdo.configure()
 
@@ -531,7 +531,7 @@ class VirtualDrive:
         if index == 0x1017:
             return True, lambda: self.hb_producer.set_period(value, time.monotonic())
         if index == 0x1014:
-            return True, lambda: setattr(self.emcy, "cob_id", value & 0x7FF)
+            return True, lambda: self.emcy.set_cob_id(value)
         if index == 0x1201:
             return True, self._bind_sdo2
         if index == 0x6040:

@@ -58,7 +58,7 @@ class EmcyManager:
     def __init__(
         self, cob_id: int, send: Callable[[int, bytes], None], allowed: Callable[[], bool]
     ) -> None:
-        self.cob_id = cob_id
+        self.cob_id: int | None = cob_id
         self._send = send
         self._allowed = allowed
         self._lock = threading.Lock()
@@ -113,8 +113,12 @@ class EmcyManager:
         with self._lock:
             self.history.clear()
 
+    def set_cob_id(self, value: int) -> None:
+        """0x1014 value: bit 31 set = EMCY not sent (CiA 301 §7.5.2.17), bits 10..0 COB-ID."""
+        self.cob_id = None if value & 0x80000000 else value & 0x7FF
+
     def _emit(self, code: int, reg: int, data: bytes) -> None:
-        if not self._allowed():
+        if not self._allowed() or self.cob_id is None:
             return
         payload = struct.pack("<HB", code, reg) + bytes(data[:5]).ljust(5, b"\x00")
         self._send(self.cob_id, payload)
