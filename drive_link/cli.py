@@ -18,7 +18,7 @@ import os
 import sys
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 from . import connection
 from .drive import GAIN_FIELDS, Drive
@@ -509,8 +509,15 @@ def cmd_check(args: argparse.Namespace, d: Drive) -> int:
 
 
 # --------------------------------------------------------------------------- parser
+class _Parser(argparse.ArgumentParser):
+    """argparse with a one-line usage error (exit 2) instead of usage + error lines."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def _bus_parent() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(add_help=False)
+    p = _Parser(add_help=False)
     g = p.add_argument_group("bus (unset = python-can config / CAN_* environment)")
     g.add_argument(
         "--interface", default=None, help="python-can interface (socketcan, virtual, ...)"
@@ -550,7 +557,7 @@ def _outputs(p: argparse.ArgumentParser) -> None:
 def build_parser() -> argparse.ArgumentParser:
     """The ``drive-link`` argument parser."""
     bus = _bus_parent()
-    ap = argparse.ArgumentParser(
+    ap = _Parser(
         prog="drive-link",
         description=__doc__.split("\n\n")[0],
         formatter_class=argparse.RawDescriptionHelpFormatter,

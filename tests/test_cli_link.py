@@ -159,3 +159,15 @@ def test_check_passes_across_processes(hub_drive):
     results = json.loads(p.stdout)
     assert p.returncode == 0, [r for r in results if not r["ok"]]
     assert {r["name"] for r in results} >= {"nmt_bootup", "limits", "trace", "pdo_rates"}
+
+
+def test_usage_errors_are_one_line():
+    for argv in (["set-speed", "abc"], ["bogus"], ["trace", "--trigger", "sometimes"]):
+        p = subprocess.run(
+            [sys.executable, "-m", "drive_link.cli", *argv],
+            capture_output=True,
+            text=True,
+            timeout=30,
+        )
+        assert p.returncode == 2
+        assert "error:" in one_line_error(p)
