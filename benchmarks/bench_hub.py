@@ -123,7 +123,7 @@ def throughput(frames: int, bitrate: int) -> tuple[float, float]:
 def round_trip(count: int, tune: bool) -> list[float]:
     """Round-trip times (s) of count request/response exchanges at 1 Mbit/s."""
     with Hub(port=0) as hub:
-        res = _pair(hub.port, ("responder", "requester"), count, tune)
+        res = _pair(hub.port, ("requester", "responder"), count, tune)
     return res["requester"]["rtts"]
 
 
