@@ -224,3 +224,31 @@ def test_profile_velocity_acceleration_ramp(bench):
     slope = (ref[-1] - ref[0]) / (len(ref) * 20e-6)
     assert slope == pytest.approx(20000.0, rel=0.1), slope
     assert ref.max() <= 1000.0
+
+
+def test_canopen_basenode402_drives_the_node(bench):
+    """canopen's own CiA 402 master (BaseNode402: PDO discovery, state walk, op mode)."""
+    import can
+    import canopen
+    from canopen.profiles.p402 import BaseNode402
+
+    bus = can.Bus(interface="virtual", channel=bench.channel)
+    net = canopen.Network(bus)
+    net.connect()
+    try:
+        node = BaseNode402(1, bench.view.canopen_od(1))
+        net.add_node(node)
+        node.nmt.wait_for_heartbeat(1.0)
+        node.setup_402_state_machine()  # reads the PDO configuration by SDO
+        assert 0x6041 in node.tpdo_values and 0x6040 in node.rpdo_pointers
+        node.nmt.state = "OPERATIONAL"
+        node.op_mode = "PROFILED VELOCITY"
+        assert node.op_mode == "PROFILED VELOCITY"
+        node.state = "OPERATION ENABLED"  # controlword by RPDO1, statusword from TPDO1
+        assert node.state == "OPERATION ENABLED"
+        node.state = "SWITCH ON DISABLED"
+        assert node.state == "SWITCH ON DISABLED"
+        assert node.is_op_mode_supported("PROFILED TORQUE")
+        assert not node.is_op_mode_supported("PROFILED POSITION")
+    finally:
+        net.disconnect()

@@ -64,6 +64,7 @@ class Bench:
         sdo2: bool = False,
     ) -> None:
         channel = f"node-test-{os.getpid()}-{next(_counter)}"
+        self.channel = channel
         self.drive_bus = can.Bus(interface="virtual", channel=channel)
         self.bus = can.Bus(interface="virtual", channel=channel)
         self.log = FrameLog()
