@@ -148,12 +148,13 @@ def parse_send(words: list[str]) -> Frame:
     byte_words = words[3:]
     if len(byte_words) != length:
         raise ProtocolError(f"length {length} but {len(byte_words)} data bytes")
-    values = []
-    for w in byte_words:
+    if _HEX.issuperset("".join(byte_words)) and all(0 < len(w) <= 2 for w in byte_words):
+        return Frame(can_id, bytes([int(w, 16) for w in byte_words]), is_extended)
+    for w in byte_words:  # find the culprit for the message
         if len(w) > 2:
             raise ProtocolError(f"data byte {w!r} above FF")
-        values.append(_hex_value(w, "data byte"))
-    return Frame(can_id, bytes(values), is_extended)
+        _hex_value(w, "data byte")
+    raise AssertionError("unreachable")  # pragma: no cover
 
 
 def parse_channel(words: list[str]) -> str:
