@@ -253,3 +253,39 @@ def test_python_can_reads_a_long_burst_without_cut_elements(hub, caplog):
     assert [r.getMessage() for r in caplog.records if r.name.startswith("can.")] == []
     rx.shutdown()
     tx.close()
+
+
+def test_a_stalled_client_overruns_without_blocking_the_hub():
+    count = 20_000
+    with Hub(port=0, bitrate=1_000_000_000) as hub:  # pacing negligible: an instant flood
+        hub.max_outbuf_bytes = 16 * 1024
+        stalled = socket.socket()
+        stalled.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+        stalled.connect(("127.0.0.1", hub.port))
+        assert stalled.recv(6) == b"< hi >"
+        stalled.sendall(b"< open vcan0 >")
+        assert stalled.recv(6) == b"< ok >"
+        stalled.sendall(b"< rawmode >")
+        assert stalled.recv(6) == b"< ok >"  # ... and then never reads again
+        tx = RawClient(hub.port)
+        tx.send(b"".join(b"< send 181 2 %x %x >" % (i >> 8, i & 255) for i in range(count)))
+        deadline = time.monotonic() + 10
+        while time.monotonic() < deadline:
+            st = hub.stats
+            if st.frames_received == count and st.frames_pending == 0:
+                break
+            time.sleep(0.01)
+        assert st.frames_forwarded == count
+        assert st.frames_overrun > 0  # the stalled client lost frames ...
+        a = can.Bus(**hub.join_kwargs())  # ... while the hub keeps serving everybody else
+        b = can.Bus(**hub.join_kwargs())
+        time.sleep(Hub.handshake_hold_s + 0.05)
+        t0 = time.monotonic()
+        a.send(can.Message(arbitration_id=0x100, data=[1], is_extended_id=False))
+        m = b.recv(2.0)
+        assert m is not None and m.arbitration_id == 0x100
+        assert time.monotonic() - t0 < 0.2
+        a.shutdown()
+        b.shutdown()
+        tx.close()
+        stalled.close()
