@@ -117,6 +117,7 @@ class Drive:
         self._consumer_configured = False
         self._live: LiveStreams | None = None
         self._live_lock = threading.Lock()
+        self._gains_lock = threading.RLock()  # stage + apply + read back as one operation
         self._closed = False
         self.host_id: int | None = None
         self.sm = cia402.StateMachine(
@@ -408,6 +409,10 @@ class Drive:
         sets = 0
         for k in changes:
             sets |= _GAIN_OBJECTS[k][0]
+        with self._gains_lock:
+            return self._stage_and_apply(changes, sets)
+
+    def _stage_and_apply(self, changes: dict[str, float | int], sets: int) -> Gains:
         current = self.read_gains().to_dict()
         merged = {**current, **changes}
         for f in GAIN_FIELDS:

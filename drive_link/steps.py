@@ -164,21 +164,22 @@ def current_step(
     drive.set_current(i_from)
     _require_enabled(drive, enable)
     time.sleep(settle_s)
-    drive.trace.configure(
-        ["i_p", "i_p_ref", "v_L", "e_L", *extra],
-        divider,
-        length,
-        pre_trigger,
-        Trigger("setpoint_step"),
-    )
-    tr = _record_step(
-        drive,
-        lambda: drive.set_current(i_from),
-        lambda: drive.set_current(i_to),
-        pre_trigger * divider * TS,
-        length * divider * TS,
-        timeout,
-    )
+    with drive.trace.lock:
+        drive.trace.configure(
+            ["i_p", "i_p_ref", "v_L", "e_L", *extra],
+            divider,
+            length,
+            pre_trigger,
+            Trigger("setpoint_step"),
+        )
+        tr = _record_step(
+            drive,
+            lambda: drive.set_current(i_from),
+            lambda: drive.set_current(i_to),
+            pre_trigger * divider * TS,
+            length * divider * TS,
+            timeout,
+        )
     g = drive.read_gains()
     R = float(drive.read("motor.R"))
     L = float(drive.read("motor.L"))
@@ -253,21 +254,22 @@ def speed_step(
     drive.set_speed(w0)
     _require_enabled(drive, enable)
     time.sleep(settle_s)
-    drive.trace.configure(
-        ["speed", "speed_ref", "i_p_ref", "i_p"],
-        divider,
-        length,
-        pre_trigger,
-        Trigger("setpoint_step"),
-    )
-    tr = _record_step(
-        drive,
-        lambda: drive.set_speed(w0),
-        lambda: drive.set_speed(w1),
-        pre_trigger * divider * TS,
-        length * divider * TS,
-        timeout,
-    )
+    with drive.trace.lock:
+        drive.trace.configure(
+            ["speed", "speed_ref", "i_p_ref", "i_p"],
+            divider,
+            length,
+            pre_trigger,
+            Trigger("setpoint_step"),
+        )
+        tr = _record_step(
+            drive,
+            lambda: drive.set_speed(w0),
+            lambda: drive.set_speed(w1),
+            pre_trigger * divider * TS,
+            length * divider * TS,
+            timeout,
+        )
     g = drive.read_gains()
     a, b = model or SPEED_MODEL_PAPER
     k0 = tr.trigger_index

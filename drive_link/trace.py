@@ -8,6 +8,7 @@ units, and the trigger position.
 from __future__ import annotations
 
 import csv
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -135,6 +136,9 @@ class Recorder:
         self._drive = drive
         self._channels: list[str] = []
         self._divider = 1
+        #: held by :meth:`capture` (configure … upload is one operation); take it around your
+        #: own configure/arm/wait/upload sequence when several threads use the recorder
+        self.lock = threading.RLock()
 
     @property
     def state(self) -> str:
@@ -263,10 +267,11 @@ class Recorder:
 
         ``timeout`` (s) defaults to 2 s plus 3 × the recording duration.
         """
-        self.configure(channels, divider, length, pre_trigger, trigger)
-        length = int(self._drive.read("trace_config.length"))
-        if timeout is None:
-            timeout = 2.0 + 3.0 * length * divider * TS
-        self.arm()
-        self.wait(timeout)
-        return self.upload(progress)
+        with self.lock:
+            self.configure(channels, divider, length, pre_trigger, trigger)
+            length = int(self._drive.read("trace_config.length"))
+            if timeout is None:
+                timeout = 2.0 + 3.0 * length * divider * TS
+            self.arm()
+            self.wait(timeout)
+            return self.upload(progress)
