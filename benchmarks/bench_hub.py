@@ -5,7 +5,8 @@ Prints:
   emulated 1 Mbit/s (expected: the bus limit, 1e6 / frame_bits) and with pacing made
   negligible (1 Gbit/s: the hub's own capacity), plus the hub's CPU use (one core = 100 %);
 * SDO-like round-trip latency: a requester process sends 0x601 (8 bytes) and waits for the 0x581
-  reply of a responder process, with and without python-can's ``tcp_tune``.
+  reply of a responder process; and a burst of 8 frames answered by one reply (a block-transfer
+  sub-block); each with and without python-can's ``tcp_tune``.
 
 Run: python benchmarks/bench_hub.py [--frames 20000] [--round-trips 1000]
 Clients run as separate processes; the hub runs in this process.
@@ -33,16 +34,17 @@ out = {}
 if role == "sink":
     time.sleep(0.1)
     print("joined", flush=True)
-    n, first, last = 0, None, None
+    n, first, last, stamp0, stamp1 = 0, None, None, None, None
     while n < count:
         m = bus.recv(10.0)
         if m is None:
             break
-        last = time.perf_counter()
+        last, stamp1 = time.perf_counter(), m.timestamp
         if first is None:
-            first = last
+            first, stamp0 = last, stamp1
         n += 1
-    out = {"n": n, "span": (last - first) if n > 1 else None}
+    out = {"n": n, "span": (last - first) if n > 1 else None,
+           "stamp_span": (stamp1 - stamp0) if n > 1 else None}
 elif role == "source":
     rng = __import__("random").Random(1)
     for i in range(count):
@@ -62,6 +64,30 @@ elif role == "responder":
                                  is_extended_id=False))
             served += 1
     out = {"served": served}
+elif role == "block_responder":
+    time.sleep(0.1)
+    print("joined", flush=True)
+    served = 0
+    while served < count:
+        m = bus.recv(10.0)
+        if m is None:
+            break
+        if m.arbitration_id == 0x601 and m.data[0] == 7:  # last frame of a burst of 8
+            bus.send(can.Message(arbitration_id=0x581, data=bytes([0xA2, 8, 127, 0, 0, 0, 0, 0]),
+                                 is_extended_id=False))
+            served += 1
+    out = {"served": served}
+elif role == "block_requester":
+    rtts = []
+    for _ in range(count):
+        t0 = time.perf_counter()
+        for k in range(8):
+            bus.send(can.Message(arbitration_id=0x601, data=bytes([k] * 8), is_extended_id=False))
+        m = bus.recv(5.0)
+        if m is None:
+            break
+        rtts.append(time.perf_counter() - t0)
+    out = {"rtts": rtts}
 elif role == "requester":
     rtts = []
     req = can.Message(arbitration_id=0x601, data=bytes([0x40, 0, 0x10, 0, 0, 0, 0, 0]),
@@ -102,8 +128,9 @@ def _pair(port: int, roles: tuple[str, str], count: int, tune: bool) -> dict:
     return results
 
 
-def throughput(frames: int, bitrate: int) -> tuple[float, float]:
-    """(frames/s at the sink, hub CPU time per frame in µs) for a burst of 8-byte frames.
+def throughput(frames: int, bitrate: int) -> tuple[float, float, float]:
+    """(frames/s on the emulated bus by the hub's timestamps, frames/s received by the sink,
+    hub CPU time per frame in µs) for a burst of 8-byte frames.
 
     The CPU time is this process's (the hub thread's; the clients are child processes) over the
     whole run, so it slightly overstates the per-frame cost.
@@ -115,16 +142,19 @@ def throughput(frames: int, bitrate: int) -> tuple[float, float]:
         sink = res["sink"]
         if sink["n"] != frames:
             raise SystemExit(f"bench_hub: sink got {sink['n']} of {frames} frames")
+    bus_rate = (frames - 1) / sink["stamp_span"]
     rate = (frames - 1) / sink["span"]
     cpu = (cpu1.user - cpu0.user) + (cpu1.system - cpu0.system)
-    return rate, 1e6 * cpu / frames
+    return bus_rate, rate, 1e6 * cpu / frames
 
 
-def round_trip(count: int, tune: bool) -> list[float]:
-    """Round-trip times (s) of count request/response exchanges at 1 Mbit/s."""
+def round_trip(count: int, tune: bool, burst: bool = False) -> list[float]:
+    """Round-trip times (s) of count exchanges at 1 Mbit/s: one request and its reply, or
+    (burst=True) 8 frames back to back and one reply, like a block-transfer sub-block."""
+    roles = ("block_requester", "block_responder") if burst else ("requester", "responder")
     with Hub(port=0) as hub:
-        res = _pair(hub.port, ("requester", "responder"), count, tune)
-    return res["requester"]["rtts"]
+        res = _pair(hub.port, roles, count, tune)
+    return res[roles[0]]["rtts"]
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -141,28 +171,28 @@ def main(argv: list[str] | None = None) -> int:
     print(f"hub benchmark  (python {sys.version.split()[0]}, {os.cpu_count()} CPUs)")
     print(f"8-byte frames: mean {mean_bits:.1f} bits with exact stuffing")
     for bitrate, label in ((1_000_000, "1 Mbit/s emulated"), (1_000_000_000, "pacing off")):
-        rate, us = throughput(args.frames, bitrate)
-        limit = bitrate / mean_bits
-        extra = f" (bus limit {limit:,.0f})" if bitrate <= 1_000_000 else ""
+        bus_rate, rate, us = throughput(args.frames, bitrate)
+        limit = f"limit {bitrate / mean_bits:,.0f}" if bitrate <= 1_000_000 else "no limit"
         print(
-            f"throughput, {label:18s}: {rate:9,.0f} frames/s{extra}; hub CPU {us:.1f} µs/frame"
-            f" = {us * 9000 / 1e4:.0f} % of a core at 9,000 frames/s"
+            f"throughput, {label:18s}: on the bus {bus_rate:9,.0f} frames/s ({limit}), "
+            f"at the python-can sink {rate:9,.0f} frames/s; hub CPU {us:.1f} µs/frame"
         )
     floor = frame_bits(0x601, bytes([0x40, 0, 0x10, 0, 0, 0, 0, 0])) + frame_bits(
         0x581, bytes([0x43, 0, 0x10, 0, 1, 2, 3, 4])
     )
     print(f"round trips at 1 Mbit/s include 2 frames on the bus: {floor / 1e3:.3f} ms")
-    for tune in (True, False):
-        rtts = sorted(round_trip(args.round_trips, tune))
-        if not rtts:
-            print(f"round trip, tcp_tune={tune!s:5s}: no replies")
-            continue
-        p95 = rtts[min(len(rtts) - 1, int(0.95 * len(rtts)))]
-        print(
-            f"SDO-like round trip, tcp_tune={tune!s:5s}: median {statistics.median(rtts) * 1e3:.3f}"
-            f" ms, p95 {p95 * 1e3:.3f} ms, mean {statistics.fmean(rtts) * 1e3:.3f} ms"
-            f" ({len(rtts)} exchanges)"
-        )
+    for burst, label in ((False, "1 request + reply"), (True, "8-frame burst + reply")):
+        for tune in (True, False):
+            rtts = sorted(round_trip(args.round_trips, tune, burst))
+            if not rtts:
+                print(f"{label}, tcp_tune={tune!s:5s}: no replies")
+                continue
+            p95 = rtts[min(len(rtts) - 1, int(0.95 * len(rtts)))]
+            print(
+                f"{label:22s} tcp_tune={tune!s:5s}: median {statistics.median(rtts) * 1e3:6.3f}"
+                f" ms, p95 {p95 * 1e3:6.3f} ms, mean {statistics.fmean(rtts) * 1e3:6.3f} ms"
+                f" ({len(rtts)} exchanges)"
+            )
     return 0
 
 

@@ -49,6 +49,7 @@ __all__ = ["DEFAULT_PORT", "Hub", "HubStats", "add_parser", "crc15", "frame_bits
 DEFAULT_PORT = 29536
 
 _LOOPBACK_NAMES = ("127.0.0.1", "localhost")
+_QUICKACK = getattr(socket, "TCP_QUICKACK", None)  # Linux only
 _BIND_ADDRESS = "127.0.0.1"
 
 # --------------------------------------------------------------------------------------------
@@ -537,6 +538,13 @@ class Hub:
         if not chunk:  # peer closed; an unfinished element is discarded
             self._close(client)
             return
+        if _QUICKACK is not None:
+            # ACK at once: a client without tcp_tune (Nagle on) then sends its next small
+            # segment without waiting ~40 ms for our delayed ACK
+            try:
+                client.sock.setsockopt(socket.IPPROTO_TCP, _QUICKACK, 1)
+            except OSError:
+                pass
         for item in client.splitter.feed(chunk):
             if isinstance(item, ProtocolError):
                 self._reject(client, str(item), now)
