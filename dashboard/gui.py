@@ -28,6 +28,7 @@ from dashboard.gui_scene import RotorScene
 from dashboard.models import CONTROLLER_TYPES
 from dashboard.security import origin_ok
 
+WAKE_DELAY_S = 0.004  #: after a setpoint change: > one 1 ms TPDO period plus bus latency
 SPEED_COLORS = ("#1f77b4", "#ff7f0e")
 CURRENT_COLORS = ("#2ca02c", "#d62728")
 
@@ -58,6 +59,7 @@ class BenchGui:
         self.server: viser.ViserServer | None = None
         self.port = 0
         self._stop = threading.Event()
+        self._wake = threading.Event()  # a setpoint changed: plot now, not at the next tick
         self._threads: list[threading.Thread] = []
         self._tokens: dict[int, str] = {}  # viser client id -> lease token
         self._muted = 0  # >0 while the server itself sets input values (no echo)
@@ -88,6 +90,7 @@ class BenchGui:
 
     def stop(self) -> None:
         self._stop.set()
+        self._wake.set()
         for th in self._threads:
             th.join(timeout=2.0)
         with contextlib.suppress(ValueError):
@@ -536,9 +539,11 @@ class BenchGui:
         elif kind == "gains":
             with contextlib.suppress(Exception):
                 self._load_gains()
-        elif kind == "setpoint" and "rpm" in data:
-            with self._mute():
-                self.speed_in.value = float(data["rpm"])
+        elif kind == "setpoint":
+            self._wake.set()
+            if "rpm" in data:
+                with self._mute():
+                    self.speed_in.value = float(data["rpm"])
         elif kind == "error" and self.server is not None:
             for client in self.server.get_clients().values():
                 client.add_notification(
@@ -546,32 +551,43 @@ class BenchGui:
                 )
 
     def _plot_loop(self) -> None:
+        """Push the live window to both plots at gui_rate_hz, and at once after a setpoint
+        change (after WAKE_DELAY_S, the time the drive needs to stream the new reference)."""
         period = 1.0 / self.config.gui_rate_hz
-        names = list(LIVE_SIGNALS)
         next_t = time.monotonic()
         while not self._stop.is_set():
             next_t += period
-            try:
-                w = self.bench.drive.live.window(self.config.live_window_s, names)
-                t = np.asarray(w["t"], dtype=np.float64)
-                cols = [np.asarray(w[n], dtype=np.float64) for n in names]
-                ok = np.isfinite(t)
-                for c in cols:  # NaN before a stream's first frame inside the window
-                    ok &= np.isfinite(c)
-                t, cols = t[ok], [c[ok] for c in cols]
-                if len(t) >= 2:
-                    x = t - t[-1]
-                    self.speed_plot.data = (x, cols[0], cols[1])
-                    self.current_plot.data = (x, cols[2], cols[3])
-                    self.frames_sent += 1
-                    self.last_live = w
-                    if self.scene is not None:
-                        self.scene.update(float(cols[0][-1]), w)
-            except Exception:
-                pass
-            self._stop.wait(max(0.0, next_t - time.monotonic()))
+            self._push_plots()
+            if self._wake.wait(max(0.0, next_t - time.monotonic())):
+                self._wake.clear()
+                time.sleep(WAKE_DELAY_S)
+                next_t = time.monotonic()
             if time.monotonic() - next_t > 1.0:
                 next_t = time.monotonic()
+
+    def _push_plots(self) -> None:
+        if self.server is None or not self.server.get_clients():
+            return  # nobody watches: no work
+        names = list(LIVE_SIGNALS)
+        try:
+            w = self.bench.drive.live.window(self.config.live_window_s, names)
+        except Exception:
+            return
+        t = np.asarray(w["t"], dtype=np.float64)
+        cols = [np.asarray(w[n], dtype=np.float64) for n in names]
+        ok = np.isfinite(t)
+        for c in cols:  # NaN before a stream's first frame inside the window
+            ok &= np.isfinite(c)
+        t, cols = t[ok], [c[ok] for c in cols]
+        if len(t) < 2:
+            return
+        x = t - t[-1]
+        self.speed_plot.data = (x, cols[0], cols[1])
+        self.current_plot.data = (x, cols[2], cols[3])
+        self.frames_sent += 1
+        self.last_live = w
+        if self.scene is not None:
+            self.scene.update(float(cols[0][-1]), w)
 
     def _status_loop(self) -> None:
         first = True

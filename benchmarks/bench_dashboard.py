@@ -1,0 +1,280 @@
+"""Benchmarks of drive-dashboard in a real headless Chromium; prints figures (no pass/fail).
+
+Figures (goals from the issue):
+  1. step-to-plot latency: from the click on "+ step" to the first redraw of the speed plot
+     that draws a frame whose speed* series shows the new setpoint (goal ≤ 100 ms);
+  2. plot refresh rate: redraws per second of the speed plot's canvas (goal ≥ 20 Hz);
+  3. server CPU while one browser streams: the dashboard process alone (the virtual drive and
+     the loopback hub run in a separate ``virtual-drive run --hub`` process), in % of one core
+     (goal ≤ 25 %).
+
+How: the page gets an init script that timestamps (performance.now()) every canvas redraw
+(uPlot clears its canvas on every redraw) and every click; the page clock is mapped onto
+Python's (offset measured to about 1 ms). viser's WebSocket runs in a worker, so frame arrival
+is timed in Python: Playwright delivers each frame while the script waits in
+page.wait_for_timeout (a few ms late at most, which only lengthens the figure). Python decodes
+the frame (viser's wire format: zstd-compressed msgpack + 8-byte aligned raw arrays) to find the
+first one whose speed* series ends at the new setpoint; the first redraw of the speed plot at or
+after its arrival is the one that shows the step. CPU is utime + stime of the dashboard process from
+/proc over a window of wall time.
+
+Run: python benchmarks/bench_dashboard.py [--steps 6] [--window 10] [--3d]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import socket
+import statistics
+import subprocess
+import sys
+import time
+
+import msgspec
+import numpy as np
+import zstandard
+
+CHROMIUM = "/usr/bin/chromium"
+FLAGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--no-first-run",
+]
+
+INIT_JS = """
+(() => {
+  const draws = new Map();
+  window.__draws = draws;
+  const orig = CanvasRenderingContext2D.prototype.clearRect;
+  CanvasRenderingContext2D.prototype.clearRect = function (...a) {
+    const c = this.canvas;
+    if (!draws.has(c)) draws.set(c, []);
+    draws.get(c).push(performance.now());
+    return orig.apply(this, a);
+  };
+  window.__clicks = [];
+  document.addEventListener('pointerdown', () => window.__clicks.push(performance.now()), true);
+})();
+"""
+
+SPEED_CANVAS_DRAWS = """
+() => { const c = document.querySelector('.uplot canvas'); return (window.__draws.get(c) || []); }
+"""
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def cpu_seconds(pid: int) -> float:
+    """utime + stime of ``pid`` in seconds (/proc/<pid>/stat fields 14 and 15)."""
+    with open(f"/proc/{pid}/stat") as f:
+        fields = f.read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def clock_offset(page) -> float:
+    """Python time.monotonic() (ms) minus the page's performance.now() (ms), ± 1 ms."""
+    best = None
+    for _ in range(5):
+        t0 = time.monotonic() * 1e3
+        tp = page.evaluate("performance.now()")
+        t1 = time.monotonic() * 1e3
+        if best is None or t1 - t0 < best[0]:
+            best = (t1 - t0, (t0 + t1) / 2 - tp)
+    return best[1]
+
+
+def decode_frame(payload: bytes) -> list[dict]:
+    """viser's wire format → the list of message dicts, arrays put back as numpy."""
+    n_inner = int.from_bytes(payload[0:8], "little")
+    n_comp = int.from_bytes(payload[8:16], "little")
+    inner = zstandard.ZstdDecompressor().decompress(payload[16 : 16 + n_comp], n_inner)
+    obj = msgspec.msgpack.decode(inner)
+    off = 16 + n_comp
+    buffers = []
+    for length in obj.get("binaryBufferLengths", ()):
+        off += (8 - off % 8) % 8
+        buffers.append(payload[off : off + length])
+        off += length
+
+    def fix(v):
+        if isinstance(v, dict):
+            if "__binary_index" in v and "dtype" in v:
+                return np.frombuffer(buffers[v["__binary_index"]], dtype=v["dtype"])
+            return {k: fix(x) for k, x in v.items()}
+        if isinstance(v, list):
+            return [fix(x) for x in v]
+        return v
+
+    return fix(obj["messages"])
+
+
+def shows_setpoint(messages: list[dict], target: float) -> bool:
+    """True if a uPlot data update has a third series (speed*) ending at ``target``."""
+    for m in messages:
+        if m.get("type") != "GuiUpdateMessage":
+            continue
+        for v in m.get("updates", {}).values():
+            if isinstance(v, list) and len(v) == 3 and all(isinstance(a, np.ndarray) for a in v):
+                ref = v[2]
+                if ref.size and abs(float(ref[-1]) - target) < 0.5:
+                    return True
+    return False
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--steps", type=int, default=6, help="speed steps for the latency figure")
+    ap.add_argument("--window", type=float, default=10.0, help="CPU / refresh window, s")
+    ap.add_argument("--3d", dest="scene", action="store_true", help="keep the 3D rotor view")
+    args = ap.parse_args(argv)
+    from playwright.sync_api import sync_playwright
+
+    hub_port, api_port = free_port(), free_port()
+    drive = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "virtual_drive.cli",
+            "run",
+            "--hub",
+            "--hub-port",
+            str(hub_port),
+            "--log-level",
+            "ERROR",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
+        text=True,
+    )
+    dash = None
+    try:
+        ready = drive.stdout.readline()
+        assert "ready" in ready, f"virtual drive did not start: {ready!r}"
+        cmd = [
+            sys.executable,
+            "-m",
+            "dashboard.cli",
+            "--join-hub",
+            str(hub_port),
+            "--port",
+            str(api_port),
+            "--gui-port",
+            "0",
+        ]
+        if not args.scene:
+            cmd.append("--no-3d")
+        dash = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+        line = dash.stdout.readline()
+        m = re.match(r"open (http://\S+)", line)
+        assert m, f"dashboard did not start: {line!r}"
+        url = m.group(1)
+        time.sleep(2.0)
+        c0, w0 = cpu_seconds(dash.pid), time.monotonic()
+        time.sleep(args.window / 2)
+        idle_cpu = (cpu_seconds(dash.pid) - c0) / (time.monotonic() - w0) * 100
+
+        frames: list[tuple[int, bytes]] = []
+        with sync_playwright() as p:
+            browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True)
+            page = browser.new_page(viewport={"width": 1400, "height": 1000})
+            page.add_init_script(INIT_JS)
+
+            def on_ws(ws):
+                if "/api/" in ws.url:
+                    return
+
+                def on_frame(payload):
+                    # runs while Playwright waits (page.wait_for_timeout), so promptly
+                    if isinstance(payload, (bytes, bytearray)):
+                        frames.append((time.monotonic() * 1e3, bytes(payload)))
+
+                ws.on("framereceived", on_frame)
+
+            page.on("websocket", on_ws)
+            page.goto(url)
+            enable = page.get_by_role("button", name="Enable")
+            enable.wait_for(timeout=30_000)
+
+            def click(name: str) -> None:
+                button = page.get_by_role("button", name=name)
+                button.scroll_into_view_if_needed()
+                box = button.bounding_box()
+                page.mouse.click(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+
+            click("Enable")
+            page.wait_for_timeout(2000)
+            offset = clock_offset(page)
+
+            # --- refresh rate and server CPU while this browser streams
+            d0 = len(page.evaluate(SPEED_CANVAS_DRAWS))
+            c0, w0 = cpu_seconds(dash.pid), time.monotonic()
+            page.wait_for_timeout(args.window * 1e3)
+            stream_cpu = (cpu_seconds(dash.pid) - c0) / (time.monotonic() - w0) * 100
+            d1 = page.evaluate(SPEED_CANVAS_DRAWS)
+            span_ms = d1[-1] - d1[d0] if len(d1) > d0 + 1 else float("nan")
+            refresh_hz = (len(d1) - 1 - d0) / span_ms * 1e3 if span_ms > 0 else float("nan")
+
+            # --- step-to-plot latency
+            latencies = []
+            target = 0.0
+            for k in range(args.steps):
+                sign = +1 if k % 2 == 0 else -1
+                target += sign * 500.0
+                n_frames = len(frames)
+                n_clicks = len(page.evaluate("window.__clicks"))
+                click("+ step" if sign > 0 else "− step")
+                page.wait_for_timeout(1500)
+                t_click = page.evaluate("window.__clicks")[n_clicks] + offset
+                hit = next(
+                    (t for t, pl in frames[n_frames:] if shows_setpoint(decode_frame(pl), target)),
+                    None,
+                )
+                if hit is None:
+                    print(f"step {k + 1}: no frame with speed* = {target:.0f} rpm found")
+                    continue
+                draws = [d + offset for d in page.evaluate(SPEED_CANVAS_DRAWS)]
+                t_draw = next((d for d in draws if d >= hit), float("nan"))
+                latencies.append(t_draw - t_click)
+                print(
+                    f"step {k + 1} to {target:+.0f} rpm: frame arrived "
+                    f"{hit - t_click:6.1f} ms, drawn {t_draw - t_click:6.1f} ms after the click"
+                )
+                page.wait_for_timeout(1000)
+            browser.close()
+    finally:
+        for proc in (dash, drive):
+            if proc is not None:
+                proc.terminate()
+                try:
+                    proc.wait(timeout=10)
+                except subprocess.TimeoutExpired:
+                    proc.kill()
+                    proc.wait()
+
+    print()
+    print(f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} at the end")
+    if latencies:
+        print(
+            f"step-to-plot latency: median {statistics.median(latencies):.0f} ms, "
+            f"max {max(latencies):.0f} ms over {len(latencies)} steps (goal <= 100 ms)"
+        )
+    print(f"speed plot refresh in the browser: {refresh_hz:.1f} Hz (goal >= 20 Hz)")
+    print(
+        f"dashboard server CPU: {stream_cpu:.1f} % of one core with one browser streaming "
+        f"(goal <= 25 %); {idle_cpu:.1f} % with no browser"
+    )
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
