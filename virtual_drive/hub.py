@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 import errno
 import functools
+import logging
 import math
 import random
 import re
@@ -48,6 +49,7 @@ __all__ = ["DEFAULT_PORT", "Hub", "HubStats", "add_parser", "crc15", "frame_bits
 #: Port used by ``virtual-drive hub`` when none is given.
 DEFAULT_PORT = 29536
 
+_log = logging.getLogger(__name__)
 _LOOPBACK_NAMES = ("127.0.0.1", "localhost")
 _QUICKACK = getattr(socket, "TCP_QUICKACK", None)  # Linux only
 _BIND_ADDRESS = "127.0.0.1"
@@ -488,7 +490,11 @@ class Hub:
             else:
                 client = self._clients.get(sock)
                 if client is not None:
-                    self._read(client, now)
+                    try:
+                        self._read(client, now)
+                    except Exception:  # a bug triggered by one client must not stop the bus
+                        _log.exception("hub: dropping client %s (internal error)", client.peer)
+                        self._drop(client)
         now = time.monotonic()
         for bus in list(self._buses.values()):
             self._advance(bus, now)
