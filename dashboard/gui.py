@@ -26,7 +26,7 @@ from dashboard.config import BenchConfig
 from dashboard.export import capture_csv, capture_png
 from dashboard.gui_scene import RotorScene
 from dashboard.models import CONTROLLER_TYPES
-from dashboard.security import origin_ok
+from dashboard.security import allowed_origins, origin_ok
 
 WAKE_DELAY_S = 0.004  #: after a setpoint change: > one 1 ms TPDO period plus bus latency
 SPEED_COLORS = ("#1f77b4", "#ff7f0e")
@@ -75,9 +75,12 @@ class BenchGui:
                 host="127.0.0.1", port=self.config.gui_port, verbose=False
             )
         self.port = self.server.get_port()
+        self.origins = allowed_origins("127.0.0.1", [self.port, self.config.api_port])
+        self._guard_origin()
         self.server.gui.configure_theme(
-            control_layout="fixed", control_width="large", show_share_button=False, show_logo=False
+            control_width="large", show_share_button=False, show_logo=False
         )
+        self.server.gui.main_panel.dock_right()
         self.server.on_client_connect(self._on_connect)
         self.server.on_client_disconnect(self._on_disconnect)
         self._build()
@@ -100,29 +103,30 @@ class BenchGui:
 
     # ------------------------------------------------------------------ clients and control
     def _on_connect(self, client: viser.ClientHandle) -> None:
-        """Close a viser WebSocket opened from a foreign page (viser itself checks no Origin)."""
-        conn = self._connection(client.client_id)
-        origin = None
-        if conn is not None:
-            origin = conn.request.headers.get("Origin") if conn.request else None
-        allowed = getattr(self, "origins", None)
-        if allowed is not None and conn is not None and not origin_ok(origin, allowed):
-            import asyncio
-
-            loop = self.server._websock_server._background_event_loop
-            if loop is not None:
-                asyncio.run_coroutine_threadsafe(conn.close(1008, "origin not allowed"), loop)
-            return
         self._refresh_status()
+
+    def _guard_origin(self) -> None:
+        """Close a viser WebSocket opened from a foreign page (viser checks no Origin).
+
+        Hooks viser's transport-level connect callback (private API of viser 1.1: the public
+        ``on_client_connect`` fires only after the first camera message, and a foreign page
+        could read the GUI and send clicks before that). Runs on viser's event loop before
+        any message is sent to the new connection.
+        """
+        ws_server = self.server._websock_server
+
+        async def guard(client_conn: Any) -> None:
+            conn = ws_server._live_connections.get(client_conn.client_id)
+            if conn is None:
+                return
+            origin = conn.request.headers.get("Origin") if conn.request is not None else None
+            if not origin_ok(origin, self.origins):
+                await conn.close(1008, "origin not allowed")
+
+        ws_server.on_client_connect(guard)
 
     def _on_disconnect(self, client: viser.ClientHandle) -> None:
         self._tokens.pop(client.client_id, None)
-
-    def _connection(self, client_id: int) -> Any:
-        try:
-            return self.server._websock_server._live_connections.get(client_id)
-        except AttributeError:
-            return None
 
     def _client_name(self, client_id: int | None) -> str:
         return f"browser #{client_id}"

@@ -149,6 +149,23 @@ def test_speed_step_in_the_browser(page):
     assert plot.screenshot() != after  # and keeps scrolling (live)
 
 
+def test_one_controller_and_visible_take_over(page, bench):
+    api = bench[1]
+    tok = httpx.post(f"{api}/api/control", json={"client": "script", "take_over": True})
+    tok = tok.json()["token"]
+    wait_text(page, r"In control: script since")  # the browser sees who took over
+    wait_text(page, r"Control taken over")
+    click(page, page.get_by_role("button", name="+ step"))
+    wait_text(page, r"script controls the bench")  # watching: the click changed nothing
+    assert httpx.get(f"{api}/api/state").json()["speed_setpoint"] == 500
+    click(page, page.get_by_role("button", name="Take control"))
+    wait_text(page, r"In control: browser #\d+ since")
+    r = httpx.post(
+        f"{api}/api/command", json={"command": "enable"}, headers={"X-Control-Token": tok}
+    )
+    assert r.status_code == 409  # the script now only watches
+
+
 def current_margins(ratio: float) -> tuple[float, float, float]:
     """GM (dB), PM (°), ‖S‖∞ of the deadbeat loop with L_c = ratio·L (python-control)."""
     Phi, Gamma = math.exp(-R * TS / L), (1 - math.exp(-R * TS / L)) / (2 * R)
