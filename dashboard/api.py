@@ -183,9 +183,25 @@ def get_gains_diff(bench: BenchDep) -> dict[str, Any]:
 
 
 # ------------------------------------------------------------------ traces and identification
-@router.post("/trace/capture", tags=["trace"], summary="Configure, arm and read one trace (50 kHz)")
-def post_capture(body: TraceIn, bench: ControlDep) -> dict[str, Any]:
-    cap = run(lambda: experiments.capture(bench, body))
+@router.get("/trace/config", tags=["trace"], summary="The trace configuration used by default")
+def get_trace_config(bench: BenchDep) -> TraceIn:
+    return bench.trace_config
+
+
+@router.put("/trace/config", tags=["trace"], summary="Set the default trace configuration")
+def put_trace_config(body: TraceIn, bench: ControlDep) -> TraceIn:
+    bench.trace_config = body
+    return body
+
+
+@router.post(
+    "/trace/capture",
+    tags=["trace"],
+    summary="Arm, trigger and upload one trace (50 kHz); body overrides the stored config",
+)
+def post_capture(bench: ControlDep, body: TraceIn | None = None) -> dict[str, Any]:
+    cfg = body if body is not None else bench.trace_config
+    cap = run(lambda: experiments.capture(bench, cfg))
     return jsonable(cap.summary())
 
 

@@ -122,6 +122,9 @@ class Bench:
         self.last_step_t: float | None = None  # time.monotonic() of the last setpoint step
         self.listeners: list[Callable[[str, dict], None]] = []
         self.busy: str | None = None  # a long operation under way (capture, identify ...)
+        from dashboard.models import TraceIn
+
+        self.trace_config = TraceIn()  # default for POST /api/trace/capture without a body
 
     # ---------------------------------------------------------------- events
     def emit(self, kind: str, data: dict | None = None) -> None:

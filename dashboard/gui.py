@@ -545,9 +545,11 @@ class BenchGui:
                 self._load_gains()
         elif kind == "setpoint":
             self._wake.set()
-            if "rpm" in data:
-                with self._mute():
+            with self._mute():
+                if "rpm" in data:
                     self.speed_in.value = float(data["rpm"])
+                if "i_p_ref" in data:
+                    self.i_in.value = float(data["i_p_ref"])
         elif kind == "error" and self.server is not None:
             for client in self.server.get_clients().values():
                 client.add_notification(

@@ -319,6 +319,16 @@ def test_trace_capture_csv_and_png(client, hdr):
     img = mpimg.imread(io.BytesIO(png.content), format="png")
     assert img.shape[0] > 200 and img.shape[1] > 400
     assert client.get("/api/trace/99999/csv").status_code == 404
+    cfg = {"channels": ["measurements.speed"], "length": 200, "pre_trigger": 0, "divider": 5}
+    assert client.put("/api/trace/config", json=cfg, headers=hdr).status_code == 200
+    assert client.get("/api/trace/config").json()["divider"] == 5
+    r = client.post(
+        "/api/trace/capture", json=None, headers={**hdr, "content-type": "application/json"}
+    )
+    assert r.status_code == 200 and r.json()["samples"] == 200
+    assert r.json()["columns"] == ["t", "speed"] and r.json()["meta"]["dt_s"] == pytest.approx(
+        5 * TS
+    )
     bad = {"channels": ["measurements.nothing"], "length": 10}
     assert client.post("/api/trace/capture", json=bad, headers=hdr).status_code == 422
 
@@ -329,7 +339,9 @@ def test_identify_and_carry_into_ip_design(client, hdr):
     )
     assert r.status_code == 200, r.text
     res = r.json()
-    assert 0.9999 < res["a"] < 1.0 and res["b"] > 0
+    # the virtual drive models the paper's motor and load: a ≈ 0.99997(85), b = 3.33715e-4
+    assert res["a"] == pytest.approx(0.9999785, abs=3e-6)
+    assert res["b"] == pytest.approx(3.33715e-4, rel=0.05)
     assert res["r2"] > 0.98
     assert client.get("/api/state").json()["identified"]["a"] == pytest.approx(res["a"])
     d = client.post("/api/gains/ip_design", json={"xi": 1.0, "omega_n": 2.3}).json()
