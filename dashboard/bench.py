@@ -71,7 +71,21 @@ def jsonable(x: Any) -> Any:
         return int(x)
     if isinstance(x, complex):
         return [x.real, x.imag]
+    if isinstance(x, (bytes, bytearray)):
+        return x.hex()
     return x
+
+
+#: EMCY error codes the drive sends (CiA 301 / CiA 402 meanings), for display.
+EMCY_TEXT = {
+    0x0000: "error reset",
+    0x2310: "continuous overcurrent",
+    0x2320: "short circuit",
+    0x3210: "DC-link overvoltage",
+    0x3220: "DC-link undervoltage",
+    0x4210: "excess temperature",
+    0x8130: "heartbeat lost",
+}
 
 
 @dataclasses.dataclass
@@ -156,7 +170,7 @@ class Bench:
             "speed_setpoint": self.speed_setpoint,
             "current_setpoint": self.current_setpoint,
             "T_load": self.T_load,
-            "emcy": [jsonable(as_dict(e)) for e in _safe(lambda: list(d.emcy_history), [])],
+            "emcy": [_emcy(e) for e in _safe(lambda: list(d.emcy_history), [])][-20:],
             "live": jsonable(stats),
             "controller": holder.public() if holder else None,
             "busy": self.busy,
@@ -279,6 +293,12 @@ class Bench:
 
     def close(self) -> None:
         self.stop_sequence()
+
+
+def _emcy(e: Any) -> dict[str, Any]:
+    out = jsonable(as_dict(e))
+    out["text"] = EMCY_TEXT.get(int(out.get("code", -1)), "")
+    return out
 
 
 def _safe(fn: Callable[[], Any], default: Any = None) -> Any:

@@ -620,9 +620,7 @@ class BenchGui:
         emcy = s.get("emcy") or []
         emcy_txt = (
             ", ".join(
-                f"0x{int(e.get('code', 0)):04X}"
-                + (f" {e.get('text') or e.get('description') or ''}".rstrip())
-                for e in emcy[-5:]
+                f"0x{int(e.get('code', 0)):04X} {e.get('text', '')}".strip() for e in emcy[-3:]
             )
             or "none"
         )

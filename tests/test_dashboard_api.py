@@ -192,6 +192,24 @@ def test_bad_setpoint_changes_nothing(client, hdr):
     assert drive(client).read("target_velocity") == before
 
 
+def test_fault_shown_with_emcy_and_reset(client, hdr):
+    client.post("/api/command", json={"command": "enable"}, headers=hdr)
+    drive(client).write("sim_fault.inject", 1)  # the virtual inverter trips on overcurrent
+    deadline = time.monotonic() + 5
+    while client.get("/api/state").json()["state"] != "FAULT" and time.monotonic() < deadline:
+        time.sleep(0.05)
+    s = client.get("/api/state").json()
+    assert s["state"] == "FAULT"  # CiA 402 state name
+    assert s["emcy"][-1]["code"] == 0x2310 and s["emcy"][-1]["text"] == "continuous overcurrent"
+    with client.websocket_connect("/api/stream") as ws:  # the stream carries the EMCY too
+        msg = {"type": "live"}
+        while msg["type"] != "state":
+            msg = json.loads(ws.receive_text())
+        assert msg["emcy"][-1]["code"] == 0x2310
+    r = client.post("/api/command", json={"command": "fault_reset"}, headers=hdr)
+    assert r.status_code == 200 and r.json()["state"] == "SWITCH ON DISABLED"
+
+
 # ---------------------------------------------------------------- gains
 def deadbeat_loop(L_c: float, R_c: float = R) -> ct.TransferFunction:
     """C_db(z) P(z) from the paper's eqs. (4)–(8), (15) with python-control."""
