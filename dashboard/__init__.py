@@ -1,0 +1,23 @@
+"""Browser bench for the BLDC drive: FastAPI (REST, WebSocket, offline docs) and a viser GUI.
+
+Start it with ``drive-dashboard --virtual`` (loopback hub + virtual drive in this process) or
+``drive-dashboard --interface socketcan --channel can0 --node 1`` (a real drive), then open the
+one URL it prints. Everything goes through :mod:`drive_link`; no CAN details live here.
+
+Modules (one job each):
+
+- :mod:`dashboard.cli` — the ``drive-dashboard`` command (argument checks, uvicorn).
+- :mod:`dashboard.app` — FastAPI app, lifespan (bench + GUI), access/JSON/Origin middleware,
+  the self-made ``/docs`` page (renders ``/openapi.json``, no CDN).
+- :mod:`dashboard.api` / :mod:`dashboard.stream` — REST routes and the ``/api/stream`` WebSocket.
+- :mod:`dashboard.models` — request bodies (pydantic; bad input is a 422, nothing applied).
+- :mod:`dashboard.bench` — one drive shared by all clients: commands, setpoints, sequences.
+- :mod:`dashboard.security` — control lease (one controller, visible take-over), Origin, token.
+- :mod:`dashboard.tuning` — gains read-back, preview (stability, GM, PM, ‖S‖∞), atomic apply,
+  IP design from ξ, ω_n (eqs. 28–31), store and live-vs-stored diff.
+- :mod:`dashboard.experiments` — trace capture, current step test (Fig. 13) with the model's
+  prediction, identification of G(z) = b/(z − a) (Fig. 16).
+- :mod:`dashboard.export` — captures as CSV and PNG.
+- :mod:`dashboard.gui` / :mod:`dashboard.gui_scene` — the viser GUI and the 3D rotor.
+- :mod:`dashboard.virtual` — opens the bench (real bus, running hub, or hub + virtual drive).
+"""
