@@ -239,3 +239,39 @@ def test_bare_command_with_own_hub_and_sigint():
         if proc.poll() is None:
             proc.kill()
             proc.wait()
+
+
+def test_bus_from_python_can_environment(hub):
+    """No bus option on the command line: python-can's CAN_* environment chooses the bus."""
+    env = {
+        **os.environ,
+        "CAN_INTERFACE": "socketcand",
+        "CAN_CHANNEL": "vcan0",
+        "CAN_CONFIG": json.dumps({"host": "127.0.0.1", "port": hub.port}),
+    }
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "virtual_drive.cli", "run", "--node-id", "5"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+    )  # fmt: skip
+    try:
+        line = proc.stdout.readline()
+        assert "node 5 ready" in line and "socketcand" in line, line
+        bus = can.Bus(**hub.join_kwargs())
+        net = canopen.Network(bus)
+        net.connect()
+        try:
+            node = canopen.RemoteNode(5, load_od(node_id=5).canopen_od(5))
+            net.add_node(node)
+            node.sdo.RESPONSE_TIMEOUT = 1.0
+            assert node.sdo[0x1018][2].raw == 0x5048  # identity.product_code
+        finally:
+            net.disconnect()
+    finally:
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(15) == 0
+    env["CAN_CONFIG"] = json.dumps({"host": "127.0.0.1", "port": 1})
+    r = subprocess.run(
+        [sys.executable, "-m", "virtual_drive.cli", "run"],
+        capture_output=True, text=True, timeout=30, env=env,
+    )  # fmt: skip
+    assert r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1, r.stderr

@@ -64,11 +64,16 @@ def bus_kwargs(args: argparse.Namespace) -> dict:
         value = getattr(args, key, None)
         if value is not None:
             kw[key] = value
-    if kw.get("interface") == "socketcand":
-        kw.setdefault("channel", "vcan0")
-        kw.setdefault("host", "127.0.0.1")
-        kw.setdefault("tcp_tune", True)
     return kw
+
+
+def socketcand_defaults(cfg: dict) -> dict:
+    """The loopback hub's defaults for a socketcand bus (tcp_tune: 4x faster SDO)."""
+    if cfg.get("interface") == "socketcand":
+        for key, value in (("channel", "vcan0"), ("host", "127.0.0.1"), ("tcp_tune", True)):
+            if cfg.get(key) is None:
+                cfg[key] = value
+    return cfg
 
 
 def _fail(message: str, code: int = 1) -> int:
@@ -100,17 +105,27 @@ def run_command(args: argparse.Namespace) -> int:
     logging.getLogger("canopen").setLevel(max(logging.WARNING, logging.root.level))
     kw = bus_kwargs(args)
     shown = ", ".join(f"{k}={v}" for k, v in kw.items()) or "python-can configuration"
-    if kw.get("interface") == "socketcand" and "port" in kw:
+    try:
+        # options given here win; the rest comes from python-can's config file / CAN_* env
+        cfg = socketcand_defaults(dict(can.util.load_config(config=kw)))
+    except Exception as exc:
+        if hub is not None:
+            hub.stop()
+        return _fail(f"no usable CAN bus configuration ({shown}): {exc}")
+    if cfg.get("interface") == "socketcand" and cfg.get("port") is not None:
         # python-can retries a refused socketcand connection for 10 s with a warning per try:
         # check the server is there first and fail with one line.
+        host = cfg.get("host", "127.0.0.1")
         try:
-            socket.create_connection((kw["host"], kw["port"]), timeout=2.0).close()
-        except OSError as exc:
+            socket.create_connection((host, int(cfg["port"])), timeout=2.0).close()
+        except (OSError, ValueError) as exc:
             if hub is not None:
                 hub.stop()
-            return _fail(f"cannot open the CAN bus ({shown}): {exc.strerror or exc}")
+            return _fail(
+                f"cannot open the CAN bus ({shown}): {getattr(exc, 'strerror', None) or exc}"
+            )
     try:
-        bus = can.Bus(**kw)
+        bus = can.Bus(**cfg)
     except Exception as exc:  # python-can raises many types (CanError, OSError, ValueError...)
         if hub is not None:
             hub.stop()
