@@ -5,9 +5,10 @@ other's transfers. :class:`SdoChannel` serialises every transfer on its channel;
 channel per SDO server (0x1200 for status and parameters, 0x1201 for trace uploads) so a long
 upload never blocks status reads.
 
-Retries: a transfer that times out (lost frame) is repeated up to ``retries`` times. Expedited
-reads and writes of one object are idempotent, so a repeat is allowed by the protocol; an abort
-from the drive is never retried.
+Retries: a transfer that times out or loses sync (lost frames: a protocol abort such as
+0x05040001 or 0x05040003) is repeated from its start up to ``retries`` times. Reads and writes
+of one object are idempotent, so a repeat is allowed by the protocol; an abort that refuses the
+value or the access is never retried.
 """
 
 from __future__ import annotations
@@ -24,6 +25,11 @@ from .errors import BusError, DriveTimeout, SdoAbort
 
 #: progress(bytes_done, bytes_total_or_None)
 Progress = Callable[[int, "int | None"], None]
+
+
+#: Aborts that mean the transfer itself broke (lost or late frames), not a refusal of the
+#: value: SDO timeout, unknown command specifier, block size, sequence number, CRC, toggle bit.
+PROTOCOL_ABORTS = (0x05040000, 0x05040001, 0x05040002, 0x05040003, 0x05040004, 0x05030000)
 
 
 class _Client(SdoClient):
@@ -83,8 +89,8 @@ class SdoChannel:
                 with self.lock:
                     return fn()
             except SdoAbortedError as exc:
-                if exc.code == 0x05040000 and attempt + 1 < attempts:
-                    continue  # the server timed out a transfer whose frames were lost
+                if exc.code in PROTOCOL_ABORTS and attempt + 1 < attempts:
+                    continue  # the transfer lost sync (lost frames): start it again
                 raise SdoAbort(exc.code, index, subindex, name, what) from None
             except SdoCommunicationError as exc:
                 if attempt + 1 < attempts:
@@ -144,6 +150,9 @@ class SdoChannel:
                     done += len(piece)
                     if progress and (done % chunk < 7 or (total and done >= total)):
                         progress(done, total)
+            if total is not None and done != total:
+                # a lost segment the block protocol did not notice: start again
+                raise SdoCommunicationError(f"block upload returned {done} of {total} bytes")
             return b"".join(parts)
 
         return self._run("block upload", index, subindex, name, go)

@@ -51,7 +51,8 @@ def test_status_reads_continue_during_upload_with_drops(hub, drive):
     drive.trace.configure(["i_p", "speed"], divider=1, length=4000, trigger="immediate")
     drive.trace.arm()
     drive.trace.wait(5.0)
-    hub.set_faults(drop_rate=0.01)
+    clean = drive.trace.upload()
+    hub.set_faults(drop_rate=0.003)  # ~14 of the ~4,700 frames of one upload lost
     reads, stop = [0], threading.Event()
 
     def status() -> None:
@@ -65,19 +66,33 @@ def test_status_reads_continue_during_upload_with_drops(hub, drive):
     th = threading.Thread(target=status)
     th.start()
     try:
-        tr = None
-        for _ in range(4):  # a block upload that lost too much is restarted from the start
-            try:
-                tr = drive.trace.upload()
-                break
-            except DriveError:
-                continue
+        # lost segments are re-sent within the block (ackseq); a block upload that cannot
+        # recover is restarted from the start (library retries)
+        tr = drive.trace.upload()
     finally:
         stop.set()
         th.join(10)
-    assert tr is not None and len(tr.t) == 4000
-    assert np.all(np.isfinite(tr.signals["measurements.i_p"]))
     assert reads[0] > 0
+    for name, v in clean.signals.items():  # the very same recorded data, bit for bit
+        np.testing.assert_array_equal(tr.signals[name], v)
+
+
+def test_heavy_loss_upload_ends_with_exact_data_or_clear_error(hub, drive):
+    drive.trace.configure(["i_p"], divider=1, length=4000, trigger="immediate")
+    drive.trace.arm()
+    drive.trace.wait(5.0)
+    clean = drive.trace.upload()
+    hub.set_faults(drop_rate=0.05)
+    t0 = time.monotonic()
+    try:
+        tr = drive.trace.upload()
+    except DriveError as exc:
+        assert "\n" not in str(exc) and "trace_data" in str(exc)
+    else:
+        np.testing.assert_array_equal(
+            tr.signals["measurements.i_p"], clean.signals["measurements.i_p"]
+        )
+    assert time.monotonic() - t0 < 30
 
 
 def test_dead_bus_fails_fast_with_clear_error(hub, drive):
