@@ -596,12 +596,14 @@ class BenchGui:
             self.scene.update(float(cols[0][-1]), w)
 
     def _status_loop(self) -> None:
-        first = True
+        loaded = False
         while not self._stop.wait(0.25):
-            if first:
-                with contextlib.suppress(Exception):
+            if not loaded:  # the gains read back once at start (retried until it works)
+                try:
                     self._load_gains()
-                first = False
+                    loaded = True
+                except Exception:
+                    pass
             self._refresh_status()
 
     def _refresh_status(self) -> None:
