@@ -164,3 +164,24 @@ def test_full_64k_trace_upload_while_status_reads_on_second_sdo(bench):
     assert reads >= 3
     trace = as_samples(result["data"], 4)
     np.testing.assert_array_equal(trace[:, 0], trace[:, 3])
+
+
+def test_fault_trigger_captures_the_trip(bench):
+    """Trigger mode 3: the trigger sample is the first sample at or after the trip instant."""
+    configure(bench, [REF_I_P, REF_I_P_REF], length=500, pre=100, mode=3)
+    bench.write("trace_config.command", 1)
+    time.sleep(0.03)
+    bench.write("sim_fault.inject", 2)  # DC-link overvoltage trip
+    assert bench.wait(lambda: bench.read("statusword") & 0x4F == 0x08)
+    assert bench.wait(lambda: bench.read("trace_config.state") == 3, 2.0)
+    assert bench.read("error_code") == 0x3210
+    trace = as_samples(block_upload(bench), 2)
+    assert bench.read("trace_config.trigger_position") == 100
+    t_trip = bench.drive.sim.fault.t  # the core's own trip instant (s)
+    rec = bench.tap.record()
+    k = int(np.flatnonzero(rec["t"] >= t_trip - 1e-9)[0])
+    np.testing.assert_array_equal(trace[:, 0], rec["i_p"][k - 100 : k + 400])
+    assert abs(trace[99, 0] - 15.0) < 1.5  # regulating before the trip
+    # recover for any later test
+    bench.write("controlword", 0x80)
+    bench.enable(-1)
