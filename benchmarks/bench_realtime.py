@@ -90,8 +90,9 @@ def main() -> int:
         wall0 = time.monotonic()
         sim0 = drive.sim.time
         # an independent process that only sleeps 1 ms at a time: how late does the OS wake it?
-        probe = subprocess.Popen([sys.executable, "-c", _PROBE, str(args.seconds)],
-                                 stdout=subprocess.PIPE, text=True)
+        probe = subprocess.Popen(
+            [sys.executable, "-c", _PROBE, str(args.seconds)], stdout=subprocess.PIPE, text=True
+        )
         drifts = []
         end = wall0 + args.seconds
         while True:
@@ -124,8 +125,10 @@ def main() -> int:
         print(f"CPU (time.process_time): {100 * cpu / wall:.1f} % of one core")
         print(f"CPU (getrusage user+sys): {100 * ru_cpu / wall:.1f} % of one core")
         p_worst, p_late, p_n = probe.communicate(timeout=args.seconds + 30)[0].split()
-        print(f"scheduler probe (separate process, 1 ms sleeps): worst wake-up {p_worst} ms late, "
-              f"{p_late} of {p_n} wake-ups > 5 ms late")
+        print(
+            f"scheduler probe (separate process, 1 ms sleeps): worst wake-up {p_worst} ms late, "
+            f"{p_late} of {p_n} wake-ups > 5 ms late"
+        )
         ok = worst <= 5e-3 and cpu / wall <= 0.15
         print("goals (drift <= 5 ms, CPU <= 15 %):", "met" if ok else "NOT met")
         return 0

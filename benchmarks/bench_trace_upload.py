@@ -127,8 +127,9 @@ def main() -> int:
     net = None
     try:
         drive = spawn_virtual_drive(port=port)
-        bus = can.Bus(interface="socketcand", host="127.0.0.1", port=port, channel="vcan0",
-                      tcp_tune=True)
+        bus = can.Bus(
+            interface="socketcand", host="127.0.0.1", port=port, channel="vcan0", tcp_tune=True
+        )
         net = canopen.Network(bus)
         net.connect()
         node = canopen.RemoteNode(1, load_od().canopen_od(1))
@@ -145,17 +146,23 @@ def main() -> int:
             assert len(data) == SIZE, len(data)
             rates.append(SIZE / dt / 1000)
             print(f"block upload {k + 1}: {dt:.3f} s, {SIZE / dt / 1000:.1f} kB/s")
-        print(f"block upload (canopen client): best {max(rates):.1f} kB/s, median "
-              f"{sorted(rates)[len(rates) // 2]:.1f} kB/s (goal >= 45, limit 51-63)")
+        print(
+            f"block upload (canopen client): best {max(rates):.1f} kB/s, median "
+            f"{sorted(rates)[len(rates) // 2]:.1f} kB/s (goal >= 45, limit 51-63)"
+        )
         lean = []
         for _ in range(args.repeat):
             data_l, dt, react = lean_block_upload(net)
             assert data_l == data
             lean.append(SIZE / dt / 1000)
-            print(f"block upload (lean client): {dt:.3f} s, {SIZE / dt / 1000:.1f} kB/s, "
-                  f"median ack->next sub-block {react * 1e3:.2f} ms")
-        print(f"block upload (lean client): best {max(lean):.1f} kB/s, median "
-              f"{sorted(lean)[len(lean) // 2]:.1f} kB/s")
+            print(
+                f"block upload (lean client): {dt:.3f} s, {SIZE / dt / 1000:.1f} kB/s, "
+                f"median ack->next sub-block {react * 1e3:.2f} ms"
+            )
+        print(
+            f"block upload (lean client): best {max(lean):.1f} kB/s, median "
+            f"{sorted(lean)[len(lean) // 2]:.1f} kB/s"
+        )
         if not args.no_segmented:
             t0 = time.perf_counter()
             data2 = node.sdo.upload(0x2102, 0)
