@@ -18,6 +18,7 @@ the EDS); live values (statusword, measurements, trace data, error objects) are 
 
 from __future__ import annotations
 
+import errno
 import logging
 import math
 import threading
@@ -276,14 +277,26 @@ class VirtualDrive:
 
     # -- bus ------------------------------------------------------------------------------
     def _send(self, cob_id: int, data: bytes) -> None:
+        """Put one frame on the bus; never raises (errors are counted in ``tx_errors``).
+
+        A full transmit queue (SocketCAN's ENOBUFS with the default ``txqueuelen 10``, e.g. in
+        a 127-frame block-upload burst) is retried for up to 10 ms before the frame is dropped.
+        """
         msg = can.Message(arbitration_id=cob_id, data=data, is_extended_id=False)
-        try:
-            with self._send_lock:
-                self.bus.send(msg)
-        except (can.CanError, OSError) as exc:
-            self.tx_errors += 1
-            if self.tx_errors < 10 or self.tx_errors % 1000 == 0:
-                logger.warning("send 0x%03X failed: %s", cob_id, exc)
+        for attempt in range(21):
+            try:
+                with self._send_lock:
+                    self.bus.send(msg)
+                return
+            except (can.CanError, OSError) as exc:
+                full = getattr(exc, "errno", None) == errno.ENOBUFS or "No buffer space" in str(exc)
+                if full and attempt < 20:
+                    time.sleep(0.0005)
+                    continue
+                self.tx_errors += 1
+                if self.tx_errors < 10 or self.tx_errors % 1000 == 0:
+                    logger.warning("send 0x%03X failed: %s", cob_id, exc)
+                return
 
     # -- parameters -----------------------------------------------------------------------
     def _current_by_name(self, name: str) -> float | int:
