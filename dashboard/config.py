@@ -47,7 +47,7 @@ class BenchConfig:
     allow_remote: bool = False
     token: str | None = None
     live_window_s: float = 4.0
-    gui_rate_hz: float = 25.0
+    gui_rate_hz: float = 30.0
     scene_3d: bool = True
     stream_rate_hz: float = 20.0
     extra_origins: list[str] = field(default_factory=list)

@@ -33,7 +33,11 @@ async def stream(ws: WebSocket) -> None:
     tick = 0
     try:
         while True:
-            w = await run_in_threadpool(bench.live, 1.0)
+            try:
+                w = await run_in_threadpool(bench.live, 1.0)
+            except Exception as exc:  # e.g. a drive whose TPDOs map other objects
+                await ws.send_text(json.dumps({"type": "error", "detail": str(exc)}))
+                w = {}
             t = np.asarray(w.get("t", []), dtype=np.float64)
             new = t > last_t
             if new.any():

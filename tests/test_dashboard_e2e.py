@@ -34,7 +34,7 @@ FLAGS = [
     "--no-first-run",
 ]
 ROOT = Path(__file__).resolve().parents[1]
-SPEED_FACTOR = 2.0
+SPEED_FACTOR = 1.0
 TS, R, L = 20e-6, 6.2e-3, 14.8e-6
 
 pytestmark = [
@@ -97,6 +97,9 @@ def page(bench):
     with sync_playwright() as p:
         browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True)
         pg = browser.new_page(viewport={"width": 1400, "height": 1000})
+        pg.requested = []
+        pg.on("request", lambda r: pg.requested.append(r.url))
+        pg.on("websocket", lambda ws: pg.requested.append(ws.url))
         pg.goto(bench[0])
         pg.get_by_role("button", name="Enable").wait_for(timeout=30_000)
         yield pg
@@ -211,3 +214,11 @@ def test_change_L_c_and_see_readback_and_margins(page, bench):
     out.mkdir(exist_ok=True)
     page.screenshot(path=str(out / "dashboard_e2e.png"))
     shutil.copyfile(out / "dashboard_e2e.png", ROOT / "docs" / "bench.png")
+
+
+def test_nothing_leaves_the_machine(page, bench):
+    """The GUI and the API docs load no asset from a CDN or any other host."""
+    page.goto(f"{bench[1]}/docs")
+    page.get_by_text("/api/gains").first.wait_for(timeout=10_000)  # rendered from /openapi.json
+    urls = [u for u in page.requested if not u.startswith(("data:", "blob:"))]
+    assert urls and all(re.match(r"(http|ws)://127\.0\.0\.1:\d+/", u) for u in urls), urls
