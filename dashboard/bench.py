@@ -123,6 +123,7 @@ class Bench:
         self.description = description
         self.node_id = node_id
         self.virtual = virtual
+        self.hub_port: int | None = None  # loopback hub this bench started (virtual), if any
         self.lease = ControlLease()
         self.lock = threading.RLock()  # one drive command sequence at a time
         self.speed_setpoint = 0.0  # rpm, last commanded
