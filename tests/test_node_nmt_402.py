@@ -38,13 +38,13 @@ def test_boot_up_then_heartbeat_in_pre_operational(bench):
     assert boot is not None, "no boot-up message"
     period_ms = bench.read("producer_heartbeat_time")
     assert period_ms == 100
-    time.sleep(0.65)
+    time.sleep(1.05)
     beats = [t for t, d in bench.log.of(0x701) if d == b"\x7f"]
-    assert len(beats) >= 5
-    mean = (beats[-1] - beats[0]) / (len(beats) - 1)
-    assert 0.09 < mean < 0.11, mean  # schedule kept on average (shared, loaded machine)
+    assert len(beats) >= 6, beats
     gaps = [b - a for a, b in itertools.pairwise(beats)]
-    assert max(gaps) < 0.2, gaps
+    # every gap a multiple of the period (a starved process skips beats, never bunches them)
+    assert all(0.08 < g for g in gaps), gaps
+    assert sorted(gaps)[len(gaps) // 2] == pytest.approx(0.1, abs=0.012), gaps
 
 
 def test_nmt_states_gate_sdo_and_pdo(bench):
@@ -62,8 +62,10 @@ def test_nmt_states_gate_sdo_and_pdo(bench):
     bench.nmt(0x02)
     t1 = time.monotonic()
     assert bench.log.wait_for(0x701, 0.5, since=t1, pred=lambda d: d == b"\x04")
+    bench.node.sdo.RESPONSE_TIMEOUT = 0.3
     with pytest.raises(SdoCommunicationError):
         bench.read("statusword")
+    bench.node.sdo.RESPONSE_TIMEOUT = 2.0
     t2 = time.monotonic()
     time.sleep(0.05)
     assert bench.log.of(0x281, t2) == []

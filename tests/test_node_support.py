@@ -78,9 +78,9 @@ class Bench:
         self.net.add_node(self.node)
         if sdo2:
             self.sdo2.network = self.net  # canopen leaves it unset (field notes)
-            self.sdo2.RESPONSE_TIMEOUT = 1.0
+            self.sdo2.RESPONSE_TIMEOUT = 2.0
         # canopen's 0.3 s default is short for a shared 2-core machine under load
-        self.node.sdo.RESPONSE_TIMEOUT = 1.0
+        self.node.sdo.RESPONSE_TIMEOUT = 2.0
         self.node_id = node_id
         self.t_start = time.monotonic()
         self.drive = VirtualDrive(

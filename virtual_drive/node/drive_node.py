@@ -237,6 +237,10 @@ class VirtualDrive:
         self._last_fault = None
         self._started = False
         self._load_parameters()
+        # frames reach these only while start() has a Notifier running
+        self.network.subscribe(0x000, self.nmt.on_command)
+        self.network.subscribe(self.sdo.rx_cobid, self.sdo.on_request)
+        self.network.subscribe(0x080, self.pdo.on_sync)
 
     # -- lifecycle ------------------------------------------------------------------------
     def start(self) -> VirtualDrive:
@@ -244,10 +248,6 @@ class VirtualDrive:
         if self._started:
             return self
         self._started = True
-        net = self.network
-        net.subscribe(0x000, self.nmt.on_command)
-        net.subscribe(self.sdo.rx_cobid, self.sdo.on_request)
-        net.subscribe(0x080, self.pdo.on_sync)
         self.network.notifier = can.Notifier(self.bus, self.network.listeners, 0.2)
         self.nmt.boot()
         self.runner.start()
