@@ -65,7 +65,7 @@ def test_heartbeat_loss_quick_stop_and_emcy(bench):
     _, code, reg = emcy_frames(bench.log, since=last)[0]
     assert code == 0x8130 and reg & 0x10
     delay = t_emcy - last
-    assert CONSUMER_MS / 1000 <= delay <= CONSUMER_MS / 1000 + 0.02, delay
+    assert CONSUMER_MS / 1000 <= delay <= CONSUMER_MS / 1000 + 0.04, delay  # + 1 ms tick, jitter
     # 0x6007 = 3: quick stop -> (motor at rest) SWITCH ON DISABLED
     assert bench.wait(lambda: bench.read("statusword") & 0x4F == 0x40, 1.0)
     assert bench.read("error_register") & 0x10
