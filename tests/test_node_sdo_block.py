@@ -10,6 +10,7 @@ from __future__ import annotations
 import binascii
 import queue
 import struct
+import time
 
 import numpy as np
 import pytest
@@ -213,3 +214,12 @@ def test_full_tx_queue_is_retried_not_dropped():
         drive.stop()
         drive_bus.shutdown()
         b.close()
+
+
+def test_abandoned_block_download_times_out(bench):
+    raw = bench.raw
+    raw.send(0xC2, struct.pack("<HB", 0x2010, 2), struct.pack("<I", 4))  # initiate, no CRC
+    assert raw.recv()[0] & 0xE3 == 0xA0
+    # the client vanishes; after the server's 1 s timeout a new client is served normally
+    time.sleep(1.1)
+    assert bench.read("current_controller.L_c") == pytest.approx(L)

@@ -22,6 +22,7 @@ from __future__ import annotations
 import binascii
 import logging
 import struct
+import time
 from collections.abc import Callable
 
 from canopen.sdo import SdoAbortedError, SdoServer
@@ -69,6 +70,9 @@ class BlockSdoServer(SdoServer):
     :param send: ``send(cob_id, data)``; default: the network's ``send_message``.
     """
 
+    #: A block transfer with no frame from the client for this long (s) is dropped.
+    timeout = 1.0
+
     def __init__(
         self,
         rx_cobid: int,
@@ -81,6 +85,7 @@ class BlockSdoServer(SdoServer):
         super().__init__(rx_cobid, tx_cobid, node)
         self._allowed = allowed
         self._send = send
+        self._last_rx = 0.0
         self.download_blksize = download_blksize
         self._index = 0
         self._subindex = 0
@@ -105,6 +110,13 @@ class BlockSdoServer(SdoServer):
         if len(data) < 8:
             data = bytes(data) + bytes(8 - len(data))
         command = data[0]
+        now = time.monotonic()
+        if self._mode is not None and now - self._last_rx > self.timeout:
+            # the client went away mid-transfer: forget it (a stale block download would
+            # otherwise read the next client's requests as segments)
+            logger.info("SDO block transfer 0x%04X:%02X timed out", self._index, self._subindex)
+            self._reset_block()
+        self._last_rx = now
         if self._mode == "down":
             # During a block download every frame is a segment (no command specifier);
             # seqno 0 is invalid, so 0x80 is the client's abort request.
