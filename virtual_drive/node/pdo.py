@@ -119,7 +119,8 @@ class PdoEngine:
         self.tpdos: list[_Tpdo] = []
         self.rpdos: dict[int, _Rpdo] = {}
         self.sent = 0
-        self.dropped_rx = 0
+        self.dropped_rx = 0  # RPDOs shorter than their mapping
+        self.refused_rx = 0  # mapped values the write checks refused
 
     # -- helpers --------------------------------------------------------------------------
     def _u(self, index: int, sub: int) -> int:
@@ -248,9 +249,16 @@ class PdoEngine:
             try:
                 self.node.set_data(index, sub, bytes(data[off : off + size]))
             except SdoAbortedError as exc:
-                logger.warning(
-                    "RPDO%d: 0x%04X:%02X refused (0x%08X)", rpdo.number, index, sub, exc.code
-                )
+                self.refused_rx += 1
+                if self.refused_rx <= 10 or self.refused_rx % 1000 == 0:
+                    logger.warning(
+                        "RPDO%d: 0x%04X:%02X refused (0x%08X), %d refused so far",
+                        rpdo.number,
+                        index,
+                        sub,
+                        exc.code,
+                        self.refused_rx,
+                    )
 
     def tick(self, now: float) -> None:
         """Send the TPDOs whose event timer expired (call every loop period)."""
