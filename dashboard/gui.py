@@ -28,7 +28,7 @@ from dashboard.gui_scene import RotorScene
 from dashboard.models import CONTROLLER_TYPES
 from dashboard.security import allowed_origins, origin_ok
 
-WAKE_DELAY_S = 0.004  #: after a setpoint change: > one 1 ms TPDO period plus bus latency
+WAKE_TIMEOUT_S = 0.030  #: after a setpoint change, wait at most this for the drive's new reference
 SPEED_COLORS = ("#1f77b4", "#ff7f0e")
 CURRENT_COLORS = ("#2ca02c", "#d62728")
 
@@ -60,6 +60,7 @@ class BenchGui:
         self.port = 0
         self._stop = threading.Event()
         self._wake = threading.Event()  # a setpoint changed: plot now, not at the next tick
+        self._wake_target: tuple[str, float] | None = None  # (live signal, commanded value)
         self._threads: list[threading.Thread] = []
         self._tokens: dict[int, str] = {}  # viser client id -> lease token
         self._muted = 0  # >0 while the server itself sets input values (no echo)
@@ -544,6 +545,10 @@ class BenchGui:
             with contextlib.suppress(Exception):
                 self._load_gains()
         elif kind == "setpoint":
+            if "rpm" in data:
+                self._wake_target = ("measurements.speed_ref", float(data["rpm"]))
+            elif "i_p_ref" in data:
+                self._wake_target = ("measurements.i_p_ref", float(data["i_p_ref"]))
             self._wake.set()
             with self._mute():
                 if "rpm" in data:
@@ -558,7 +563,7 @@ class BenchGui:
 
     def _plot_loop(self) -> None:
         """Push the live window to both plots at gui_rate_hz, and at once after a setpoint
-        change (after WAKE_DELAY_S, the time the drive needs to stream the new reference)."""
+        change: as soon as the drive streams the new reference back (at most WAKE_TIMEOUT_S)."""
         period = 1.0 / self.config.gui_rate_hz
         next_t = time.monotonic()
         while not self._stop.is_set():
@@ -566,10 +571,25 @@ class BenchGui:
             self._push_plots()
             if self._wake.wait(max(0.0, next_t - time.monotonic())):
                 self._wake.clear()
-                time.sleep(WAKE_DELAY_S)
+                self._await_reference()
                 next_t = time.monotonic()
             if time.monotonic() - next_t > 1.0:
                 next_t = time.monotonic()
+
+    def _await_reference(self) -> None:
+        """Wait (≤ WAKE_TIMEOUT_S) until the live stream carries the commanded reference."""
+        target = self._wake_target
+        if target is None:
+            return
+        name, value = target
+        deadline = time.monotonic() + WAKE_TIMEOUT_S
+        while time.monotonic() < deadline and not self._stop.is_set():
+            try:
+                if abs(self.bench.drive.live.latest().get(name, np.nan) - value) < 1e-3:
+                    return
+            except Exception:
+                return
+            time.sleep(0.001)
 
     def _push_plots(self) -> None:
         if self.server is None or not self.server.get_clients():
