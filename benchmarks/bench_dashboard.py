@@ -139,6 +139,7 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     from playwright.sync_api import sync_playwright
 
+    load_start = os.getloadavg()[0]
     hub_port, api_port = free_port(), free_port()
     drive = subprocess.Popen(
         [
@@ -262,7 +263,10 @@ def main(argv: list[str] | None = None) -> int:
                     proc.wait()
 
     print()
-    print(f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} at the end")
+    print(
+        f"machine: {os.cpu_count()} cores, load average {load_start:.1f} at the start, "
+        f"{os.getloadavg()[0]:.1f} at the end (other work on the machine skews every figure)"
+    )
     if latencies:
         print(
             f"step-to-plot latency: median {statistics.median(latencies):.0f} ms, "
