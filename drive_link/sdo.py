@@ -22,6 +22,7 @@ from canopen.sdo.client import SdoClient
 from canopen.sdo.exceptions import SdoAbortedError, SdoCommunicationError
 
 from .errors import BusError, DriveTimeout, SdoAbort
+from .sdo_block import block_upload
 
 #: progress(bytes_done, bytes_total_or_None)
 Progress = Callable[[int, "int | None"], None]
@@ -129,30 +130,12 @@ class SdoChannel:
         subindex: int,
         name: str = "",
         progress: Progress | None = None,
-        chunk: int = 7 * 127,
     ) -> bytes:
         """Read a large object with SDO block upload (CiA 301 §7.2.4.3.10), reporting progress."""
 
         def go() -> bytes:
-            parts: list[bytes] = []
-            done = 0
-            with self.client.open(
-                index, subindex, mode="rb", buffering=0, block_transfer=True
-            ) as fp:
-                total = fp.size
-                if progress:
-                    progress(0, total)
-                while True:
-                    piece = fp.read(7)
-                    if not piece:
-                        break
-                    parts.append(piece)
-                    done += len(piece)
-                    if progress and (done % chunk < 7 or (total and done >= total)):
-                        progress(done, total)
-            if total is not None and done != total:
-                # a lost segment the block protocol did not notice: start again
-                raise SdoCommunicationError(f"block upload returned {done} of {total} bytes")
-            return b"".join(parts)
+            return block_upload(
+                self.client, index, subindex, progress, timeout=self.client.RESPONSE_TIMEOUT
+            )
 
         return self._run("block upload", index, subindex, name, go)
