@@ -87,7 +87,8 @@ def test_heavy_loss_upload_ends_with_exact_data_or_clear_error(hub, drive):
     try:
         tr = drive.trace.upload()
     except DriveError as exc:
-        assert "\n" not in str(exc) and "trace_data" in str(exc)
+        msg = str(exc)  # a timeout names the node, an abort names the object
+        assert "\n" not in msg and ("node 2" in msg or "trace" in msg), msg
     else:
         np.testing.assert_array_equal(
             tr.signals["measurements.i_p"], clean.signals["measurements.i_p"]
