@@ -4,12 +4,16 @@ one-line error rule (no tracebacks)."""
 
 from __future__ import annotations
 
+import contextlib
 import csv
+import io
 import json
 import subprocess
 import sys
 
 import pytest
+
+from drive_link import cli
 
 pytestmark = pytest.mark.timeout(120)
 
@@ -31,9 +35,20 @@ def hub_drive(tmp_path_factory):
 
 
 def run(hub, *args: str, timeout: float = 60.0) -> subprocess.CompletedProcess:
+    """`drive-link ARGS` in a child process (the real command line)."""
     cmd = [sys.executable, "-m", "drive_link.cli", args[0], "--host", "127.0.0.1"]
     cmd += ["--port", str(hub.port), *args[1:]]
     return subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+
+
+def run_here(hub, *args: str) -> subprocess.CompletedProcess:
+    """`drive-link ARGS` via cli.main in this process (saves an interpreter start); the drive
+    is still the `virtual-drive run` child behind the hub."""
+    out, err = io.StringIO(), io.StringIO()
+    argv = [args[0], "--host", "127.0.0.1", "--port", str(hub.port), *args[1:]]
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        rc = cli.main(argv)
+    return subprocess.CompletedProcess(argv, rc, out.getvalue(), err.getvalue())
 
 
 def one_line_error(p: subprocess.CompletedProcess) -> str:
@@ -54,27 +69,27 @@ def test_status_scan_and_json(hub_drive):
 
 
 def test_enable_setpoint_disable(hub_drive):
-    p = run(hub_drive, "set-current", "5", "--enable", "--json")
+    p = run_here(hub_drive, "set-current", "5", "--enable", "--json")
     assert p.returncode == 0, p.stderr
     assert json.loads(p.stdout) == {"i_p_ref": 5.0, "state": "OPERATION ENABLED"}
-    p = run(hub_drive, "read", "measurements.i_p", "statusword", "--json")
+    p = run_here(hub_drive, "read", "measurements.i_p", "statusword", "--json")
     vals = json.loads(p.stdout)
     assert (
         vals["measurements.i_p"] == pytest.approx(5.0, abs=0.5)
         and vals["statusword"] & 0x6F == 0x27
     )
-    p = run(hub_drive, "disable")
+    p = run_here(hub_drive, "disable")
     assert p.returncode == 0 and p.stdout.strip() == "SWITCHED ON"
 
 
 def test_bad_input_one_line_and_exit_codes(hub_drive, tmp_path):
-    p = run(hub_drive, "write", "current_controller.L_c", "1e-3")
+    p = run_here(hub_drive, "write", "current_controller.L_c", "1e-3")
     assert p.returncode == 7 and "stability range" in one_line_error(p)
-    p = run(hub_drive, "write", "setpoints.i_p_ref", "abc")
+    p = run_here(hub_drive, "write", "setpoints.i_p_ref", "abc")
     assert p.returncode == 7 and "not a number" in one_line_error(p)
-    p = run(hub_drive, "read", "current_controller.Lc")
+    p = run_here(hub_drive, "read", "current_controller.Lc")
     assert p.returncode == 1 and "no object named" in one_line_error(p)
-    p = run(hub_drive, "status", "--node", "5", "--sdo-timeout", "0.05")
+    p = run_here(hub_drive, "status", "--node", "5", "--sdo-timeout", "0.05")
     assert p.returncode == 4 and "no answer from node 5" in one_line_error(p)
     p = subprocess.run(
         [sys.executable, "-m", "drive_link.cli", "status", "--host", "127.0.0.1", "--port", "1"],
@@ -84,25 +99,27 @@ def test_bad_input_one_line_and_exit_codes(hub_drive, tmp_path):
     )
     assert p.returncode == 3 and "no hub at 127.0.0.1:1" in one_line_error(p)
     # the drive refuses (SDO abort with its meaning) when the client check is bypassed
-    p = run(hub_drive, "write", "modes_of_operation", "1")
+    p = run_here(hub_drive, "write", "modes_of_operation", "1")
     assert p.returncode == 6 and "0x06090030 (invalid value for parameter)" in one_line_error(p)
 
 
 def test_gains_margin_check_and_force(hub_drive):
-    p = run(hub_drive, "set-gains", f"L_c={1.6 * L}")
+    p = run_here(hub_drive, "set-gains", f"L_c={1.6 * L}")
     assert p.returncode == 8
     assert "L_c = 1.6 L > 1.5 L" in one_line_error(p)
-    assert json.loads(run(hub_drive, "gains", "--json").stdout)["L_c"] == pytest.approx(L, rel=1e-6)
-    p = run(hub_drive, "set-gains", f"L_c={1.6 * L}", "--force", "--json")
+    assert json.loads(run_here(hub_drive, "gains", "--json").stdout)["L_c"] == pytest.approx(
+        L, rel=1e-6
+    )
+    p = run_here(hub_drive, "set-gains", f"L_c={1.6 * L}", "--force", "--json")
     assert p.returncode == 0, p.stderr
     out = json.loads(p.stdout)
     assert out["gains"]["L_c"] == pytest.approx(1.6 * L, rel=1e-6) and out["warnings"]
-    p = run(hub_drive, "set-gains", f"L_c={L}", "k_p=0.5", "--json")
+    p = run_here(hub_drive, "set-gains", f"L_c={L}", "k_p=0.5", "--json")
     assert p.returncode == 0 and json.loads(p.stdout)["gains"]["k_p"] == pytest.approx(0.5)
 
 
 def test_trace_and_step_files(hub_drive, tmp_path):
-    p = run(
+    p = run_here(
         hub_drive,
         "trace",
         "--channels",
@@ -126,7 +143,7 @@ def test_trace_and_step_files(hub_drive, tmp_path):
         and len(rows) == 1001
     )
     assert (tmp_path / "t.png").read_bytes()[:4] == b"\x89PNG"
-    p = run(
+    p = run_here(
         hub_drive,
         "step",
         "current",
@@ -145,7 +162,7 @@ def test_trace_and_step_files(hub_drive, tmp_path):
     assert out["kind"] == "current" and out["to"] == 15.0
     assert out["metrics"]["rise_time"] < 1e-4  # deadbeat: two 20 µs samples
     assert "measurements.i_p_predicted [A]" in next(csv.reader((tmp_path / "s.csv").open()))
-    run(hub_drive, "disable")
+    run_here(hub_drive, "disable")
 
 
 def test_progress_bar_on_stderr(hub_drive):
@@ -155,7 +172,7 @@ def test_progress_bar_on_stderr(hub_drive):
 
 
 def test_check_passes_across_processes(hub_drive):
-    p = run(hub_drive, "check", "--json", timeout=90)
+    p = run_here(hub_drive, "check", "--json")
     results = json.loads(p.stdout)
     assert p.returncode == 0, [r for r in results if not r["ok"]]
     assert {r["name"] for r in results} >= {"nmt_bootup", "limits", "trace", "pdo_rates"}
