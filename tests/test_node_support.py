@@ -15,6 +15,7 @@ import time
 
 import can
 import canopen
+from canopen.sdo import SdoCommunicationError
 
 from firmware_protocol import load_od
 from virtual_drive.node import VirtualDrive
@@ -111,10 +112,15 @@ class Bench:
         self.net.send_message(0, bytes([command, self.node_id]))
 
     def wait(self, pred, timeout: float = 2.0, step: float = 0.005) -> bool:
+        """Poll ``pred`` until true; an SDO timeout inside it (a stalled machine) counts as
+        "not yet" until the deadline."""
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
-            if pred():
-                return True
+            try:
+                if pred():
+                    return True
+            except SdoCommunicationError:
+                pass
             time.sleep(step)
         return pred()
 

@@ -724,10 +724,11 @@ class VirtualDrive:
         }
 
     def _reset_fault(self) -> bool:
-        with self.sim_lock:
-            self.sim.reset_fault()  # leaves the bridge off
-            self._sim_mode = "off"
-            self._last_fault = None
+        # Called with the CiA 402 lock held: take no drive lock here (the pacing loop takes
+        # sim_lock, then the 402 lock); the simulator serialises reset_fault with run itself.
+        self.sim.reset_fault()  # leaves the bridge off
+        self._sim_mode = "off"
+        self._last_fault = None
         self.emcy.clear_all()
         return True
 
