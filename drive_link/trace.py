@@ -236,13 +236,12 @@ class Recorder:
         length = int(d.read("trace_config.length"))
         divider = int(d.read("trace_config.divider"))
         trig = int(d.read("trace_config.trigger_position"))
-        if not self._channels or len(self._channels) != count:
-            names = []
-            for i in range(1, count + 1):
-                ref = int(d.read(f"trace_channels.channel_{i}"))
-                obj = d.table.by_index(ref >> 16, (ref >> 8) & 0xFF)
-                names.append(obj.name if obj else f"0x{ref >> 16:04X}:{(ref >> 8) & 0xFF:02X}")
-            self._channels = names
+        names = []  # the drive's own channel list (it may have been configured elsewhere)
+        for i in range(1, count + 1):
+            ref = int(d.read(f"trace_channels.channel_{i}"))
+            obj = d.table.by_index(ref >> 16, (ref >> 8) & 0xFF)
+            names.append(obj.name if obj else f"0x{ref >> 16:04X}:{(ref >> 8) & 0xFF:02X}")
+        self._channels = names
         raw = d.sdo_trace.upload_block(*TRACE_DATA, name="trace_data", progress=progress)
         expected = length * count * 4
         if len(raw) != expected:
