@@ -657,7 +657,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--xi", type=float, default=1.0)
     p.add_argument("--omega-n", type=float, default=2.3)
     _outputs(p)
-    p = add("check", cmd_check, "conformance run (CiA 301/402 + OD) with pass/fail per item")
+    p = add(
+        "check",
+        cmd_check,
+        "conformance run (CiA 301/402 + OD) with pass/fail per item; item store_restore "
+        "rewrites the stored parameters (--skip store_restore on a tuned drive)",
+    )
     p.add_argument("--only", default=None, help="comma-separated items")
     p.add_argument("--skip", default=None, help="comma-separated items (e.g. store_restore)")
     p.add_argument("--rate-tolerance", type=float, default=0.25, help="allowed relative rate error")
