@@ -5,15 +5,17 @@ simulation to ``speed × elapsed wall time`` (50 samples at speed 1, 500 at spee
 in one call (``step(n)``), then runs the periodic services (``periodic(now)``: heartbeats,
 TPDO event timers, consumer timeouts). The simulation never runs per sample in Python.
 
-After a stall (the process was not scheduled) the next chunk catches up the whole backlog in
-one call, so simulated time stays locked to wall-clock time on average; only a backlog longer
-than ``max_lag`` (1 s of simulated time by default) is dropped and counted in
+After a stall (the process was not scheduled) the loop catches up the backlog without sleeping,
+in chunks of at most ``max_chunk`` (0.1 s of simulated time) with the periodic services run
+between them, so simulated time returns to wall-clock time within milliseconds of the stall's
+end; only a backlog longer than ``max_lag`` (30 s) is dropped and counted in
 :attr:`RunnerStats.dropped_s`.
 """
 
 from __future__ import annotations
 
 import logging
+import math
 import threading
 import time
 from collections.abc import Callable
@@ -43,7 +45,8 @@ class Runner:
     :param periodic: called with ``time.monotonic()`` after each chunk.
     :param speed: simulated seconds per wall-clock second.
     :param period: wall-clock loop period (s).
-    :param max_lag: largest backlog of simulated time caught up in one go (s).
+    :param max_lag: largest backlog of simulated time caught up after a stall (s).
+    :param max_chunk: most simulated time run in one call (s).
     """
 
     def __init__(
@@ -52,7 +55,8 @@ class Runner:
         periodic: Callable[[float], None],
         speed: float = 1.0,
         period: float = 1e-3,
-        max_lag: float = 1.0,
+        max_lag: float = 30.0,
+        max_chunk: float = 0.1,
     ) -> None:
         if not speed > 0:
             raise ValueError("speed must be > 0")
@@ -61,6 +65,7 @@ class Runner:
         self.speed = float(speed)
         self.period = float(period)
         self.max_lag = float(max_lag)
+        self.max_chunk = float(max_chunk)
         self.stats = RunnerStats()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -95,6 +100,8 @@ class Runner:
         t0 = time.monotonic()
         done = 0  # samples run since t0 (plus dropped ones)
         max_n = max(1, round(self.max_lag / TS))
+        # at least 4 loop periods' worth, so a high --speed never outruns the chunk limit
+        chunk_n = max(round(self.max_chunk / TS), math.ceil(4 * self.period * self.speed / TS))
         k = 0
         while not self._stop.is_set():
             now = time.monotonic()
@@ -108,6 +115,7 @@ class Runner:
                 logger.warning(
                     "pacing loop behind: %.1f ms of simulated time dropped", skipped * TS * 1e3
                 )
+            n = min(n, chunk_n)
             if n > 0:
                 self._step(n)
                 done += n
