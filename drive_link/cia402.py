@@ -68,7 +68,8 @@ def mode_name(value: int) -> str:
 class StateMachine:
     """Drive the 402 state machine through ``read_statusword()`` / ``write_controlword(cw)``.
 
-    ``poll_s`` is the statusword polling period in s.
+    ``poll_s`` is the statusword polling period in s; ``settle_s`` how long a fault reset
+    must hold (s) before it counts as done.
     """
 
     def __init__(
@@ -76,10 +77,12 @@ class StateMachine:
         read_statusword: Callable[[], int],
         write_controlword: Callable[[int], None],
         poll_s: float = 0.005,
+        settle_s: float = 0.1,
     ):
         self.read_statusword = read_statusword
         self.write_controlword = write_controlword
         self.poll_s = poll_s
+        self.settle_s = settle_s
 
     @property
     def state(self) -> str:
@@ -177,7 +180,12 @@ class StateMachine:
         self.write_controlword(CW_DISABLE_VOLTAGE)
         self.write_controlword(CW_FAULT_RESET)
         try:
-            return self._wait((SWITCH_ON_DISABLED,), timeout, "fault reset", fail_on_fault=False)
+            self._wait((SWITCH_ON_DISABLED,), timeout, "fault reset", fail_on_fault=False)
+            time.sleep(self.settle_s)  # a fault whose cause persists comes straight back
+            state = self.state
+            if state in (FAULT, FAULT_REACTION_ACTIVE):
+                raise DriveTimeout(state)
+            return state
         except DriveTimeout:
             raise StateError(
                 f"fault reset refused: drive still in {self.state} (fault condition persists?)"

@@ -13,6 +13,8 @@ from typing import Any
 
 import can
 
+from firmware_protocol.constraints import CONSTRAINTS
+
 from . import cia402, connection
 from .emcy import Emcy, EmcyListener
 from .errors import DriveError, DriveTimeout, InvalidValue, NodeNotFound, StateError
@@ -46,8 +48,6 @@ _GAIN_OBJECTS: dict[str, tuple[int, str, str]] = {
     "speed_k_i": (2, "speed_controller.k_i", "gain_set.speed_k_i"),
     "speed_current_limit": (2, "speed_controller.current_limit", "gain_set.speed_current_limit"),
 }
-
-_L_C_NAMES = ("current_controller.L_c", "gain_set.L_c")
 
 
 @dataclass(frozen=True)
@@ -275,17 +275,22 @@ class Drive:
         if not obj.writable:
             raise InvalidValue(f"{name} is read-only")
         data = obj.encode(value)
-        if name in _L_C_NAMES:
-            self._check_L_c(float(obj.check(value)))
+        v = obj.check(value)
+        if isinstance(v, int | float):
+            self._check_rules({name: v})
         self.sdo.download(obj.index, obj.subindex, data, name)
 
-    def _check_L_c(self, L_c: float) -> None:
-        L = float(self.read("motor.L"))
-        if not 0.0 < L_c < 2.0 * L:
-            raise InvalidValue(
-                f"L_c = {L_c:.4g} H outside the deadbeat stability range "
-                f"(0, 2L) = (0, {2 * L:.4g}) H"
-            )
+    def _check_rules(self, values: dict[str, float | int]) -> None:
+        """Client-side check of the OD's cross-object rules (firmware_protocol.CONSTRAINTS,
+        e.g. L_c < 2 motor.L) triggered by ``values``; other operands are read from the drive."""
+        for c in CONSTRAINTS:
+            if not any(n in values for n in c.triggers):
+                continue
+            operands = {n: values[n] if n in values else self.read(n) for n in c.names}
+            if c.holds(operands):
+                continue
+            shown = ", ".join(f"{n} = {operands[n]:.6g}" for n in c.names)
+            raise InvalidValue(f"refused before sending: {c} does not hold ({shown}): {c.reason}")
 
     # ------------------------------------------------------------------ NMT / heartbeat
     @property
@@ -404,8 +409,7 @@ class Drive:
             return self.read_gains()
         for k, v in changes.items():
             self.table[_GAIN_OBJECTS[k][2]].check(v)
-        if "L_c" in changes:
-            self._check_L_c(float(changes["L_c"]))
+        self._check_rules({_GAIN_OBJECTS[k][2]: v for k, v in changes.items()})
         sets = 0
         for k in changes:
             sets |= _GAIN_OBJECTS[k][0]

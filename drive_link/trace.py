@@ -184,6 +184,10 @@ class Recorder:
         if length is None:
             length = self.capacity // len(names)
         d.write("trace_config.command", 0)
+        # shrink first so that every intermediate configuration is valid
+        # (pre_trigger < length, length × channel_count ≤ capacity)
+        d.write("trace_config.pre_trigger", 0)
+        d.write("trace_config.length", 1)
         d.write("trace_config.channel_count", len(names))
         d.write("trace_config.divider", int(divider))
         d.write("trace_config.length", int(length))

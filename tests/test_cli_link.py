@@ -84,7 +84,7 @@ def test_enable_setpoint_disable(hub_drive):
 
 def test_bad_input_one_line_and_exit_codes(hub_drive, tmp_path):
     p = run_here(hub_drive, "write", "current_controller.L_c", "1e-3")
-    assert p.returncode == 7 and "stability range" in one_line_error(p)
+    assert p.returncode == 7 and "deadbeat loop stable for L_c < 2 L" in one_line_error(p)
     p = run_here(hub_drive, "write", "setpoints.i_p_ref", "abc")
     assert p.returncode == 7 and "not a number" in one_line_error(p)
     p = run_here(hub_drive, "read", "current_controller.Lc")

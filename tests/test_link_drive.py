@@ -121,7 +121,7 @@ def test_fault_emcy_history_and_reset(drive):
 
 def test_limits_client_side_and_drive_side(drive):
     L_c0 = drive.read("current_controller.L_c")
-    with pytest.raises(InvalidValue, match="stability range"):
+    with pytest.raises(InvalidValue, match=r"current_controller.L_c < 2 \* motor.L does not hold"):
         drive.write("current_controller.L_c", 2.5 * L_MOTOR)
     with pytest.raises(InvalidValue, match="above the limit"):
         drive.set_current(250.0)
