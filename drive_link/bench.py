@@ -101,7 +101,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--port", type=int)
     ap.add_argument("--node", type=int, default=1)
     ap.add_argument("--reads", type=int, default=300)
+    ap.add_argument(
+        "--drop-rates",
+        default="",
+        help="own hub only: frame-loss rates for a 32 KB upload test, e.g. 0.01,0.05",
+    )
+    ap.add_argument("--uploads", type=int, default=10, help="uploads per drop rate")
     args = ap.parse_args(argv)
+    hub = None
     with contextlib.ExitStack() as stack:
         if args.interface is None and args.port is None:
             from virtual_drive.hub import Hub
@@ -124,7 +131,36 @@ def main(argv: list[str] | None = None) -> int:
         )
         stack.callback(d.close)
         run(d, args.reads)
+        if hub is not None and args.drop_rates:
+            lossy_uploads(d, hub, [float(x) for x in args.drop_rates.split(",")], args.uploads)
     return 0
+
+
+def lossy_uploads(d: Drive, hub, rates: list[float], n: int) -> None:
+    """Upload the same 32 KB trace ``n`` times per hub drop rate; print exact/wrong/failed."""
+    from .errors import DriveError
+
+    hub.set_faults(drop_rate=0.0)
+    d.trace.configure(["i_p", "speed"], divider=1, length=4000, trigger="immediate")
+    d.trace.arm()
+    d.trace.wait(10.0)
+    ref = d.sdo_trace.upload_block(0x2102, 0)
+    for rate in rates:
+        hub.set_faults(drop_rate=rate)
+        ok = wrong = failed = 0
+        t0 = time.perf_counter()
+        for _ in range(n):
+            try:
+                ok_now = d.sdo_trace.upload_block(0x2102, 0) == ref
+                ok += ok_now
+                wrong += not ok_now
+            except DriveError:
+                failed += 1
+        dt = (time.perf_counter() - t0) / n
+        print(
+            f"  drop {rate:.3f}: {ok}/{n} exact, {wrong} wrong, {failed} failed, {dt:.2f} s/upload"
+        )
+    hub.set_faults(drop_rate=0.0)
 
 
 if __name__ == "__main__":
