@@ -275,3 +275,39 @@ def test_bus_from_python_can_environment(hub):
         capture_output=True, text=True, timeout=30, env=env,
     )  # fmt: skip
     assert r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+
+
+def test_drive_exits_when_the_hub_goes_away():
+    """A lost bus ends the process with one line (no orphan spinning on a dead socket)."""
+    hub = HubProcess()
+    proc = spawn_virtual_drive(port=hub.port)
+    try:
+        hub.stop()
+        assert proc.proc.wait(10) == 1
+        assert "CAN bus lost" in proc.stderr_tail
+    finally:
+        if proc.proc.poll() is None:
+            proc.kill()
+
+
+def test_drive_exits_when_its_parent_is_killed(hub):
+    code = (
+        "import sys, time\n"
+        "from virtual_drive.node import spawn_virtual_drive\n"
+        f"p = spawn_virtual_drive(port={hub.port})\n"
+        "print(p.pid, flush=True)\n"
+        "time.sleep(60)\n"
+    )
+    parent = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True)
+    child = int(parent.stdout.readline())
+    os.kill(parent.pid, signal.SIGKILL)
+    parent.wait()
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline:
+        try:
+            os.kill(child, 0)
+        except ProcessLookupError:
+            return
+        time.sleep(0.1)
+    os.kill(child, signal.SIGKILL)
+    pytest.fail("the drive outlived its killed parent")

@@ -13,10 +13,12 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 import signal
 import socket
 import sys
 import threading
+import time
 
 import can
 
@@ -74,6 +76,27 @@ def socketcand_defaults(cfg: dict) -> dict:
             if cfg.get(key) is None:
                 cfg[key] = value
     return cfg
+
+
+def bus_lost(bus: can.BusABC, drive) -> str | None:
+    """Why the bus is gone, or None while it works.
+
+    python-can's socketcand interface does not notice a closed connection (its receive loop
+    then spins on the dead socket), so the socket is peeked for end-of-file; on any bus, sends
+    failing for more than 2 s also count as a lost bus.
+    """
+    sock = getattr(bus, "_SocketCanDaemonBus__socket", None)
+    if sock is not None:
+        try:
+            if sock.recv(1, socket.MSG_PEEK | socket.MSG_DONTWAIT) == b"":
+                return "the socketcand server closed the connection"
+        except BlockingIOError:
+            pass
+        except OSError as exc:
+            return f"socketcand connection failed: {exc}"
+    if drive.tx_errors and time.monotonic() - drive.last_tx_ok > 2.0:
+        return f"no frame could be sent for 2 s ({drive.tx_errors} send errors)"
+    return None
 
 
 def _fail(message: str, code: int = 1) -> int:
@@ -154,9 +177,15 @@ def run_command(args: argparse.Namespace) -> int:
         if hub is not None:
             line += f"; hub: {hub.join_line()}"
         print(line, flush=True)
+        parent = os.environ.get("VIRTUAL_DRIVE_PARENT_PID")
         while not stop.wait(0.2):
+            if parent and parent.isdigit() and os.getppid() != int(parent):
+                return _fail(f"parent process {parent} is gone")
             if drive.runner.error is not None:
                 return _fail(f"simulation loop stopped: {drive.runner.error}")
+            lost = bus_lost(bus, drive)
+            if lost is not None:
+                return _fail(f"CAN bus lost: {lost}")
         logger.info("signal received, shutting down")
         return 0
     finally:

@@ -187,6 +187,7 @@ class VirtualDrive:
         self._write_lock = threading.RLock()
         self._send_lock = threading.Lock()
         self.tx_errors = 0
+        self.last_tx_ok = time.monotonic()  #: time of the last frame the bus accepted
         self.taps: list[Callable[[dict], None]] = []
         self.live: dict[str, float] = {name: 0.0 for name in MEASUREMENTS.values()}
         self.live["hall_sector"] = 1
@@ -287,6 +288,7 @@ class VirtualDrive:
             try:
                 with self._send_lock:
                     self.bus.send(msg)
+                self.last_tx_ok = time.monotonic()
                 return
             except (can.CanError, OSError) as exc:
                 full = getattr(exc, "errno", None) == errno.ENOBUFS or "No buffer space" in str(exc)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import atexit
 import os
 import signal
 import subprocess
@@ -11,6 +12,9 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
+#: Environment variable naming the parent PID; ``virtual-drive run`` exits when it is gone.
+PARENT_ENV = "VIRTUAL_DRIVE_PARENT_PID"
+
 
 class DriveProcess:
     """A running ``virtual-drive run`` child; stop it with :meth:`stop` (SIGTERM) or
@@ -19,6 +23,7 @@ class DriveProcess:
     def __init__(self, proc: subprocess.Popen, ready_line: str) -> None:
         self.proc = proc
         self.ready_line = ready_line
+        atexit.register(self._at_exit)  # never leave an orphan drive behind
         self._stderr: list[str] = []
         self._reader = threading.Thread(target=self._drain, daemon=True)
         self._reader.start()
@@ -28,6 +33,11 @@ class DriveProcess:
         for line in self.proc.stderr:
             self._stderr.append(line)
             del self._stderr[:-200]
+
+    def _at_exit(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait(5)
 
     @property
     def pid(self) -> int:
@@ -97,7 +107,8 @@ def spawn_virtual_drive(
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
-        env={**os.environ, **(env or {})},
+        # the child exits by itself when this process is gone (even after SIGKILL)
+        env={**os.environ, PARENT_ENV: str(os.getpid()), **(env or {})},
     )
     assert proc.stdout is not None
     line_box: list[str] = []
