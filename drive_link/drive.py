@@ -436,12 +436,14 @@ class Drive:
     # ------------------------------------------------------------------ store / restore
     def store(self) -> None:
         """Store all parameters in the drive's non-volatile memory (0x1010:1 = "save")."""
-        self.write("store_parameters.save_all", SAVE_SIGNATURE)
+        with self.sdo.patience(3.0):  # writing non-volatile memory takes time
+            self.write("store_parameters.save_all", SAVE_SIGNATURE)
 
     def restore_defaults(self, reset: bool = False, timeout: float = 3.0) -> None:
         """Restore factory defaults (0x1011:1 = "load"); they apply after the next reset node,
         which ``reset=True`` sends (waiting for the boot-up)."""
-        self.write("restore_default_parameters.restore_all", LOAD_SIGNATURE)
+        with self.sdo.patience(3.0):
+            self.write("restore_default_parameters.restore_all", LOAD_SIGNATURE)
         if reset:
             self.reset(timeout=timeout)
 

@@ -13,8 +13,9 @@ value or the access is never retried.
 
 from __future__ import annotations
 
+import contextlib
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
 import can
 import canopen
@@ -106,6 +107,18 @@ class SdoChannel:
             except RuntimeError as exc:  # canopen: "Not connected to CAN bus"
                 raise BusError(f"CAN bus not usable: {exc}") from None
         raise AssertionError("unreachable")
+
+    @contextlib.contextmanager
+    def patience(self, timeout: float) -> Iterator[None]:
+        """Hold the channel with a response timeout of at least ``timeout`` s (for objects
+        whose write takes the drive long, e.g. store 0x1010 / restore 0x1011)."""
+        with self.lock:
+            old = self.client.RESPONSE_TIMEOUT
+            self.client.RESPONSE_TIMEOUT = max(old, timeout)
+            try:
+                yield
+            finally:
+                self.client.RESPONSE_TIMEOUT = old
 
     def upload(self, index: int, subindex: int, name: str = "") -> bytes:
         """Read an object (expedited or segmented) and return its raw bytes."""
