@@ -19,8 +19,9 @@ from drive_link.bus import bus_settings, open_bus
 from drive_link.connection import acquire, release
 from drive_link.errors import BusError, DriveTimeout, InvalidValue, SdoAbort, UnknownObject
 from drive_link.live import LiveStreams, MappedField, TpdoConfig
-from drive_link.objects import default_table, eds_path
+from drive_link.objects import default_table
 from drive_link.sdo import SdoChannel
+from firmware_protocol import EDS_PATH
 
 pytestmark = pytest.mark.timeout(60)
 
@@ -57,14 +58,20 @@ def test_encode_checks_type_and_limits():
     # REAL32 little-endian per CiA 301 (IEEE 754 single)
     assert t["setpoints.i_p_ref"].encode(20.0) == struct.pack("<f", 20.0)
     assert t["target_velocity"].encode(-500) == (-500).to_bytes(4, "little", signed=True)
-    with pytest.raises(InvalidValue, match="above the limit"):
+    # refusals name the limit and the CiA 301 abort code the drive would answer with
+    with pytest.raises(InvalidValue, match=r"above the limit.*0x06090031"):
         t["setpoints.i_p_ref"].encode(250.0)  # contract: [-200, 200] A
-    with pytest.raises(InvalidValue, match="range"):
+    with pytest.raises(InvalidValue, match=r"below the limit.*0x06090032"):
+        t["setpoints.i_p_ref"].encode(-250.0)
+    with pytest.raises(InvalidValue, match=r"UNSIGNED16 range.*0x06090031"):
         t["controlword"].encode(70000)
-    with pytest.raises(InvalidValue, match="not a finite"):
+    with pytest.raises(InvalidValue, match=r"not a finite.*0x06090030"):
         t["current_controller.k_p"].encode(float("nan"))
-    with pytest.raises(InvalidValue, match="not an integer"):
+    with pytest.raises(InvalidValue, match=r"not integral.*0x06090030"):
         t["controlword"].encode(1.5)
+    with pytest.raises(InvalidValue, match="not a number"):
+        t["controlword"].encode("twelve")
+    assert t["controlword"].encode("0x000F") == (15).to_bytes(2, "little")  # CLI text
     with pytest.raises(UnknownObject, match="no object named"):
         t["current_controller.Lc"]
     assert t["modes_of_operation"].decode(b"\xff") == -1
@@ -119,7 +126,7 @@ def local_node():
     srv_bus = can.Bus(interface="virtual", channel=ch)
     net = canopen.Network(srv_bus)
     net.connect()
-    node = canopen.LocalNode(5, canopen.import_od(str(eds_path()), 5))
+    node = canopen.LocalNode(5, canopen.import_od(str(EDS_PATH), 5))
     net.add_node(node)
     cli_bus = can.Bus(interface="virtual", channel=ch)
     conn = acquire(bus=cli_bus)
