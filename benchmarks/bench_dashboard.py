@@ -131,6 +131,39 @@ def shows_setpoint(messages: list[dict], target: float) -> bool:
     return False
 
 
+def server_side_latency(hub_port: int, steps: int) -> list[float]:
+    """In this process: setpoint command → the speed plot's data ends at the new setpoint (ms).
+
+    The same app as the command (FastAPI lifespan + viser GUI) on the running hub; a viewer is
+    simulated so that plots are pushed. Separates the server's share from the browser's.
+    """
+    from fastapi.testclient import TestClient
+
+    from dashboard.app import create_app
+    from dashboard.config import BenchConfig
+
+    out = []
+    cfg = BenchConfig(join_hub=hub_port, gui_port=0, api_port=free_port(), scene_3d=False)
+    with TestClient(create_app(cfg)) as client:
+        gui, bench = client.app.state.gui, client.app.state.bench
+        gui.server.get_clients = lambda: {0: None}  # one (simulated) viewer
+        bench.drive.enable(timeout=2.0)
+        time.sleep(1.0)
+        for k in range(steps):
+            target = 500.0 if k % 2 == 0 else 0.0
+            t0 = time.monotonic()
+            bench.set_speed(target)
+            while time.monotonic() - t0 < 1.0:
+                d = gui.speed_plot.data
+                if len(d[2]) and abs(d[2][-1] - target) < 0.5:
+                    break
+                time.sleep(0.0005)
+            out.append((time.monotonic() - t0) * 1e3)
+            time.sleep(0.5)
+        bench.drive.disable()
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=6, help="speed steps for the latency figure")
@@ -252,6 +285,7 @@ def main(argv: list[str] | None = None) -> int:
                 )
                 page.wait_for_timeout(1000)
             browser.close()
+        server_ms = server_side_latency(hub_port, args.steps)
     finally:
         for proc in (dash, drive):
             if proc is not None:
@@ -272,6 +306,10 @@ def main(argv: list[str] | None = None) -> int:
             f"step-to-plot latency: median {statistics.median(latencies):.0f} ms, "
             f"max {max(latencies):.0f} ms over {len(latencies)} steps (goal <= 100 ms)"
         )
+    print(
+        f"  of which server side (command -> plot data sent): median "
+        f"{statistics.median(server_ms):.1f} ms, max {max(server_ms):.1f} ms"
+    )
     print(f"speed plot refresh in the browser: {refresh_hz:.1f} Hz (goal >= 20 Hz)")
     print(
         f"dashboard server CPU: {stream_cpu:.1f} % of one core with one browser streaming "

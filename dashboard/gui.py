@@ -567,38 +567,37 @@ class BenchGui:
         period = 1.0 / self.config.gui_rate_hz
         next_t = time.monotonic()
         while not self._stop.is_set():
-            next_t += period
-            self._push_plots()
             if self._wake.wait(max(0.0, next_t - time.monotonic())):
                 self._wake.clear()
-                self._await_reference()
-                next_t = time.monotonic()
+                self._push_after_setpoint()
+                next_t = time.monotonic() + period
+                continue
+            self._push_plots()
+            next_t += period
             if time.monotonic() - next_t > 1.0:
                 next_t = time.monotonic()
 
-    def _await_reference(self) -> None:
-        """Wait (≤ WAKE_TIMEOUT_S) until the live stream carries the commanded reference."""
+    def _push_after_setpoint(self) -> None:
+        """Push as soon as the plotted window ends with the commanded reference (the drive
+        streams it back within a few ms), at most WAKE_TIMEOUT_S after the setpoint change."""
         target = self._wake_target
-        if target is None:
-            return
-        name, value = target
         deadline = time.monotonic() + WAKE_TIMEOUT_S
-        while time.monotonic() < deadline and not self._stop.is_set():
-            try:
-                if abs(self.bench.drive.live.latest().get(name, np.nan) - value) < 1e-3:
-                    return
-            except Exception:
+        while target is not None and time.monotonic() < deadline and not self._stop.is_set():
+            if self._push_plots(require=target):
                 return
             time.sleep(0.001)
+        self._push_plots()
 
-    def _push_plots(self) -> None:
+    def _push_plots(self, require: tuple[str, float] | None = None) -> bool:
+        """Send the live window to both plots; with ``require`` = (signal, value) only if the
+        window's last sample of that signal equals value. Returns whether it sent."""
         if self.server is None or not self.server.get_clients():
-            return  # nobody watches: no work
+            return True  # nobody watches: no work
         names = list(LIVE_SIGNALS)
         try:
             w = self.bench.drive.live.window(self.config.live_window_s, names)
         except Exception:
-            return
+            return True
         t = np.asarray(w["t"], dtype=np.float64)
         cols = [np.asarray(w[n], dtype=np.float64) for n in names]
         ok = np.isfinite(t)
@@ -606,7 +605,11 @@ class BenchGui:
             ok &= np.isfinite(c)
         t, cols = t[ok], [c[ok] for c in cols]
         if len(t) < 2:
-            return
+            return True
+        if require is not None:
+            col = cols[names.index(require[0])]
+            if abs(col[-1] - require[1]) > 1e-3:
+                return False
         x = t - t[-1]
         self.speed_plot.data = (x, cols[0], cols[1])
         self.current_plot.data = (x, cols[2], cols[3])
@@ -614,6 +617,7 @@ class BenchGui:
         self.last_live = w
         if self.scene is not None:
             self.scene.update(float(cols[0][-1]), w)
+        return True
 
     def _status_loop(self) -> None:
         loaded = False
