@@ -98,8 +98,13 @@ def test_bad_input_one_line_and_exit_codes(hub_drive, tmp_path):
         timeout=30,
     )
     assert p.returncode == 3 and "no hub at 127.0.0.1:1" in one_line_error(p)
-    # the drive refuses (SDO abort with its meaning) when the client check is bypassed
+    # a value outside the EDS enumeration is refused before sending, naming the abort code
+    # the drive would answer with (CiA 301 0x06090030)
     p = run_here(hub_drive, "write", "modes_of_operation", "1")
+    assert p.returncode == 7 and "SDO abort 0x06090030" in one_line_error(p)
+    # the drive refuses (SDO abort with its meaning) what the client cannot check: CiA 301
+    # §7.5.2.7 allows only 0 to be written to 0x1003:0
+    p = run_here(hub_drive, "write", "pre_defined_error_field.number_of_errors", "1")
     assert p.returncode == 6 and "0x06090030 (invalid value for parameter)" in one_line_error(p)
 
 
