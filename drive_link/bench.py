@@ -18,6 +18,7 @@ import tempfile
 import threading
 import time
 
+from .cli_connect import connect_from_args
 from .drive import Drive
 from .scan import scan
 
@@ -120,15 +121,7 @@ def main(argv: list[str] | None = None) -> int:
             stack.callback(proc.stop)
             args.host, args.port = "127.0.0.1", hub.port
             print(f"virtual drive (child process) on loopback hub 127.0.0.1:{hub.port}, 1 Mbit/s")
-        d = Drive.connect(
-            interface=args.interface,
-            channel=args.channel,
-            bitrate=args.bitrate,
-            host=args.host,
-            port=args.port,
-            node_id=args.node,
-            heartbeat_ms=None,
-        )
+        d = connect_from_args(args)
         stack.callback(d.close)
         run(d, args.reads)
         if hub is not None and args.drop_rates:

@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 from . import connection
+from .cli_connect import connect_from_args
 from .drive import GAIN_FIELDS, Drive
 from .errors import (
     BusError,
@@ -90,19 +91,6 @@ def _progress_bar(args: argparse.Namespace) -> Callable[[int, int | None], None]
         sys.stderr.flush()
 
     return bar
-
-
-def _connect(args: argparse.Namespace) -> Drive:
-    return Drive.connect(
-        interface=args.interface,
-        channel=args.channel,
-        bitrate=args.bitrate,
-        host=args.host,
-        port=args.port,
-        node_id=args.node,
-        heartbeat_ms=None,
-        sdo_timeout=args.sdo_timeout,
-    )
 
 
 def _parse_value(text: str) -> float | int | str:
@@ -180,24 +168,37 @@ def cmd_mode(args: argparse.Namespace, d: Drive) -> int:
     return 0
 
 
-def cmd_set_speed(args: argparse.Namespace, d: Drive) -> int:
-    d.set_mode("speed")
-    d.set_speed(args.rpm)
+def _set_setpoint(
+    args: argparse.Namespace,
+    d: Drive,
+    mode: str,
+    write: Callable[[float], None],
+    value: float,
+    name: str,
+    key: str,
+    shown: str,
+) -> int:
+    """Select ``mode``, ``write(value)``, enable if ``--enable``, print the read-back ``name``
+    as ``key`` (``shown`` formats it, e.g. ``"{:g} A"``) with the drive state."""
+    d.set_mode(mode)
+    write(value)
     if args.enable:
         d.enable(timeout=args.timeout)
-    out = {"target_velocity": d.read("target_velocity"), "state": d.state}
-    _emit(args, out, f"target_velocity {out['target_velocity']} rpm ({out['state']})")
+    out = {key: d.read(name), "state": d.state}
+    _emit(args, out, f"{key} {shown.format(out[key])} ({out['state']})")
     return 0
+
+
+def cmd_set_speed(args: argparse.Namespace, d: Drive) -> int:
+    return _set_setpoint(
+        args, d, "speed", d.set_speed, args.rpm, "target_velocity", "target_velocity", "{} rpm"
+    )
 
 
 def cmd_set_current(args: argparse.Namespace, d: Drive) -> int:
-    d.set_mode("current")
-    d.set_current(args.amps)
-    if args.enable:
-        d.enable(timeout=args.timeout)
-    out = {"i_p_ref": d.read("setpoints.i_p_ref"), "state": d.state}
-    _emit(args, out, f"i_p_ref {out['i_p_ref']:g} A ({out['state']})")
-    return 0
+    return _set_setpoint(
+        args, d, "current", d.set_current, args.amps, "setpoints.i_p_ref", "i_p_ref", "{:g} A"
+    )
 
 
 def cmd_read(args: argparse.Namespace, d: Drive) -> int:
@@ -431,24 +432,23 @@ def cmd_identify(args: argparse.Namespace, d: Drive) -> int:
     import time
 
     from . import design, identify
-    from .steps import _record_step
-    from .trace import TS, Trigger
+    from .steps import record_setpoint_step
+    from .trace import TS
 
     d.set_mode("current")
     d.set_current(args.i_from)
     if d.state != "OPERATION ENABLED":
         d.enable(timeout=args.timeout)
     time.sleep(args.settle)
-    d.trace.configure(
-        ["i_p", "speed"], args.divider, args.length, args.pre_trigger, Trigger("setpoint_step")
-    )
     try:
-        tr = _record_step(
+        tr = record_setpoint_step(
             d,
+            ["i_p", "speed"],
             lambda: d.set_current(args.i_from),
             lambda: d.set_current(args.i_to),
-            args.pre_trigger * args.divider * TS,
-            args.length * args.divider * TS,
+            args.divider,
+            args.length,
+            args.pre_trigger,
             None,
         )
     finally:
@@ -699,7 +699,7 @@ def main(argv: list[str] | None = None) -> int:
     d: Drive | None = None
     try:
         if getattr(args, "needs_drive", False):
-            d = _connect(args)
+            d = connect_from_args(args)
             return args.func(args, d)
         return args.func(args)
     except Refused as exc:

@@ -912,7 +912,17 @@ def analyse_current_loop(
     """
     L_c = L if L_c is None else L_c
     R_c = R if R_c is None else R_c
-    loop = current_loop_tf(controller, R=R, L=L, L_c=L_c, R_c=R_c, k_p=k_p, k_i=k_i, fs=fs)
+    # plant, controller parameters and sampling rate shared by the loop and its step predictions
+    setup: dict[str, Any] = {
+        "R": R,
+        "L": L,
+        "L_c": L_c,
+        "R_c": R_c,
+        "k_p": k_p,
+        "k_i": k_i,
+        "fs": fs,
+    }
+    loop = current_loop_tf(controller, **setup)
     cl = feedback(loop)
     poles = cl.poles()
     stable = is_stable(cl)
@@ -959,30 +969,10 @@ def analyse_current_loop(
             n_samples = 50 if r_max < 1e-3 else math.ceil(math.log(1e-4) / math.log(r_max))
             n_samples = min(max(n_samples, 50), 200_000)
         r = predicted_step(
-            controller,
-            n_samples=n_samples,
-            i_start=i_start,
-            i_final=i_final,
-            R=R,
-            L=L,
-            L_c=L_c,
-            R_c=R_c,
-            k_p=k_p,
-            k_i=k_i,
-            fs=fs,
+            controller, n_samples=n_samples, i_start=i_start, i_final=i_final, **setup
         )
         y0 = predicted_step(
-            controller,
-            n_samples=1,
-            i_start=i_start,
-            i_final=i_start,
-            R=R,
-            L=L,
-            L_c=L_c,
-            R_c=R_c,
-            k_p=k_p,
-            k_i=k_i,
-            fs=fs,
+            controller, n_samples=1, i_start=i_start, i_final=i_start, **setup
         ).i_p_final
         sm = _metrics.step_metrics(r.t, r.i_p, reference=i_final, y_initial=y0, y_final=r.i_p_final)
         step = {

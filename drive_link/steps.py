@@ -103,37 +103,47 @@ def _require_enabled(drive: Drive, enable: bool) -> None:
     drive.enable()
 
 
-def _record_step(
+def record_setpoint_step(
     drive: Drive,
+    channels: list[str],
     set_before: Callable[[], None],
     set_after: Callable[[], None],
-    pre_s: float,
-    record_s: float,
+    divider: int,
+    length: int,
+    pre_trigger: int,
     timeout: float | None,
     attempts: int = 3,
 ) -> Trace:
-    """Arm on "setpoint step", wait for the pre-trigger part to fill, step, wait, upload.
+    """Record ``channels`` around a setpoint step made by ``set_after``.
 
-    The recorder ignores a step while its pre-trigger part is still filling (state "armed"
-    either way), so the wait is ``3 × pre_s + 20 ms``; if the step was still too early the
-    setpoint goes back and the step is repeated (``attempts`` times).
+    Configures the recorder (``divider`` loop samples per trace sample, ``length`` samples,
+    ``pre_trigger`` before the step) on "setpoint step", arms, waits for the pre-trigger part
+    to fill, steps, waits (``timeout`` s, default 1 s + 3 × the recording) and uploads, all
+    under the trace lock. The recorder ignores a step while its pre-trigger part is still
+    filling (state "armed" either way), so the wait is ``3 × pre-trigger time + 20 ms``; if
+    the step was still too early ``set_before`` puts the setpoint back and the step is
+    repeated (``attempts`` times).
     """
+    pre_s = pre_trigger * divider * TS
+    record_s = length * divider * TS
     if timeout is None:
         timeout = 1.0 + 3.0 * record_s
     wait_pre = 3.0 * pre_s + 0.02
-    for attempt in range(attempts):
-        drive.trace.arm()
-        time.sleep(wait_pre * (attempt + 1))
-        set_after()
-        try:
-            drive.trace.wait(timeout)
-            return drive.trace.upload()
-        except DriveTimeout:
-            if attempt + 1 == attempts or drive.trace.state != "armed":
-                raise
-            drive.trace.stop()
-            set_before()
-            time.sleep(wait_pre)
+    with drive.trace.lock:
+        drive.trace.configure(channels, divider, length, pre_trigger, Trigger("setpoint_step"))
+        for attempt in range(attempts):
+            drive.trace.arm()
+            time.sleep(wait_pre * (attempt + 1))
+            set_after()
+            try:
+                drive.trace.wait(timeout)
+                return drive.trace.upload()
+            except DriveTimeout:
+                if attempt + 1 == attempts or drive.trace.state != "armed":
+                    raise
+                drive.trace.stop()
+                set_before()
+                time.sleep(wait_pre)
     raise AssertionError("unreachable")
 
 
@@ -164,22 +174,16 @@ def current_step(
     drive.set_current(i_from)
     _require_enabled(drive, enable)
     time.sleep(settle_s)
-    with drive.trace.lock:
-        drive.trace.configure(
-            ["i_p", "i_p_ref", "v_L", "e_L", *extra],
-            divider,
-            length,
-            pre_trigger,
-            Trigger("setpoint_step"),
-        )
-        tr = _record_step(
-            drive,
-            lambda: drive.set_current(i_from),
-            lambda: drive.set_current(i_to),
-            pre_trigger * divider * TS,
-            length * divider * TS,
-            timeout,
-        )
+    tr = record_setpoint_step(
+        drive,
+        ["i_p", "i_p_ref", "v_L", "e_L", *extra],
+        lambda: drive.set_current(i_from),
+        lambda: drive.set_current(i_to),
+        divider,
+        length,
+        pre_trigger,
+        timeout,
+    )
     g = drive.read_gains()
     R = float(drive.read("motor.R"))
     L = float(drive.read("motor.L"))
@@ -254,22 +258,16 @@ def speed_step(
     drive.set_speed(w0)
     _require_enabled(drive, enable)
     time.sleep(settle_s)
-    with drive.trace.lock:
-        drive.trace.configure(
-            ["speed", "speed_ref", "i_p_ref", "i_p"],
-            divider,
-            length,
-            pre_trigger,
-            Trigger("setpoint_step"),
-        )
-        tr = _record_step(
-            drive,
-            lambda: drive.set_speed(w0),
-            lambda: drive.set_speed(w1),
-            pre_trigger * divider * TS,
-            length * divider * TS,
-            timeout,
-        )
+    tr = record_setpoint_step(
+        drive,
+        ["speed", "speed_ref", "i_p_ref", "i_p"],
+        lambda: drive.set_speed(w0),
+        lambda: drive.set_speed(w1),
+        divider,
+        length,
+        pre_trigger,
+        timeout,
+    )
     g = drive.read_gains()
     a, b = model or SPEED_MODEL_PAPER
     k0 = tr.trigger_index
