@@ -24,9 +24,8 @@ Run: python benchmarks/bench_dashboard.py [--steps 6] [--window 10] [--3d]
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
-import re
-import socket
 import statistics
 import subprocess
 import sys
@@ -36,16 +35,7 @@ import msgspec
 import numpy as np
 import zstandard
 
-CHROMIUM = "/usr/bin/chromium"
-FLAGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-    "--no-first-run",
-]
+from dashboard.browser import free_port, launch, run_dashboard, stop_process
 
 INIT_JS = """
 (() => {
@@ -66,12 +56,6 @@ INIT_JS = """
 SPEED_CANVAS_DRAWS = """
 () => { const c = document.querySelector('.uplot canvas'); return (window.__draws.get(c) || []); }
 """
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def cpu_seconds(pid: int) -> float:
@@ -173,7 +157,7 @@ def main(argv: list[str] | None = None) -> int:
     from playwright.sync_api import sync_playwright
 
     load_start = os.getloadavg()[0]
-    hub_port, api_port = free_port(), free_port()
+    hub_port = free_port()
     drive = subprocess.Popen(
         [
             sys.executable,
@@ -190,28 +174,13 @@ def main(argv: list[str] | None = None) -> int:
         stderr=subprocess.DEVNULL,
         text=True,
     )
-    dash = None
+    stack = contextlib.ExitStack()
     try:
         ready = drive.stdout.readline()
         assert "ready" in ready, f"virtual drive did not start: {ready!r}"
-        cmd = [
-            sys.executable,
-            "-m",
-            "dashboard.cli",
-            "--join-hub",
-            str(hub_port),
-            "--port",
-            str(api_port),
-            "--gui-port",
-            "0",
-        ]
-        if not args.scene:
-            cmd.append("--no-3d")
-        dash = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
-        line = dash.stdout.readline()
-        m = re.match(r"open (http://\S+)", line)
-        assert m, f"dashboard did not start: {line!r}"
-        url = m.group(1)
+        args_dash = ["--join-hub", str(hub_port)] + ([] if args.scene else ["--no-3d"])
+        running = stack.enter_context(run_dashboard(args_dash))
+        dash, url = running.proc, running.gui_url
         time.sleep(2.0)
         c0, w0 = cpu_seconds(dash.pid), time.monotonic()
         time.sleep(args.window / 2)
@@ -219,7 +188,7 @@ def main(argv: list[str] | None = None) -> int:
 
         frames: list[tuple[int, bytes]] = []
         with sync_playwright() as p:
-            browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True)
+            browser = launch(p)
             page = browser.new_page(viewport={"width": 1400, "height": 1000})
             page.add_init_script(INIT_JS)
 
@@ -287,14 +256,8 @@ def main(argv: list[str] | None = None) -> int:
             browser.close()
         server_ms = server_side_latency(hub_port, args.steps)
     finally:
-        for proc in (dash, drive):
-            if proc is not None:
-                proc.terminate()
-                try:
-                    proc.wait(timeout=10)
-                except subprocess.TimeoutExpired:
-                    proc.kill()
-                    proc.wait()
+        stack.close()  # the dashboard first, then the drive and its hub
+        stop_process(drive)
 
     print()
     print(

@@ -20,4 +20,7 @@ Modules (one job each):
 - :mod:`dashboard.export` — captures as CSV and PNG.
 - :mod:`dashboard.gui` / :mod:`dashboard.gui_scene` — the viser GUI and the 3D rotor.
 - :mod:`dashboard.virtual` — opens the bench (real bus, running hub, or hub + virtual drive).
+- :mod:`dashboard.browser` — headless /usr/bin/chromium and a child ``drive-dashboard`` (shared
+  by the e2e test, the screenshot command and the benchmark).
+- :mod:`dashboard.screenshot` — ``python -m dashboard.screenshot docs/bench.png`` (README picture).
 """

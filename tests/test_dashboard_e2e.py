@@ -3,8 +3,8 @@
 Starts ``drive-dashboard --virtual`` as a user would, opens the printed URL, enables the drive,
 presses the speed step button, sees the speed plot move and the speed reach the setpoint, then
 changes L_c and sees the drive's read-back and the margins change; the margins shown are checked
-against python-control (test-only oracle). Screenshots: artifacts/dashboard_e2e.png and
-docs/bench.png (the README's picture).
+against python-control (test-only oracle). Screenshot: artifacts/dashboard_e2e.png only (the
+README's picture is made on purpose with ``python -m dashboard.screenshot docs/bench.png``).
 """
 
 from __future__ import annotations
@@ -12,10 +12,6 @@ from __future__ import annotations
 import math
 import os
 import re
-import shutil
-import socket
-import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -23,16 +19,8 @@ import control as ct
 import httpx
 import pytest
 
-CHROMIUM = "/usr/bin/chromium"
-FLAGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-    "--no-first-run",
-]
+from dashboard.browser import CHROMIUM, click, dismiss_notifications, launch, run_dashboard
+
 ROOT = Path(__file__).resolve().parents[1]
 SPEED_FACTOR = 1.0
 TS, R, L = 20e-6, 6.2e-3, 14.8e-6
@@ -43,51 +31,12 @@ pytestmark = [
 ]
 
 
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 @pytest.fixture(scope="module")
 def bench():
     """``drive-dashboard --virtual`` in a child process; yields (gui_url, api_url)."""
-    api_port = free_port()
-    proc = subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "dashboard.cli",
-            "--virtual",
-            "--speed-factor",
-            str(SPEED_FACTOR),
-            "--port",
-            str(api_port),
-            "--gui-port",
-            "0",
-            "--no-3d",
-        ],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.DEVNULL,
-        text=True,
-    )
-    try:
-        line = ""
-        deadline = time.monotonic() + 60
-        while time.monotonic() < deadline and not line.startswith("open "):
-            line = proc.stdout.readline()
-            if not line and proc.poll() is not None:
-                raise RuntimeError(f"drive-dashboard exited with {proc.returncode}")
-        m = re.match(r"open (http://127\.0\.0\.1:\d+/)", line)
-        assert m, f"no URL printed: {line!r}"
-        yield m.group(1), f"http://127.0.0.1:{api_port}"
-    finally:
-        proc.terminate()
-        try:
-            proc.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
+    args = ["--virtual", "--speed-factor", str(SPEED_FACTOR), "--no-3d"]
+    with run_dashboard(args) as urls:
+        yield urls
 
 
 @pytest.fixture(scope="module")
@@ -95,7 +44,7 @@ def page(bench):
     from playwright.sync_api import sync_playwright
 
     with sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True)
+        browser = launch(p)
         pg = browser.new_page(viewport={"width": 1400, "height": 1000})
         pg.requested = []
         pg.on("request", lambda r: pg.requested.append(r.url))
@@ -104,15 +53,6 @@ def page(bench):
         pg.get_by_role("button", name="Enable").wait_for(timeout=30_000)
         yield pg
         browser.close()
-
-
-def click(page, locator) -> None:
-    """A real mouse click in the middle of the element (viser re-renders the panel at 4 Hz,
-    which keeps Playwright's own click waiting for a stable hit target)."""
-    locator.scroll_into_view_if_needed()
-    box = locator.bounding_box()
-    page.mouse.click(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
-    time.sleep(0.1)  # viser batches GUI messages in 50 ms windows
 
 
 def status(page) -> str:
@@ -205,15 +145,12 @@ def test_change_L_c_and_see_readback_and_margins(page, bench):
     g = httpx.get(f"{bench[1]}/api/gains").json()
     assert g["L_c"] == pytest.approx(22.2e-6, rel=1e-6)
     click(page, page.get_by_role("tab", name="Speed"))
-    close = page.get_by_role("button", name=re.compile("close", re.I))
-    if close.count():
-        click(page, close.first)  # viser's "software WebGL" notice
+    dismiss_notifications(page)  # viser's "software WebGL" notice
     page.get_by_text("In control:").scroll_into_view_if_needed()
     time.sleep(0.5)
     out = ROOT / "artifacts"
     out.mkdir(exist_ok=True)
     page.screenshot(path=str(out / "dashboard_e2e.png"))
-    shutil.copyfile(out / "dashboard_e2e.png", ROOT / "docs" / "bench.png")
 
 
 def test_nothing_leaves_the_machine(page, bench):

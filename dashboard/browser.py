@@ -1,0 +1,107 @@
+"""Headless Chromium and a child ``drive-dashboard`` for the e2e test, the screenshot command
+and the benchmark (one copy of the launch flags and of the start/stop code).
+
+Uses Debian's /usr/bin/chromium through Playwright (never a downloaded browser) with the flags
+from the field notes: without the background-networking flags it tries to reach other hosts.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import re
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Iterator, Sequence
+from typing import Any, NamedTuple
+
+CHROMIUM = "/usr/bin/chromium"
+FLAGS = (
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--no-first-run",
+)
+
+
+def free_port() -> int:
+    """A TCP port that is free on 127.0.0.1 right now."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def launch(playwright: Any) -> Any:
+    """Headless /usr/bin/chromium from a ``sync_playwright()`` handle; returns the Browser."""
+    return playwright.chromium.launch(executable_path=CHROMIUM, args=list(FLAGS), headless=True)
+
+
+def stop_process(proc: subprocess.Popen, timeout: float = 10.0) -> None:
+    """SIGTERM, wait up to ``timeout`` s, then SIGKILL."""
+    if proc.poll() is None:
+        proc.terminate()
+    try:
+        proc.wait(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
+
+
+class Dashboard(NamedTuple):
+    """A running child ``drive-dashboard``: its GUI and API URLs and its process."""
+
+    gui_url: str
+    api_url: str
+    proc: subprocess.Popen
+
+
+@contextlib.contextmanager
+def run_dashboard(args: Sequence[str], timeout: float = 60.0) -> Iterator[Dashboard]:
+    """``drive-dashboard <args> --port P --gui-port 0`` in a child process.
+
+    Yields a :class:`Dashboard` once it printed its ``open http://...`` line; stops it
+    (SIGTERM, then SIGKILL) on exit.
+    :raises RuntimeError: it exited or printed no URL within ``timeout`` s.
+    """
+    api_port = free_port()
+    cmd = [sys.executable, "-m", "dashboard.cli", *args, "--port", str(api_port)]
+    cmd += ["--gui-port", "0"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    try:
+        line = ""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline and not line.startswith("open "):
+            line = proc.stdout.readline()
+            if not line and proc.poll() is not None:
+                raise RuntimeError(f"drive-dashboard exited with {proc.returncode}")
+        m = re.match(r"open (http://127\.0\.0\.1:\d+/)", line)
+        if not m:
+            raise RuntimeError(f"drive-dashboard printed no URL: {line!r}")
+        yield Dashboard(m.group(1), f"http://127.0.0.1:{api_port}", proc)
+    finally:
+        stop_process(proc)
+
+
+def click(page: Any, locator: Any) -> None:
+    """A real mouse click in the middle of the element (viser re-renders the panel at 4 Hz,
+    which keeps Playwright's own click waiting for a stable hit target)."""
+    locator.scroll_into_view_if_needed()
+    box = locator.bounding_box()
+    page.mouse.click(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+    time.sleep(0.1)  # viser batches GUI messages in 50 ms windows
+
+
+def dismiss_notifications(page: Any) -> None:
+    """Close viser's notifications (e.g. the "software WebGL" notice) so they hide nothing."""
+    for _ in range(3):
+        close = page.locator(".mantine-Notification-root button")
+        if not close.count():
+            return
+        for i in range(close.count()):
+            with contextlib.suppress(Exception):
+                close.nth(i).click(timeout=1000)
+        time.sleep(0.4)  # the close animation

@@ -1,0 +1,78 @@
+"""Regenerate the README picture: ``python -m dashboard.screenshot docs/bench.png``.
+
+Starts the real ``drive-dashboard --virtual`` on free ports, opens it in headless
+/usr/bin/chromium (1400x900), enables the drive, makes a +500 rpm step, waits until the page
+shows the speed at the setpoint and the plot has scrolled, hides viser's notifications,
+takes the screenshot and stops everything. ``--no-3d`` leaves out the rotor view.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+from dashboard.browser import click, dismiss_notifications, launch, run_dashboard
+
+VIEWPORT = {"width": 1400, "height": 900}
+
+
+def _wait_speed(page, target: float, timeout: float = 30.0) -> float:
+    """Wait until the status line shows the speed within 5 rpm of ``target``; returns it (rpm)."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        m = re.search(r"speed ([-\d.]+) rpm \(set (-?\d+)\)", page.inner_text("body"))
+        if m and float(m.group(2)) == target and abs(float(m.group(1)) - target) < 5.0:
+            return float(m.group(1))
+        time.sleep(0.1)
+    raise RuntimeError(f"the speed never reached {target:.0f} rpm on the page")
+
+
+def take(out: Path, scene_3d: bool = True, settle_s: float = 1.5) -> None:
+    """Write the bench screenshot (PNG) to ``out``."""
+    from playwright.sync_api import sync_playwright
+
+    args = ["--virtual"] + ([] if scene_3d else ["--no-3d"])
+    with run_dashboard(args) as dash, sync_playwright() as p:
+        browser = launch(p)
+        try:
+            page = browser.new_page(viewport=VIEWPORT)
+            page.goto(dash.gui_url)
+            page.get_by_role("button", name="Enable").wait_for(timeout=30_000)
+            click(page, page.get_by_role("button", name="Enable"))
+            page.get_by_text("OPERATION ENABLED").first.wait_for(timeout=20_000)
+            time.sleep(0.5)
+            click(page, page.get_by_role("button", name="+ step"))
+            _wait_speed(page, 500.0)
+            time.sleep(settle_s)  # the step sits inside the plot window, not at its edge
+            dismiss_notifications(page)
+            page.mouse.move(VIEWPORT["width"] - 5, VIEWPORT["height"] - 5)
+            time.sleep(0.3)
+            out.parent.mkdir(parents=True, exist_ok=True)
+            page.screenshot(path=str(out))
+        finally:
+            browser.close()
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m dashboard.screenshot", description=__doc__)
+    ap.add_argument("out", type=Path, help="PNG file to write (e.g. docs/bench.png)")
+    ap.add_argument("--no-3d", action="store_true", help="without the 3D rotor view")
+    args = ap.parse_args(argv)
+    if args.out.suffix.lower() != ".png":
+        print("dashboard.screenshot: error: the output must be a .png file", file=sys.stderr)
+        return 2
+    try:
+        take(args.out, scene_3d=not args.no_3d)
+    except Exception as exc:  # one line, non-zero exit
+        print(f"dashboard.screenshot: error: {exc}", file=sys.stderr)
+        return 1
+    print(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
