@@ -10,54 +10,68 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
+# States, statusword bits and controlword commands (CiA 402-2 tables 3 and 4) are the
+# protocol package's single copy, shared with the virtual drive.
+from firmware_protocol.cia402 import (
+    CW_DISABLE_OPERATION,
+    CW_DISABLE_VOLTAGE,
+    CW_ENABLE_OPERATION,
+    CW_FAULT_RESET,
+    CW_QUICK_STOP,
+    CW_SHUTDOWN,
+    CW_SWITCH_ON,
+    FAULT,
+    FAULT_REACTION_ACTIVE,
+    OPERATION_ENABLED,
+    QUICK_STOP_ACTIVE,
+    READY_TO_SWITCH_ON,
+    SW_INTERNAL_LIMIT,
+    SW_REMOTE,
+    SW_TARGET_REACHED,
+    SW_WARNING,
+    SWITCH_ON_DISABLED,
+    SWITCHED_ON,
+    state_from_statusword,
+)
+from firmware_protocol.cia402 import NOT_READY_TO_SWITCH_ON as NOT_READY
+from firmware_protocol.enums import ModeOfOperation
+
 from .errors import DriveTimeout, StateError
 
-NOT_READY = "NOT READY TO SWITCH ON"
-SWITCH_ON_DISABLED = "SWITCH ON DISABLED"
-READY_TO_SWITCH_ON = "READY TO SWITCH ON"
-SWITCHED_ON = "SWITCHED ON"
-OPERATION_ENABLED = "OPERATION ENABLED"
-QUICK_STOP_ACTIVE = "QUICK STOP ACTIVE"
-FAULT_REACTION_ACTIVE = "FAULT REACTION ACTIVE"
-FAULT = "FAULT"
+__all__ = [
+    "CW_DISABLE_OPERATION",
+    "CW_DISABLE_VOLTAGE",
+    "CW_ENABLE_OPERATION",
+    "CW_FAULT_RESET",
+    "CW_QUICK_STOP",
+    "CW_SHUTDOWN",
+    "CW_SWITCH_ON",
+    "FAULT",
+    "FAULT_REACTION_ACTIVE",
+    "MODES",
+    "MODE_NAMES",
+    "NOT_READY",
+    "OPERATION_ENABLED",
+    "QUICK_STOP_ACTIVE",
+    "READY_TO_SWITCH_ON",
+    "SWITCHED_ON",
+    "SWITCH_ON_DISABLED",
+    "SW_INTERNAL_LIMIT",
+    "SW_REMOTE",
+    "SW_TARGET_REACHED",
+    "SW_WARNING",
+    "StateMachine",
+    "mode_name",
+    "state_from_statusword",
+]
 
-# (mask, value) on the statusword, CiA 402-2 table 4.
-_STATES: tuple[tuple[int, int, str], ...] = (
-    (0x4F, 0x00, NOT_READY),
-    (0x4F, 0x40, SWITCH_ON_DISABLED),
-    (0x6F, 0x21, READY_TO_SWITCH_ON),
-    (0x6F, 0x23, SWITCHED_ON),
-    (0x6F, 0x27, OPERATION_ENABLED),
-    (0x6F, 0x07, QUICK_STOP_ACTIVE),
-    (0x4F, 0x0F, FAULT_REACTION_ACTIVE),
-    (0x4F, 0x08, FAULT),
-)
-
-# Controlword commands, CiA 402-2 table 3 (bits 7, 3..0).
-CW_SHUTDOWN = 0x0006
-CW_SWITCH_ON = 0x0007
-CW_ENABLE_OPERATION = 0x000F
-CW_DISABLE_VOLTAGE = 0x0000
-CW_QUICK_STOP = 0x0002
-CW_DISABLE_OPERATION = 0x0007
-CW_FAULT_RESET = 0x0080
-
-SW_WARNING = 1 << 7
-SW_REMOTE = 1 << 9
-SW_TARGET_REACHED = 1 << 10
-SW_INTERNAL_LIMIT = 1 << 11
-
-#: modes_of_operation (0x6060) values by host name.
-MODES: dict[str, int] = {"speed": 3, "torque": 4, "current": -1}
+#: modes_of_operation (0x6060) values by host name (values from the EDS enumeration).
+MODES: dict[str, int] = {
+    "speed": int(ModeOfOperation.PROFILE_VELOCITY),
+    "torque": int(ModeOfOperation.PROFILE_TORQUE),
+    "current": int(ModeOfOperation.PSEUDO_CURRENT),
+}
 MODE_NAMES: dict[int, str] = {v: k for k, v in MODES.items()}
-
-
-def state_from_statusword(statusword: int) -> str:
-    """CiA 402 state name encoded in a statusword (0x6041)."""
-    for mask, value, name in _STATES:
-        if statusword & mask == value:
-            return name
-    return f"UNKNOWN (statusword 0x{statusword:04X})"
 
 
 def mode_name(value: int) -> str:

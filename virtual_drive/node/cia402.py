@@ -21,34 +21,32 @@ import logging
 import threading
 from collections.abc import Callable
 
+# States and statusword/controlword bits (CiA 402 Tables 28, 30): the protocol package's single
+# copy, shared with the host library.
+from firmware_protocol.cia402 import (
+    CW_ENABLE_OPERATION_BIT,
+    CW_ENABLE_VOLTAGE,
+    CW_FAULT_RESET,
+    CW_QUICK_STOP_BIT,
+    CW_SWITCH_ON_BIT,
+    FAULT,
+    FAULT_REACTION_ACTIVE,
+    NOT_READY_TO_SWITCH_ON,
+    OPERATION_ENABLED,
+    QUICK_STOP_ACTIVE,
+    READY_TO_SWITCH_ON,
+    SW_INTERNAL_LIMIT,
+    SW_REMOTE,
+    SW_TARGET_REACHED,
+    SW_VOLTAGE_ENABLED,
+    SW_WARNING,
+    SWITCH_ON_DISABLED,
+    SWITCHED_ON,
+)
+from firmware_protocol.cia402 import STATE_BITS as _STATE_BITS
+
 logger = logging.getLogger(__name__)
 
-NOT_READY_TO_SWITCH_ON = "NOT READY TO SWITCH ON"
-SWITCH_ON_DISABLED = "SWITCH ON DISABLED"
-READY_TO_SWITCH_ON = "READY TO SWITCH ON"
-SWITCHED_ON = "SWITCHED ON"
-OPERATION_ENABLED = "OPERATION ENABLED"
-QUICK_STOP_ACTIVE = "QUICK STOP ACTIVE"
-FAULT_REACTION_ACTIVE = "FAULT REACTION ACTIVE"
-FAULT = "FAULT"
-
-#: statusword bits 0,1,2,3,5,6 per state (CiA 402 Table 30)
-_STATE_BITS = {
-    NOT_READY_TO_SWITCH_ON: 0x0000,
-    SWITCH_ON_DISABLED: 0x0040,
-    READY_TO_SWITCH_ON: 0x0021,
-    SWITCHED_ON: 0x0023,
-    OPERATION_ENABLED: 0x0027,
-    QUICK_STOP_ACTIVE: 0x0007,
-    FAULT_REACTION_ACTIVE: 0x000F,
-    FAULT: 0x0008,
-}
-
-SW_VOLTAGE_ENABLED = 1 << 4
-SW_WARNING = 1 << 7
-SW_REMOTE = 1 << 9
-SW_TARGET_REACHED = 1 << 10
-SW_INTERNAL_LIMIT = 1 << 11
 
 # Commands decoded from controlword bits 0..3 (CiA 402 Table 28)
 DISABLE_VOLTAGE = "disable voltage"
@@ -63,13 +61,13 @@ RAMP_QUICK = "quick"  # quick stop deceleration 0x6085
 
 def decode_command(controlword: int) -> str:
     """Device control command of a controlword (bit 7, fault reset, handled separately)."""
-    if not controlword & 0x0002:
+    if not controlword & CW_ENABLE_VOLTAGE:
         return DISABLE_VOLTAGE
-    if not controlword & 0x0004:
+    if not controlword & CW_QUICK_STOP_BIT:
         return QUICK_STOP
-    if not controlword & 0x0001:
+    if not controlword & CW_SWITCH_ON_BIT:
         return SHUTDOWN
-    if not controlword & 0x0008:
+    if not controlword & CW_ENABLE_OPERATION_BIT:
         return SWITCH_ON
     return ENABLE_OPERATION
 
@@ -151,7 +149,9 @@ class Cia402StateMachine:
     def write_controlword(self, controlword: int) -> None:
         """Apply a controlword (0x6040 write or RPDO)."""
         with self._lock:
-            rising_reset = bool(controlword & 0x80) and not (self._last_cw & 0x80)
+            rising_reset = bool(controlword & CW_FAULT_RESET) and not (
+                self._last_cw & CW_FAULT_RESET
+            )
             self._last_cw = controlword
             self.controlword = controlword
             if self.state == FAULT:
