@@ -1,8 +1,9 @@
 """Browser bench for the BLDC drive: FastAPI (REST, WebSocket, offline docs) and a viser GUI.
 
-Start it with ``drive-dashboard --virtual`` (loopback hub + virtual drive in this process) or
-``drive-dashboard --interface socketcan --channel can0 --node 1`` (a real drive), then open the
-one URL it prints. Everything goes through :mod:`drive_link`; no CAN details live here.
+Start it with ``drive-dashboard --virtual`` (loopback hub + the virtual drive as a child
+process) or ``drive-dashboard --interface socketcan --channel can0 --node 1`` (a real drive),
+then open the one URL it prints. Everything goes through :mod:`drive_link`; no CAN details
+live here.
 
 Modules (one job each):
 

@@ -1,7 +1,8 @@
 """``drive-dashboard``: FastAPI (REST, WebSocket, docs) and the viser GUI in one process.
 
-``drive-dashboard --virtual`` starts the loopback hub and a virtual drive too, so one command
-gives a working bench. Binds 127.0.0.1; ``--allow-remote --token T`` exposes the REST API (the
+``drive-dashboard --virtual`` starts the loopback hub and a virtual drive (``virtual-drive run``
+in a child process, stopped with SIGTERM, then SIGKILL, on every exit) too, so one command gives
+a working bench. Binds 127.0.0.1; ``--allow-remote --token T`` exposes the REST API (the
 GUI stays on 127.0.0.1: viser has no authentication; reach it through an SSH tunnel).
 """
 
@@ -29,9 +30,14 @@ def build_parser() -> argparse.ArgumentParser:
         help="start the loopback hub and a virtual drive (the bench without hardware)",
     )
     p.add_argument(
+        "--virtual-in-process",
+        action="store_true",
+        help="with --virtual: run the virtual drive in this process (default: a child process)",
+    )
+    p.add_argument(
         "--virtual-subprocess",
         action="store_true",
-        help="with --virtual: run the virtual drive as a child process",
+        help="with --virtual: the virtual drive in a child process (the default; kept for scripts)",
     )
     p.add_argument(
         "--speed-factor",
@@ -88,7 +94,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         api_port=args.port,
         gui_port=args.gui_port,
         virtual=args.virtual,
-        virtual_subprocess=args.virtual_subprocess,
+        virtual_in_process=args.virtual_in_process,
         speed_factor=args.speed_factor,
         hub_port=args.hub_port,
         join_hub=args.join_hub,
@@ -100,6 +106,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         allow_remote=args.allow_remote,
         token=args.token,
     )
+    if args.virtual_in_process and args.virtual_subprocess:
+        print(
+            "drive-dashboard: error: --virtual-in-process and --virtual-subprocess exclude "
+            "each other",
+            file=sys.stderr,
+        )
+        return 2
     try:
         config.validate()
     except ValueError as exc:

@@ -26,7 +26,9 @@ class BenchConfig:
     (0 = any free port).
     interface/channel/bitrate/node_id: the python-can bus and CANopen node when not ``virtual``.
     speed_factor: virtual drive only, simulated seconds per wall-clock second.
-    virtual_subprocess: run the virtual drive as ``virtual-drive run`` in a child process.
+    virtual_in_process: run the virtual drive in this process (tests that want the drive
+    object); by default it runs as ``virtual-drive run`` in a child process, so that its TPDOs
+    keep their rate while the dashboard is busy.
     hub_port: TCP port of the loopback hub on 127.0.0.1 (0 = any free port).
     join_hub: TCP port of an already running loopback hub to join (instead of interface).
     token: access token; required (and checked on every request) when ``allow_remote``.
@@ -41,7 +43,7 @@ class BenchConfig:
     bitrate: int = 1_000_000
     node_id: int = 1
     speed_factor: float = 1.0
-    virtual_subprocess: bool = False
+    virtual_in_process: bool = False
     hub_port: int = 0
     join_hub: int | None = None
     allow_remote: bool = False

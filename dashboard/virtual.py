@@ -1,8 +1,10 @@
 """Open the bench: a real bus and node, or (``--virtual``) the loopback hub plus a virtual drive.
 
-The virtual drive runs in this process (``VirtualDrive`` on its own socketcand connection to the
-hub) or, with ``subprocess=True``, as ``virtual-drive run`` in a child process; either way the
-dashboard reaches it only through the hub, exactly like a real drive on a bus.
+The virtual drive runs as ``virtual-drive run`` in a child process (default: its TPDOs keep
+their rate while the dashboard is busy; the child is stopped with SIGTERM, then SIGKILL, when
+the bench closes, also on errors) or, with ``virtual_in_process``, in this process
+(``VirtualDrive`` on its own socketcand connection to the hub); either way the dashboard reaches
+it only through the hub, exactly like a real drive on a bus.
 """
 
 from __future__ import annotations
@@ -27,7 +29,7 @@ def open_bench(config: BenchConfig) -> Iterator[Bench]:
             drive = Drive.connect(
                 host="127.0.0.1", port=port, bitrate=config.bitrate, node_id=config.node_id
             )
-            where = "in-process" if not config.virtual_subprocess else "subprocess"
+            where = "in-process" if config.virtual_in_process else "subprocess"
             desc = f"loopback hub 127.0.0.1:{port} (virtual drive, {where})"
         elif config.join_hub is not None:
             drive = Drive.connect(
@@ -64,10 +66,10 @@ def _virtual_bus(config: BenchConfig) -> Iterator[int]:
         hub = Hub(port=config.hub_port, bitrate=config.bitrate)
         hub.start()
         stack.callback(hub.stop)
-        if config.virtual_subprocess:
-            stack.enter_context(_drive_process(config, hub.port))
-        else:
+        if config.virtual_in_process:
             stack.enter_context(_drive_in_process(config, hub.port))
+        else:
+            stack.enter_context(_drive_process(config, hub.port))
         yield hub.port
 
 
@@ -105,8 +107,10 @@ def _drive_process(config: BenchConfig, port: int) -> Iterator[None]:
             store=f"{tmp}/parameters.json",
             speed=config.speed_factor,
         )
-        with proc:
+        try:
             yield
+        finally:
+            proc.stop()  # SIGTERM, then SIGKILL after 10 s
 
 
 def _wait_operational(drive, timeout: float = 2.0) -> None:
