@@ -189,7 +189,9 @@ def test_sdo_channel_serialises_threads(local_node):
 # ------------------------------------------------------------------ TPDO decoding
 def test_live_streams_decode_rates_and_drops():
     ch = f"t-{uuid.uuid4().hex}"
-    tx = can.Bus(interface="virtual", channel=ch)
+    # The sender stamps each frame with its time on an exact 20 ms cadence (preserve_timestamps),
+    # so the drop estimate does not depend on how punctually this process is scheduled.
+    tx = can.Bus(interface="virtual", channel=ch, preserve_timestamps=True)
     rx = can.Bus(interface="virtual", channel=ch)
     conn = acquire(bus=rx)
     cfg = TpdoConfig(
@@ -216,18 +218,24 @@ def test_live_streams_decode_rates_and_drops():
     try:
         sent = 0
         sent1 = []
-        t_next = time.monotonic()
+        t0 = time.time()
         for k in range(40):
-            t_next += 0.02
-            time.sleep(max(0.0, t_next - time.monotonic()))
+            t_k = t0 + 0.02 * (k + 1)
+            time.sleep(0.002)
             if k in (10, 11, 12):  # three frames lost on the wire
                 continue
             data = struct.pack("<ff", 0.5 * k, 100.0 + k)
-            tx.send(can.Message(arbitration_id=0x282, data=data, is_extended_id=False))
+            tx.send(
+                can.Message(timestamp=t_k, arbitration_id=0x282, data=data, is_extended_id=False)
+            )
             sent += 1
             if k % 2 == 0:
                 d1 = struct.pack("<Hi", 0x0637, -k)
-                tx.send(can.Message(arbitration_id=0x182, data=d1, is_extended_id=False))
+                tx.send(
+                    can.Message(
+                        timestamp=t_k + 1e-4, arbitration_id=0x182, data=d1, is_extended_id=False
+                    )
+                )
                 sent1.append(-k)
         deadline = time.monotonic() + 5
         while live.stats["frames"] < sent + len(sent1) and time.monotonic() < deadline:
