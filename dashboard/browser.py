@@ -96,12 +96,13 @@ def click(page: Any, locator: Any) -> None:
 
 
 def dismiss_notifications(page: Any) -> None:
-    """Close viser's notifications (e.g. the "software WebGL" notice) so they hide nothing."""
-    for _ in range(3):
-        close = page.locator(".mantine-Notification-root button")
-        if not close.count():
+    """Close viser's notifications (e.g. the "software WebGL" notice) so they hide nothing.
+
+    The close buttons are clicked from the page's script: viser re-renders often enough that a
+    Playwright click can keep waiting for a stable target."""
+    sel = ".mantine-Notification-root button"
+    for _ in range(10):
+        page.evaluate(f"() => document.querySelectorAll('{sel}').forEach(b => b.click())")
+        if not page.evaluate(f"() => document.querySelectorAll('{sel}').length"):
             return
-        for i in range(close.count()):
-            with contextlib.suppress(Exception):
-                close.nth(i).click(timeout=1000)
-        time.sleep(0.4)  # the close animation
+        time.sleep(0.3)  # the close animation

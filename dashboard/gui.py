@@ -25,12 +25,14 @@ from dashboard.bench import LIVE_SIGNALS, Bench, Capture
 from dashboard.config import BenchConfig
 from dashboard.export import capture_csv, capture_png
 from dashboard.gui_scene import RotorScene
+from dashboard.gui_scene import background as scene_background
 from dashboard.models import CONTROLLER_TYPES
 from dashboard.security import allowed_origins, origin_ok
 
 WAKE_TIMEOUT_S = 0.030  #: after a setpoint change, wait at most this for the drive's new reference
 SPEED_COLORS = ("#1f77b4", "#ff7f0e")
 CURRENT_COLORS = ("#2ca02c", "#d62728")
+BRAND_COLOR = (31, 97, 141)  #: steel blue: buttons, tabs, sliders
 
 
 def _series(
@@ -79,7 +81,12 @@ class BenchGui:
         self.origins = allowed_origins("127.0.0.1", [self.port, self.config.api_port])
         self._guard_origin()
         self.server.gui.configure_theme(
-            control_width="large", show_share_button=False, show_logo=False
+            control_layout="fixed",
+            control_width="large",
+            dark_mode=False,
+            show_logo=False,
+            show_share_button=False,  # it would open a public tunnel
+            brand_color=BRAND_COLOR,
         )
         self.server.gui.main_panel.dock_right()
         self.server.on_client_connect(self._on_connect)
@@ -253,6 +260,11 @@ class BenchGui:
         with tabs.add_tab("Captures"):
             self._build_captures_tab()
         self.scene = RotorScene(self.server) if self.config.scene_3d else None
+        if self.scene is None:  # a calm canvas instead of an empty white one
+            self.server.scene.set_background_image(scene_background())
+            self.server.scene.add_label(
+                "/no_3d", "3D rotor view off (--no-3d)", position=(0.0, 0.0, 0.0)
+            )
 
     def _build_speed_tab(self) -> None:
         gui = self.server.gui
@@ -662,6 +674,11 @@ class BenchGui:
             f"**bus load** {_fmt(load * 100 if load is not None else None, '.1f')} % · "
             f"**dropped** {live.get('dropped', '–')} · **faults/EMCY** {emcy_txt}"
         )
+        if self.scene is not None:
+            self.scene.show_status(
+                f"{_fmt(latest.get('measurements.speed'), '.0f')} rpm · {s.get('state')} · "
+                f"i_p {_fmt(latest.get('measurements.i_p'), '.1f')} A"
+            )
         ctl = s.get("controller")
         self.controller_md.content = (
             f"**In control:** {ctl['client']} since "

@@ -24,8 +24,59 @@ def _wxyz_z(angle: float) -> tuple[float, float, float, float]:
     return (math.cos(angle / 2), 0.0, 0.0, math.sin(angle / 2))
 
 
+def _tube(r_in: float, r_out: float, height: float, n: int = 48) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices and triangles of a hollow cylinder (axis z, centred on the origin), units of the
+    scene (1 = stator bore radius scale)."""
+    a = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+    ring = np.stack([np.cos(a), np.sin(a)], axis=1)
+    z0, z1 = -height / 2, height / 2
+    v = np.concatenate(
+        [
+            np.c_[ring * r_out, np.full(n, z0)],
+            np.c_[ring * r_out, np.full(n, z1)],
+            np.c_[ring * r_in, np.full(n, z0)],
+            np.c_[ring * r_in, np.full(n, z1)],
+        ]
+    ).astype(np.float32)
+    i = np.arange(n)
+    j = (i + 1) % n
+    oz0, oz1, iz0, iz1 = i, i + n, i + 2 * n, i + 3 * n
+    pz0, pz1, jz0, jz1 = j, j + n, j + 2 * n, j + 3 * n
+    faces = np.concatenate(
+        [
+            np.c_[oz0, pz0, pz1],
+            np.c_[oz0, pz1, oz1],  # outer wall
+            np.c_[iz0, iz1, jz1],
+            np.c_[iz0, jz1, jz0],  # inner wall
+            np.c_[oz1, pz1, jz1],
+            np.c_[oz1, jz1, iz1],  # top
+            np.c_[oz0, iz0, jz0],
+            np.c_[oz0, jz0, pz0],  # bottom
+        ]
+    ).astype(np.uint32)
+    return v, faces
+
+
+def background(width: int = 8, height: int = 256) -> np.ndarray:
+    """A neutral vertical gradient (light grey-blue at the top to white), RGB uint8."""
+    t = np.linspace(0.0, 1.0, height)[:, None, None]
+    top, bottom = np.array([214, 222, 232]), np.array([250, 251, 253])
+    img = (top * (1 - t) + bottom * t).astype(np.uint8)
+    return np.repeat(img, width, axis=1)
+
+
+def frame_camera(server: viser.ViserServer) -> None:
+    """Initial camera for new browsers: looking down at about 35° onto the motor so that it
+    fills the canvas left of the docked panel."""
+    cam = server.initial_camera
+    cam.up = (0.0, 0.0, 1.0)
+    cam.look_at = (0.0, 0.0, -0.05)
+    cam.position = (1.35, -2.05, 1.75)
+
+
 class RotorScene:
-    """Rotor (4 pole pairs → 8 magnets) inside 3 phase coil groups."""
+    """Rotor (4 pole pairs → 8 magnets) inside 3 phase coil groups, a stator yoke, a shaft, a
+    floor grid and a status label (speed, CiA 402 state, i_p) updated with the plots."""
 
     min_period_s = 0.1
 
@@ -34,10 +85,30 @@ class RotorScene:
         self.angle = 0.0
         self._t = time.monotonic()
         self._sector = -1
+        self._status = ""
         sc = server.scene
         sc.set_up_direction("+z")
+        sc.set_background_image(background())
+        frame_camera(server)
+        sc.add_grid(
+            "/floor",
+            width=6.0,
+            height=6.0,
+            cell_size=0.25,
+            section_size=1.0,
+            cell_color=(205, 210, 218),
+            section_color=(160, 168, 180),
+            position=(0.0, 0.0, -0.42),
+            shadow_opacity=0.2,
+        )
+        v, f = _tube(0.99, 1.12, 0.62)
+        sc.add_mesh_simple("/stator/yoke", v, f, color=(120, 128, 140), flat_shading=False)
+        sc.add_cylinder("/shaft", radius=0.07, height=1.3, color=(190, 190, 200))
         self.rotor = sc.add_frame("/rotor", show_axes=False)
         sc.add_cylinder("/rotor/core", radius=0.45, height=0.6, color=(150, 150, 160))
+        sc.add_box(
+            "/rotor/key", dimensions=(0.3, 0.05, 0.61), color=(240, 200, 60), position=(0.2, 0, 0)
+        )  # shows the turning even where magnets look alike
         for k in range(2 * pole_pairs):
             a = 2 * math.pi * k / (2 * pole_pairs)
             sc.add_box(
@@ -60,11 +131,29 @@ class RotorScene:
                 wxyz=_wxyz_z(a),
             )
             self.coils[ph].append(h)
+        for ph, name in enumerate("abc"):
+            a = 2 * math.pi * ph / n_slots
+            sc.add_label(
+                f"/stator/phase_{name}",
+                f"phase {name}",
+                position=(1.3 * math.cos(a), 1.3 * math.sin(a), 0.33),
+                font_screen_scale=0.9,
+            )
         sc.add_label(
-            "/stator/label",
-            "phases a (red) · b (green) · c (blue) lit when conducting",
-            position=(0.0, -1.2, 0.4),
+            "/legend",
+            "conducting phase pair lit (six-step) · rotor angle integrated from the measured speed",
+            position=(0.0, -1.45, -0.42),
+            font_screen_scale=0.8,
         )
+        self.status_label = sc.add_label(
+            "/status", "speed – rpm", position=(0.0, 0.0, 0.85), font_screen_scale=1.3
+        )
+
+    def show_status(self, text: str) -> None:
+        """Set the status label above the motor (sent only when it changes)."""
+        if text != self._status:
+            self._status = text
+            self.status_label.text = text
 
     def update(self, speed_rpm: float, live: dict[str, np.ndarray] | None = None) -> None:
         """Advance the rotor by the measured speed since the last call and light the phases."""

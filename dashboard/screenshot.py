@@ -18,6 +18,9 @@ from pathlib import Path
 from dashboard.browser import click, dismiss_notifications, launch, run_dashboard
 
 VIEWPORT = {"width": 1400, "height": 900}
+SCROLL_TOP = (
+    "() => document.querySelectorAll('*').forEach(e => { if (e.scrollTop) e.scrollTop = 0; })"
+)
 
 
 def _wait_speed(page, target: float, timeout: float = 30.0) -> float:
@@ -49,7 +52,10 @@ def take(out: Path, scene_3d: bool = True, settle_s: float = 1.5) -> None:
             _wait_speed(page, 500.0)
             time.sleep(settle_s)  # the step sits inside the plot window, not at its edge
             dismiss_notifications(page)
-            page.mouse.move(VIEWPORT["width"] - 5, VIEWPORT["height"] - 5)
+            # hide any notice that arrives later, and show the panel from its top (status)
+            page.add_style_tag(content=".mantine-Notifications-root { display: none; }")
+            page.evaluate(SCROLL_TOP)
+            page.mouse.move(5, VIEWPORT["height"] - 5)
             time.sleep(0.3)
             out.parent.mkdir(parents=True, exist_ok=True)
             page.screenshot(path=str(out))

@@ -1,0 +1,84 @@
+"""The 3D rotor view: stator yoke mesh geometry, six-step table, rotor angle and status label
+on a real viser server (no browser)."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+import pytest
+import viser
+
+from dashboard.gui_scene import DIM, PHASE_COLORS, SIX_STEP, RotorScene, _tube, background
+
+pytestmark = pytest.mark.timeout(60)
+
+
+def test_yoke_mesh_is_closed_and_has_the_tube_volume():
+    n, r_in, r_out, h = 48, 0.99, 1.12, 0.62
+    v, f = _tube(r_in, r_out, h, n)
+    # closed and consistently oriented: every directed edge appears once, its reverse once
+    edges = {}
+    for a, b, c in f:
+        for e in ((a, b), (b, c), (c, a)):
+            edges[e] = edges.get(e, 0) + 1
+    assert all(k == 1 for k in edges.values())
+    assert all((b, a) in edges for a, b in edges)
+    # divergence theorem: V = Σ (p0 · (p1 × p2)) / 6, positive for outward normals
+    p = v[f].astype(np.float64)
+    vol = np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 1], p[:, 2])).sum() / 6
+    ngon = n / 2 * math.sin(2 * math.pi / n)  # area of the regular n-gon of radius 1
+    assert vol == pytest.approx(ngon * (r_out**2 - r_in**2) * h, rel=1e-5)
+
+
+def test_six_step_table():
+    """Each 60° sector drives two different phases; each phase is driven + for 120° and − for
+    120° per electrical turn; successive sectors (wrapping) change exactly one phase."""
+    for plus, minus in SIX_STEP:
+        assert plus != minus
+    for ph in range(3):
+        assert sum(p == ph for p, _ in SIX_STEP) == 2
+        assert sum(m == ph for _, m in SIX_STEP) == 2
+    for k in range(6):
+        a, b = SIX_STEP[k], SIX_STEP[(k + 1) % 6]
+        assert (a[0] != b[0]) + (a[1] != b[1]) == 1
+
+
+def test_background_is_a_neutral_gradient():
+    img = background()
+    assert img.dtype == np.uint8 and img.ndim == 3 and img.shape[2] == 3
+    spread = img.max(axis=2).astype(int) - img.min(axis=2)
+    assert spread.max() < 30  # greyish, no strong colour
+    assert img[0].mean() < img[-1].mean()  # darker at the top
+
+
+@pytest.fixture(scope="module")
+def server():
+    s = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    yield s
+    s.stop()
+
+
+def test_rotor_turns_with_the_speed_and_lights_the_pair(server):
+    scene = RotorScene(server, pole_pairs=4)
+    cam = server.initial_camera
+    d = np.asarray(cam.position) - np.asarray(cam.look_at)
+    assert 2.0 < np.linalg.norm(d) < 4.0  # framed on the motor (outer radius 1.12)
+    scene._t -= 1.0  # pretend the last update was 1 s ago
+    t0 = scene._t
+    scene.update(60.0)  # 60 rpm = one turn per second
+    elapsed = scene._t - t0
+    assert scene.angle == pytest.approx((2 * math.pi * elapsed) % (2 * math.pi), abs=1e-6)
+    w = scene.rotor.wxyz
+    assert 2 * math.atan2(w[3], w[0]) % (2 * math.pi) == pytest.approx(scene.angle, abs=1e-5)
+    sector = int((scene.angle * 4 % (2 * math.pi)) // (math.pi / 3))
+    on = SIX_STEP[sector]
+    for ph in range(3):
+        want = PHASE_COLORS[ph] if ph in on else DIM
+        assert all(tuple(h.color) == want for h in scene.coils[ph])
+    time.sleep(0.12)
+    scene.update(0.0)  # standing still: every coil dark
+    assert all(tuple(h.color) == DIM for c in scene.coils for h in c)
+    scene.show_status("500 rpm · OPERATION ENABLED · i_p 32.4 A")
+    assert scene.status_label.text == "500 rpm · OPERATION ENABLED · i_p 32.4 A"
