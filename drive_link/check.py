@@ -86,8 +86,12 @@ def _wait_state(drive: Drive, state: str, timeout: float = 1.0) -> str:
 
 
 def _to_switch_on_disabled(drive: Drive) -> None:
+    """Bring the drive to SWITCH ON DISABLED from wherever the bench left it: a running motor is
+    first stopped by "disable operation" (ramp per 0x605C), a fault is reset."""
     if drive.state in (cia402.FAULT, cia402.FAULT_REACTION_ACTIVE):
         drive.fault_reset()
+    if drive.state == cia402.OPERATION_ENABLED:
+        drive.disable(timeout=5.0)
     drive.write("controlword", cia402.CW_DISABLE_VOLTAGE)
     _expect(
         _wait_state(drive, cia402.SWITCH_ON_DISABLED) == cia402.SWITCH_ON_DISABLED,
@@ -168,9 +172,9 @@ def item_heartbeat(d: Drive, opts: dict) -> str:
 
 
 def item_cia402(d: Drive, opts: dict) -> str:
+    _to_switch_on_disabled(d)
     d.set_mode("speed")
     d.set_speed(0)
-    _to_switch_on_disabled(d)
     steps = [
         (
             cia402.CW_ENABLE_OPERATION,
@@ -203,6 +207,7 @@ def item_cia402(d: Drive, opts: dict) -> str:
 
 
 def item_modes(d: Drive, opts: dict) -> str:
+    _to_switch_on_disabled(d)  # CiA 402: modes change only while operation is not enabled
     for mode in ("speed", "current", "torque", "speed"):
         d.set_mode(mode)
     code = _expect_abort(

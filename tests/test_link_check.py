@@ -67,3 +67,18 @@ def test_check_rejects_unknown_items(virtual_node, capsys):
     )
     err = capsys.readouterr().err
     assert rc == 7 and err.count("\n") == 1 and "unknown check item(s) nope" in err
+
+
+def test_check_starts_from_an_enabled_drive_in_current_mode(virtual_node, capsys):
+    """A bench leaves the drive OPERATION ENABLED in current mode with the motor turning; CiA 402
+    refuses a mode change there (0x08000022), so the 402 and mode items must first bring the
+    drive to rest themselves."""
+    _, ch = virtual_node
+    bus = ["--interface", "virtual", "--channel", ch, "--node", "4"]
+    assert cli.main(["nmt", "start", *bus]) == 0
+    assert cli.main(["set-current", "10", *bus]) == 0
+    assert cli.main(["enable", *bus]) == 0
+    assert "OPERATION ENABLED" in capsys.readouterr().out
+    rc = cli.main(["check", *bus, "--only", "cia402,modes", "--json"])
+    results = json.loads(capsys.readouterr().out)
+    assert rc == 0, [r for r in results if not r["ok"]]
