@@ -2,8 +2,10 @@
 
 Each TPDO is decoded with the mapping the drive reports (0x1800+k / 0x1A00+k read by SDO), so the
 host follows whatever mapping the drive really has. Per TPDO the stream counts received frames,
-estimates dropped frames from gaps in the expected event-timer cadence (a gap of n periods
-counts n − 1 drops), and measures its rate; the bus monitor gives the bus load.
+estimates dropped frames against the expected event-timer cadence (frames the period says should
+have arrived between the first and the latest frame, minus those that did: jitter cancels out,
+a lost frame does not; a pause longer than 1 s, e.g. NMT PRE-OPERATIONAL, starts a new count
+window instead of counting as losses), and measures its rate; the bus monitor gives the bus load.
 """
 
 from __future__ import annotations
@@ -17,6 +19,9 @@ import canopen
 import numpy as np
 
 from .connection import BusMonitor
+
+#: A TPDO silence longer than this (s) is a pause (NMT state, drive restart), not lost frames.
+_PAUSE_S = 1.0
 
 
 @dataclass(frozen=True)
@@ -54,10 +59,24 @@ class _Stream:
         self.values = {f.name: np.zeros(capacity, dtype=np.float64) for f in cfg.fields if f.fmt}
         self.n = 0  # total frames written
         self.frames = 0
-        self.dropped = 0
         self.bad_length = 0
         self.last_t: float | None = None
+        self.window_t0 = 0.0  # first frame of the current cadence window, s
+        self.window_frames = 0  # frames received in it
+        self.dropped_before = 0  # drops counted in closed windows
         self.recent: list[float] = []  # monotonic arrival times in the last second
+
+    def window_drops(self) -> int:
+        """Frames the event timer promised in the current window that never arrived."""
+        ms = self.cfg.event_timer_ms
+        if not ms or self.last_t is None:
+            return 0
+        expected = round((self.last_t - self.window_t0) / (ms / 1000.0)) + 1
+        return max(0, expected - self.window_frames)
+
+    @property
+    def dropped(self) -> int:
+        return self.dropped_before + self.window_drops()
 
 
 class LiveStreams:
@@ -121,11 +140,11 @@ class LiveStreams:
             for f in cfg.fields:
                 if f.fmt:
                     s.values[f.name][i] = struct.unpack_from(f.fmt, data, f.offset // 8)[0]
-            if s.last_t is not None and cfg.event_timer_ms > 0:
-                period = cfg.event_timer_ms / 1000.0
-                gap = t - s.last_t
-                if gap > 1.5 * period:
-                    s.dropped += round(gap / period) - 1
+            if s.last_t is None or t - s.last_t > _PAUSE_S:
+                s.dropped_before += s.window_drops()
+                s.window_t0 = t
+                s.window_frames = 0
+            s.window_frames += 1
             s.last_t = t
             s.n += 1
             s.frames += 1
@@ -233,5 +252,5 @@ class LiveStreams:
         """Zero the frame and drop counters (buffers are kept)."""
         with self._lock:
             for s in self._streams.values():
-                s.frames = s.dropped = s.bad_length = 0
+                s.frames = s.bad_length = s.dropped_before = s.window_frames = 0
                 s.last_t = None

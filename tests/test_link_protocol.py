@@ -265,3 +265,41 @@ def test_live_streams_decode_rates_and_drops():
         release(conn)
         tx.shutdown()
         rx.shutdown()
+
+
+@pytest.mark.parametrize(
+    ("lost", "pause_s", "want"),
+    [((), 0.0, 0), ((7, 8), 0.0, 2), ((), 3.0, 0), ((30,), 3.0, 1)],
+)
+def test_drop_estimate_ignores_jitter_and_pauses(lost, pause_s, want):
+    """Frames of a 1 ms event timer arriving up to ±0.45 ms off their slot (batched by a busy
+    sender) are not losses; a frame missing from the cadence is; a silence of seconds (NMT
+    PRE-OPERATIONAL) is a pause, not thousands of losses."""
+    ch = f"t-{uuid.uuid4().hex}"
+    tx = can.Bus(interface="virtual", channel=ch, preserve_timestamps=True)
+    rx = can.Bus(interface="virtual", channel=ch)
+    conn = acquire(bus=rx)
+    field = MappedField("measurements.i_p", 0x2040, 1, 0, 32, "<f", "A")
+    live = LiveStreams(conn.network, [TpdoConfig(2, 0x282, 0xFF, 1, [field])], conn.monitor, 1e6)
+    rng = np.random.default_rng(1)
+    try:
+        t0 = time.time()
+        n = 0
+        for k in range(60):
+            if k in lost:
+                continue
+            t_k = t0 + 1e-3 * k + rng.uniform(-0.45e-3, 0.45e-3) + (pause_s if k >= 20 else 0.0)
+            msg = can.Message(timestamp=t_k, arbitration_id=0x282, data=struct.pack("<f", k))
+            msg.is_extended_id = False
+            tx.send(msg)
+            n += 1
+        deadline = time.monotonic() + 5
+        while live.stats["frames"] < n and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert live.stats["tpdo"]["TPDO2"]["frames"] == n
+        assert live.stats["tpdo"]["TPDO2"]["dropped"] == want
+    finally:
+        live.close()
+        release(conn)
+        tx.shutdown()
+        rx.shutdown()
