@@ -103,12 +103,12 @@ def decode_frame(payload: bytes) -> list[dict]:
 
 
 def shows_setpoint(messages: list[dict], target: float) -> bool:
-    """True if a uPlot data update has a third series (speed*) ending at ``target``."""
+    """True if a uPlot data update has a third array (speed*) ending at ``target``."""
     for m in messages:
         if m.get("type") != "GuiUpdateMessage":
             continue
         for v in m.get("updates", {}).values():
-            if isinstance(v, list) and len(v) == 3 and all(isinstance(a, np.ndarray) for a in v):
+            if isinstance(v, list) and len(v) >= 3 and all(isinstance(a, np.ndarray) for a in v):
                 ref = v[2]
                 if ref.size and abs(float(ref[-1]) - target) < 0.5:
                     return True

@@ -32,6 +32,8 @@ from dashboard.security import allowed_origins, origin_ok
 WAKE_TIMEOUT_S = 0.030  #: after a setpoint change, wait at most this for the drive's new reference
 SPEED_COLORS = ("#1f77b4", "#ff7f0e")
 CURRENT_COLORS = ("#2ca02c", "#d62728")
+MIN_SPAN_SPEED_RPM = 50.0  #: the speed plot's y axis spans at least this (rpm)
+MIN_SPAN_I_P_A = 5.0  #: the i_p plot's y axis spans at least this (A)
 BRAND_COLOR = (31, 97, 141)  #: steel blue: buttons, tabs, sliders
 
 
@@ -42,6 +44,25 @@ def _series(
     for lab, col in zip(labels, colors, strict=False):
         out.append(uplot.Series(label=lab, stroke=col, width=1.5))
     return tuple(out)
+
+
+def _span_series(label: str) -> uplot.Series:
+    """An invisible series that only widens the y auto-scale (see :func:`min_span_envelope`)."""
+    return uplot.Series(label=label, stroke="rgba(0,0,0,0)", width=0, points={"show": False})
+
+
+def min_span_envelope(n: int, *series: np.ndarray, min_span: float) -> np.ndarray:
+    """``n`` values whose first and last are the centre of ``series`` ∓ ``min_span``/2 (the
+    centre snapped to ``min_span``/10 so the axis stays still at steady state), the rest the
+    centre: drawn invisibly, it makes uPlot's y auto-scale at least ``min_span`` wide (units of
+    the series) without hiding larger swings."""
+    lo = min(float(np.min(c)) for c in series)
+    hi = max(float(np.max(c)) for c in series)
+    q = min_span / 10
+    centre = round((lo + hi) / 2 / q) * q
+    out = np.full(n, centre, dtype=np.float64)
+    out[0], out[-1] = centre - min_span / 2, centre + min_span / 2
+    return out
 
 
 def _fmt(x: Any, spec: str = ".4g") -> str:
@@ -233,16 +254,22 @@ class BenchGui:
         nan = np.full(2, 0.0)
         axes = (uplot.Axis(label="t (s)"), uplot.Axis())
         self.speed_plot = gui.add_uplot(
-            (x0, nan, nan),
-            _series(("speed (rpm)", "speed* (rpm)"), SPEED_COLORS, "t (s)"),
+            (x0, nan, nan, nan),
+            (
+                *_series(("speed (rpm)", "speed* (rpm)"), SPEED_COLORS, "t (s)"),
+                _span_series(f"y span ≥ {MIN_SPAN_SPEED_RPM:g} rpm"),
+            ),
             scales={"x": uplot.Scale(time=False, auto=True)},
             axes=axes,
             title="Speed",
             aspect=2.2,
         )
         self.current_plot = gui.add_uplot(
-            (x0, nan, nan),
-            _series(("i_p (A)", "i_p* (A)"), CURRENT_COLORS, "t (s)"),
+            (x0, nan, nan, nan),
+            (
+                *_series(("i_p (A)", "i_p* (A)"), CURRENT_COLORS, "t (s)"),
+                _span_series(f"y span ≥ {MIN_SPAN_I_P_A:g} A"),
+            ),
             scales={"x": uplot.Scale(time=False, auto=True)},
             axes=axes,
             title="Pseudo current i_p",
@@ -623,8 +650,11 @@ class BenchGui:
             if abs(col[-1] - require[1]) > 1e-3:
                 return False
         x = t - t[-1]
-        self.speed_plot.data = (x, cols[0], cols[1])
-        self.current_plot.data = (x, cols[2], cols[3])
+        n = len(x)
+        speed_env = min_span_envelope(n, cols[0], cols[1], min_span=MIN_SPAN_SPEED_RPM)
+        current_env = min_span_envelope(n, cols[2], cols[3], min_span=MIN_SPAN_I_P_A)
+        self.speed_plot.data = (x, cols[0], cols[1], speed_env)
+        self.current_plot.data = (x, cols[2], cols[3], current_env)
         self.frames_sent += 1
         self.last_live = w
         if self.scene is not None:

@@ -17,7 +17,8 @@ import viser
 #: six-step commutation: sector 0..5 → (phase driven +, phase driven −), 60° electrical each.
 SIX_STEP = ((0, 1), (0, 2), (1, 2), (1, 0), (2, 0), (2, 1))
 PHASE_COLORS = ((220, 60, 60), (60, 170, 60), (60, 90, 220))
-DIM = (70, 70, 70)
+DIM = (176, 128, 90)  #: copper: a coil that carries no current
+MAGNET_COLORS = ((58, 60, 72), (205, 208, 216))  #: N dark, S light (apart from the phases)
 
 
 def _wxyz_z(angle: float) -> tuple[float, float, float, float]:
@@ -114,7 +115,7 @@ class RotorScene:
             sc.add_box(
                 f"/rotor/magnet{k}",
                 dimensions=(0.12, 0.3, 0.58),
-                color=(200, 50, 50) if k % 2 == 0 else (50, 50, 200),
+                color=MAGNET_COLORS[k % 2],
                 position=(0.5 * math.cos(a), 0.5 * math.sin(a), 0.0),
                 wxyz=_wxyz_z(a),
             )
@@ -131,10 +132,10 @@ class RotorScene:
                 wxyz=_wxyz_z(a),
             )
             self.coils[ph].append(h)
-        for ph, name in enumerate("abc"):
+        for ph, name in enumerate(("a (red)", "b (green)", "c (blue)")):
             a = 2 * math.pi * ph / n_slots
             sc.add_label(
-                f"/stator/phase_{name}",
+                f"/stator/phase_{name[0]}",
                 f"phase {name}",
                 position=(1.3 * math.cos(a), 1.3 * math.sin(a), 0.33),
                 font_screen_scale=0.9,

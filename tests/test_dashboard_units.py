@@ -3,6 +3,7 @@ request-model validation (each is a rule from the issue, checked against its pla
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from pydantic import ValidationError
 
@@ -114,3 +115,25 @@ def test_sequence_and_trace_validation():
         TraceIn(length=100, pre_trigger=100)
     with pytest.raises(ValidationError):
         TraceIn(trigger="signal")  # needs a level
+
+
+def test_min_span_envelope_widens_only_flat_plots():
+    """uPlot auto-scales y to the min/max of all series: the envelope makes that span at least
+    min_span around flat data, keeps the data inside, and leaves large swings alone."""
+    from dashboard.gui import min_span_envelope
+
+    rng = np.random.default_rng(1)
+    speed = 500.0 + 0.01 * rng.standard_normal(200)
+    ref = np.full(200, 500.0)
+    env = min_span_envelope(200, speed, ref, min_span=50.0)
+    lo, hi = min(env.min(), speed.min()), max(env.max(), speed.max())
+    assert hi - lo >= 50.0 - 1e-9
+    assert lo < speed.min() and speed.max() < hi and lo < 500.0 < hi
+    jitter = min_span_envelope(200, speed + 0.02, ref, min_span=50.0)
+    assert np.array_equal(env, jitter)  # the axis stays still at steady state
+    step = np.linspace(0.0, 500.0, 200)
+    env = min_span_envelope(200, step, step, min_span=50.0)
+    assert env.min() >= 0.0 and env.max() <= 500.0  # does not widen a 500 rpm swing
+    i_p = np.full(200, 32.4)
+    env = min_span_envelope(200, i_p, i_p, min_span=5.0)
+    assert env.max() - env.min() == pytest.approx(5.0)
