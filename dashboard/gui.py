@@ -253,13 +253,16 @@ class BenchGui:
         x0 = np.linspace(-self.config.live_window_s, 0.0, 2)
         nan = np.full(2, 0.0)
         axes = (uplot.Axis(label="t (s)"), uplot.Axis())
+        # the live window always ends at t = 0: a fixed x range (zoom still works) instead of
+        # auto-scaling, which sometimes left a plot stuck on a stale x range in the browser
+        live_x = {"x": uplot.Scale(time=False, range=(-self.config.live_window_s, 0.0))}
         self.speed_plot = gui.add_uplot(
             (x0, nan, nan, nan),
             (
                 *_series(("speed (rpm)", "speed* (rpm)"), SPEED_COLORS, "t (s)"),
                 _span_series(f"y span ≥ {MIN_SPAN_SPEED_RPM:g} rpm"),
             ),
-            scales={"x": uplot.Scale(time=False, auto=True)},
+            scales=live_x,
             axes=axes,
             title="Speed",
             aspect=2.2,
@@ -270,7 +273,7 @@ class BenchGui:
                 *_series(("i_p (A)", "i_p* (A)"), CURRENT_COLORS, "t (s)"),
                 _span_series(f"y span ≥ {MIN_SPAN_I_P_A:g} A"),
             ),
-            scales={"x": uplot.Scale(time=False, auto=True)},
+            scales=live_x,
             axes=axes,
             title="Pseudo current i_p",
             aspect=2.2,
