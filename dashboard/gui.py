@@ -250,33 +250,11 @@ class BenchGui:
             ):
                 b = gui.add_button(label, color=color)
                 b.on_click(self._action(lambda e, c=cmd: self.bench.command(c)))
-        x0 = np.linspace(-self.config.live_window_s, 0.0, 2)
-        nan = np.full(2, 0.0)
-        axes = (uplot.Axis(label="t (s)"), uplot.Axis())
-        # the live window always ends at t = 0: a fixed x range (zoom still works) instead of
-        # auto-scaling, which sometimes left a plot stuck on a stale x range in the browser
-        live_x = {"x": uplot.Scale(time=False, range=(-self.config.live_window_s, 0.0))}
-        self.speed_plot = gui.add_uplot(
-            (x0, nan, nan, nan),
-            (
-                *_series(("speed (rpm)", "speed* (rpm)"), SPEED_COLORS, "t (s)"),
-                _span_series(f"y span ≥ {MIN_SPAN_SPEED_RPM:g} rpm"),
-            ),
-            scales=live_x,
-            axes=axes,
-            title="Speed",
-            aspect=2.2,
+        self.speed_plot = self._live_plot(
+            "Speed", ("speed (rpm)", "speed* (rpm)"), SPEED_COLORS, MIN_SPAN_SPEED_RPM, "rpm"
         )
-        self.current_plot = gui.add_uplot(
-            (x0, nan, nan, nan),
-            (
-                *_series(("i_p (A)", "i_p* (A)"), CURRENT_COLORS, "t (s)"),
-                _span_series(f"y span ≥ {MIN_SPAN_I_P_A:g} A"),
-            ),
-            scales=live_x,
-            axes=axes,
-            title="Pseudo current i_p",
-            aspect=2.2,
+        self.current_plot = self._live_plot(
+            "Pseudo current i_p", ("i_p (A)", "i_p* (A)"), CURRENT_COLORS, MIN_SPAN_I_P_A, "A"
         )
         tabs = gui.add_tab_group()
         with tabs.add_tab("Speed"):
@@ -295,6 +273,29 @@ class BenchGui:
             self.server.scene.add_label(
                 "/no_3d", "3D rotor view off (--no-3d)", position=(0.0, 0.0, 0.0)
             )
+
+    def _live_plot(
+        self,
+        title: str,
+        labels: tuple[str, str],
+        colors: tuple[str, str],
+        min_span: float,
+        unit: str,
+    ) -> Any:
+        """A live uPlot of (t, measured, reference) over the last ``live_window_s`` seconds."""
+        x0 = np.linspace(-self.config.live_window_s, 0.0, 2)
+        zero = np.zeros(2)
+        # the live window always ends at t = 0: a fixed x range (zoom still works) instead of
+        # auto-scaling, which sometimes left a plot stuck on a stale x range in the browser
+        live_x = {"x": uplot.Scale(time=False, range=(-self.config.live_window_s, 0.0))}
+        return self.server.gui.add_uplot(
+            (x0, zero, zero, zero),
+            (*_series(labels, colors, "t (s)"), _span_series(f"y span ≥ {min_span:g} {unit}")),
+            scales=live_x,
+            axes=(uplot.Axis(label="t (s)"), uplot.Axis()),
+            title=title,
+            aspect=2.2,
+        )
 
     def _build_speed_tab(self) -> None:
         gui = self.server.gui
