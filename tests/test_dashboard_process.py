@@ -83,3 +83,24 @@ def test_child_stopped_when_opening_the_bench_fails(monkeypatch):
     assert len(started) == 1
     assert started[0].proc.poll() is not None, "the virtual drive was left running"
     assert started[0].proc.returncode == 0  # SIGTERM was enough: it shut down cleanly
+
+
+def test_in_process_drive_is_opt_in():
+    """--virtual-in-process keeps the drive in this process: no child, the bench still works."""
+    import os
+
+    from dashboard.virtual import open_bench
+
+    before = set(children(os.getpid()))
+    with open_bench(BenchConfig(virtual=True, virtual_in_process=True)) as bench:
+        assert "virtual drive, in-process" in bench.description
+        assert set(children(os.getpid())) == before
+        assert bench.drive.nmt_state == "OPERATIONAL"
+
+
+def test_cli_refuses_both_virtual_placements(capsys):
+    from dashboard.cli import main
+
+    assert main(["--virtual", "--virtual-in-process", "--virtual-subprocess"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "exclude each other" in err
