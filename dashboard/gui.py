@@ -102,7 +102,6 @@ class BenchGui:
         self.origins = allowed_origins("127.0.0.1", [self.port, self.config.api_port])
         self._guard_origin()
         self.server.gui.configure_theme(
-            control_layout="fixed",
             control_width="large",
             dark_mode=False,
             show_logo=False,
