@@ -158,7 +158,7 @@ def get_gains(bench: BenchDep) -> dict[str, Any]:
 
 @router.put("/gains", tags=["gains"], summary="Apply a gain set atomically; returns the read-back")
 def put_gains(body: GainsIn, bench: ControlDep) -> dict[str, Any]:
-    return jsonable(run(lambda: tuning.apply(bench, body.changes())))
+    return jsonable(run(lambda: tuning.apply(bench, body.changes(), force=body.force)))
 
 
 @router.post("/gains/preview", tags=["gains"], summary="Stability, margins and ‖S‖∞ of a gain set")

@@ -412,6 +412,12 @@ class BenchGui:
                 self._action(self._design_ip, needs_control=False)
             )
         self.preview_md = gui.add_markdown("")
+        self.force_in = gui.add_checkbox(
+            "Override margin check",
+            False,
+            hint="apply a stable set with poor margins (L_c > 1.5 L, GM < 2 dB or ‖S‖∞ > 5); "
+            "an unstable set is refused regardless",
+        )
         gui.add_button("Apply gains", color="green").on_click(self._action(self._apply_gains))
         gui.add_button("Read back").on_click(
             self._action(lambda e: self._load_gains(), needs_control=False)
@@ -459,7 +465,9 @@ class BenchGui:
         self.preview_md.content = tuning.preview_markdown(p)
 
     def _apply_gains(self, event: Any) -> None:
-        tuning.apply(self.bench, self._changes())
+        tuning.apply(self.bench, self._changes(), force=bool(self.force_in.value))
+        with self._mute():
+            self.force_in.value = False  # an override is for one apply only
         self._load_gains()
 
     def _store(self, event: Any) -> None:

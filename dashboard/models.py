@@ -87,11 +87,16 @@ class GainsIn(Strict):
     speed_k_p: float | None = Field(None, ge=0, le=100, description="IP k_p, A/rpm")
     speed_k_i: float | None = Field(None, ge=0, le=1, description="IP k_i, 1/sample")
     speed_current_limit: float | None = Field(None, ge=0, le=200, description="A")
+    force: bool = Field(
+        False,
+        description="apply a stable set that fails the margin rule (L_c ≤ 1.5 L, GM ≥ 2 dB, "
+        "‖S‖∞ ≤ 5); an unstable set is refused regardless",
+    )
 
     def changes(self) -> dict[str, float | int]:
         """The given fields as drive values (type as its code, flags as 0/1)."""
         out: dict[str, float | int] = {}
-        for k, v in self.model_dump(exclude_none=True).items():
+        for k, v in self.model_dump(exclude_none=True, exclude={"force"}).items():
             if k == "type":
                 out[k] = CONTROLLER_TYPES[v]
             elif isinstance(v, bool):

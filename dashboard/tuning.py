@@ -15,6 +15,7 @@ import numpy as np
 from dashboard.bench import Bench, as_dict
 from dashboard.models import TYPE_NAMES
 from drive_link import design
+from drive_link.margins_check import check_gains
 
 #: The paper's identified speed model (Section V), used until an identification has been run.
 A_PAPER = 0.9999785
@@ -108,11 +109,13 @@ def _ab(bench: Bench) -> tuple[float, float]:
     return A_PAPER, B_PAPER
 
 
-def apply(bench: Bench, changes: dict[str, float | int]) -> dict[str, Any]:
+def apply(bench: Bench, changes: dict[str, float | int], *, force: bool = False) -> dict[str, Any]:
     """Apply ``changes`` as one set (drive_link.apply_gains); returns the read-back gains.
 
-    Refused before sending if the merged current loop would be unstable on the drive's motor
-    (ValueError → 422), so an unstable set never reaches the drive.
+    Refused before sending (ValueError → 422, nothing applied) if the merged current loop would
+    be unstable on the drive's motor or the speed loop on the identified model — always — and,
+    unless ``force``, if it fails the same margin rule as ``drive-link set-gains``
+    (drive_link.margins_check: L_c ≤ 1.5 L, GM ≥ 2 dB, ‖S‖∞ ≤ 5).
     """
     p = preview(bench, changes)
     if not p["current"]["stable"]:
@@ -122,6 +125,15 @@ def apply(bench: Bench, changes: dict[str, float | int]) -> dict[str, Any]:
         )
     if not p["speed"]["stable"]:
         raise ValueError("speed loop would be unstable on the identified model; nothing applied")
+    if not force:
+        with bench.lock:
+            proposed = {**as_dict(bench.drive.read_gains()), **changes}
+            R, L = motor_RL(bench)
+        report = check_gains(proposed, R, L, _ab(bench))
+        if not report.ok:
+            raise ValueError(
+                "; ".join(report.problems) + " (force to apply anyway); nothing applied"
+            )
     with bench.lock:
         bench.drive.apply_gains(**changes)
     g = read_gains(bench)

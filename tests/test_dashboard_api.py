@@ -272,6 +272,20 @@ def test_gains_apply_readback_and_bad_input_changes_nothing(client, hdr):
     assert set(client.get("/api/gains/diff").json()["differs"]) >= {"L_c", "speed_k_p"}
 
 
+def test_poor_margins_need_an_explicit_override(client, hdr):
+    """A stable but poorly damped set (L_c = 1.8 L: Table 1 trend, GM ≈ 1 dB) is refused like
+    `drive-link set-gains` does unless forced; an unstable one (2.2 L) even when forced."""
+    before = client.get("/api/gains").json()
+    r = client.put("/api/gains", json={"L_c": 1.8 * L}, headers=hdr)
+    assert r.status_code == 422 and "force" in r.text
+    r = client.put("/api/gains", json={"L_c": 2.2 * L, "force": True}, headers=hdr)
+    assert r.status_code == 422
+    assert client.get("/api/gains").json() == before
+    r = client.put("/api/gains", json={"L_c": 1.8 * L, "force": True}, headers=hdr)
+    assert r.status_code == 200 and r.json()["L_c"] == f32(1.8 * L)
+    client.put("/api/gains", json={"L_c": L}, headers=hdr)
+
+
 def test_ip_design_reproduces_paper_gains(client):
     r = client.post(
         "/api/gains/ip_design", json={"xi": 1.0, "omega_n": 2.3, "a": 0.9999785, "b": 3.33715e-4}

@@ -51,3 +51,12 @@ def test_pi_paper_gains_pass_and_speed_loop_checked():
     bad = {**PAPER, "speed_k_p": -1.0}
     rep = check_gains(bad, R, L, (0.9999785, 3.33715e-4))
     assert not rep.ok and any("speed loop" in p for p in rep.problems)
+
+
+def test_table_1_row_l_c_1_5_l_passes_with_the_drive_s_float32_l():
+    """Table 1's L_c = 1.5 L (22.2 µH) is the edge of the rule; the drive reports L as REAL32
+    (1.4799999917e-05 H), which must not turn 22.2 µH into a refused 1.5000000008 L."""
+    L32 = float(np.float32(L))
+    assert 22.2e-6 / L32 > 1.5
+    assert check_gains({**PAPER, "L_c": 22.2e-6}, R, L32, (0.9999785, 3.33715e-4)).ok
+    assert not check_gains({**PAPER, "L_c": 22.3e-6}, R, L32, (0.9999785, 3.33715e-4)).ok
