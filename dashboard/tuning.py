@@ -112,28 +112,20 @@ def _ab(bench: Bench) -> tuple[float, float]:
 def apply(bench: Bench, changes: dict[str, float | int], *, force: bool = False) -> dict[str, Any]:
     """Apply ``changes`` as one set (drive_link.apply_gains); returns the read-back gains.
 
-    Refused before sending (ValueError → 422, nothing applied) if the merged current loop would
-    be unstable on the drive's motor or the speed loop on the identified model — always — and,
-    unless ``force``, if it fails the same margin rule as ``drive-link set-gains``
-    (drive_link.margins_check: L_c ≤ 1.5 L, GM ≥ 2 dB, ‖S‖∞ ≤ 5).
+    Checked before sending by the rule of ``drive-link set-gains`` (drive_link.margins_check) on
+    the drive's motor R, L and the identified speed model: an unstable current or speed loop is
+    refused always, poor margins (L_c > 1.5 L, GM < 2 dB, ‖S‖∞ > 5) unless ``force``
+    (ValueError → 422, nothing applied).
     """
-    p = preview(bench, changes)
-    if not p["current"]["stable"]:
-        raise ValueError(
-            f"current loop would be unstable (max |pole| {p['current']['max_pole_radius']:.4f}); "
-            "nothing applied"
-        )
-    if not p["speed"]["stable"]:
-        raise ValueError("speed loop would be unstable on the identified model; nothing applied")
-    if not force:
-        with bench.lock:
-            proposed = {**as_dict(bench.drive.read_gains()), **changes}
-            R, L = motor_RL(bench)
-        report = check_gains(proposed, R, L, _ab(bench))
-        if not report.ok:
-            raise ValueError(
-                "; ".join(report.problems) + " (force to apply anyway); nothing applied"
-            )
+    with bench.lock:
+        proposed = {**as_dict(bench.drive.read_gains()), **changes}
+        R, L = motor_RL(bench)
+    report = check_gains(proposed, R, L, _ab(bench))
+    fig = report.figures
+    unstable = not (fig["current_loop_stable"] and fig.get("speed_loop_stable", True))
+    if unstable or (not report.ok and not force):
+        hint = "" if unstable else " (force to apply anyway)"
+        raise ValueError("; ".join(report.problems) + hint + "; nothing applied")
     with bench.lock:
         bench.drive.apply_gains(**changes)
     g = read_gains(bench)
