@@ -87,6 +87,19 @@ def _fmt(x: float | None, spec: str = ".4g", unit: str = "") -> str:
 
 
 # --------------------------------------------------------------------------- design
+def _drive_limits_problem(k_p: float, k_i: float) -> str | None:
+    """None if the drive's EDS limits of 0x2020 k_p/k_i admit the gains, else one line."""
+    from drive_link.objects import default_table
+
+    table = default_table()
+    for name, v in (("speed_controller.k_p", k_p), ("speed_controller.k_i", k_i)):
+        info = table[name]
+        lo, hi = info.low, info.high
+        if (lo is not None and v < lo) or (hi is not None and v > hi):
+            return f"{name} = {v:.6g} is outside the drive's limits [{lo}, {hi}]"
+    return None
+
+
 def _design_ip(args: argparse.Namespace) -> dict[str, Any]:
     a = _num("--a", args.a)
     b = _num("--b", args.b)
@@ -98,11 +111,11 @@ def _design_ip(args: argparse.Namespace) -> dict[str, Any]:
     wn = _num("--wn", args.wn, positive=True)
     fs = _num("--fs", args.fs, positive=True)
     try:
-        k_p, k_i = design.ip_gains(a, b, xi, wn, fs)
+        ipd = design.ip_design(a, b, xi, wn, fs)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    cl = design.ip_closed_loop(a, b, k_p, k_i, fs)
-    poles = cl.poles()
+    k_p, k_i = ipd.k_p, ipd.k_i
+    limits = _drive_limits_problem(k_p, k_i)
     out: dict[str, Any] = {
         "a": a,
         "b": b,
@@ -111,9 +124,26 @@ def _design_ip(args: argparse.Namespace) -> dict[str, Any]:
         "fs": fs,
         "kp": k_p,
         "ki": k_i,
-        "stable": design.is_stable(cl),
-        "poles": [[float(p.real), float(p.imag)] for p in poles],
+        # stability from the closed-loop poles of eq. (27) with the gains as the drive holds them
+        "stable": ipd.stable,
+        "poles": [[float(p.real), float(p.imag)] for p in ipd.poles],
+        "requested_poles": [[float(p.real), float(p.imag)] for p in ipd.requested],
+        "poles_match": ipd.poles_match,
+        "pole_error_rad_s": ipd.max_pole_error,
+        "within_drive_limits": limits is None,
     }
+    if not ipd.poles_match:
+        raise UsageError(
+            f"the closed loop with k_p = {k_p:.6g}, k_i = {k_i:.6g} (REAL32) does not have the "
+            f"requested poles (off by {ipd.max_pole_error:.3g} rad/s): refusing this design"
+        )
+    if not ipd.stable:
+        raise UsageError(
+            f"the closed loop with k_p = {k_p:.6g}, k_i = {k_i:.6g} (REAL32) is not stable "
+            f"(largest |pole| {max(abs(p) for p in ipd.poles):.9f})"
+        )
+    if limits is not None:
+        out["limits_problem"] = limits
     # predicted speed step 0 -> 1000 rpm over 8 / (xi wn) s (ideal inner loop), sampled every 1 ms
     if out["stable"]:
         T = min(max(8.0 / (xi * wn), 0.01), 20.0)
@@ -148,7 +178,14 @@ def _cmd_design(args: argparse.Namespace) -> int:
                     f"xi = {result['xi']:g}, wn = {result['wn']:g} rad/s:"
                 )
                 print(f"  k_p = {result['kp']:.6g} A/rpm   k_i = {result['ki']:.6g} 1/sample")
-                print(f"  closed loop (eq. 27) stable: {'yes' if result['stable'] else 'NO'}")
+                poles = ", ".join(f"{complex(*p):.9f}" for p in result["poles"])
+                print(f"  closed-loop poles (eq. 27, REAL32 gains): {poles}")
+                print(
+                    f"  closed loop stable: {'yes' if result['stable'] else 'NO'}, poles as "
+                    f"requested: {'yes' if result['poles_match'] else 'NO'}"
+                )
+                if "limits_problem" in result:
+                    print(f"  warning: {result['limits_problem']}")
                 if "settling_time_s" in result:
                     print(
                         f"  predicted step: overshoot {_fmt(result['overshoot_pct'], '.2f', '%')}"
@@ -315,7 +352,10 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         if args.xi is not None or args.wn is not None:
             xi = _num("--xi", args.xi if args.xi is not None else "1", positive=True)
             wn = _num("--wn", args.wn if args.wn is not None else "2.3", positive=True)
-            k_p, k_i = design.ip_gains(fit.a, fit.b, xi, wn, fs)
+            try:
+                k_p, k_i = design.ip_gains(fit.a, fit.b, xi, wn, fs)
+            except ValueError as exc:
+                raise UsageError(str(exc)) from None
             result.update({"xi": xi, "wn": wn, "kp": k_p, "ki": k_i})
     except UsageError as exc:
         print(f"drive-link identify: error: {exc}", file=sys.stderr)

@@ -743,7 +743,12 @@ def ip_gains(
         fs: loop sampling frequency [Hz].
 
     Returns:
-        ``(k_p, k_i)``: k_p [A/rpm], k_i [1/sample].
+        ``(k_p, k_i)``: k_p [A/rpm], k_i [1/sample], both > 0.
+
+    Raises:
+        ValueError: bad input, or a spec whose gains are not positive (ξ ω_n at or below
+        :func:`ip_min_xi_omega_n`: the loop would need positive speed feedback; eq. (27) still
+        places the poles, but the law is not an IP controller and the drive refuses k_p < 0).
     """
     a = _finite("a", a)
     b = _finite("b", b)
@@ -765,11 +770,114 @@ def ip_gains(
         one_minus_c = 0.0
     one_d1_d2 = math.expm1(-x) ** 2 + 2.0 * r * one_minus_c
     a_minus_d2 = (a - 1.0) - math.expm1(-2.0 * x)
-    if a_minus_d2 == 0.0:
-        raise ValueError("a equals d_2: k_p would be zero (choose another xi or omega_n)")
-    k_p = a_minus_d2 / b
-    k_i = one_d1_d2 / a_minus_d2
+    k_p = a_minus_d2 / b if a_minus_d2 != 0.0 else 0.0
+    k_i = one_d1_d2 / a_minus_d2 if a_minus_d2 != 0.0 else 0.0
+    if not (k_p > 0.0 and k_i > 0.0 and math.isfinite(k_p) and math.isfinite(k_i)):
+        # eq. (30): k_p > 0 needs d_2 < a, i.e. the requested poles faster than the plant pole
+        need = ip_min_xi_omega_n(a, fs) if 0.0 < a < 1.0 else math.nan
+        hint = (
+            f"; the requested poles must be faster than the plant pole: xi * omega_n > {need:.4g}"
+            " rad/s"
+            if math.isfinite(need) and b > 0.0
+            else ""
+        )
+        raise ValueError(
+            f"xi = {xi:g}, omega_n = {omega_n:g} rad/s gives non-positive IP gains "
+            f"(k_p = {k_p:.4g} A/rpm, k_i = {k_i:.4g} 1/sample){hint}"
+        )
     return k_p, k_i
+
+
+def ip_min_xi_omega_n(a: float, fs: float = FS_DEFAULT) -> float:
+    """Smallest ξ ω_n [rad/s] giving k_p > 0 in eq. (30): ``d_2 = e^{-2 ξ ω_n Ts} < a``, i.e.
+    ``ξ ω_n > -ln(a) fs / 2`` (the closed-loop poles must be faster than the plant pole a)."""
+    a = _finite("a", a)
+    if not 0.0 < a < 1.0:
+        raise ValueError(f"a must be in (0, 1) (got {a!r})")
+    return -math.log(a) * _positive("fs", fs) / 2.0
+
+
+def ip_requested_poles(xi: float, omega_n: float, fs: float = FS_DEFAULT) -> np.ndarray:
+    """The two z-plane poles eqs. (28)–(29) ask for: ``e^{s Ts}`` with
+    ``s = -ξ ω_n ± ω_n sqrt(ξ² - 1)`` (complex for ξ < 1)."""
+    xi = _positive("xi", xi)
+    omega_n = _positive("omega_n", omega_n)
+    Ts = 1.0 / _positive("fs", fs)
+    root = np.sqrt(complex(xi * xi - 1.0))
+    s = np.array([-xi * omega_n + omega_n * root, -xi * omega_n - omega_n * root])
+    return np.exp(s * Ts)
+
+
+@dataclass(frozen=True)
+class IPDesign:
+    """An IP design checked on the gains the drive will hold.
+
+    ``k_p`` [A/rpm], ``k_i`` [1/sample] (eqs. 30–31, > 0), ``k_p_f32``/``k_i_f32`` the same
+    rounded to REAL32 as stored in 0x2020; ``requested`` the poles asked for (eqs. 28–29);
+    ``poles`` the closed-loop poles of eq. (27) computed with the REAL32 gains; ``stable`` from
+    those poles (``|p| < 1``); ``poles_match`` True when each pole's continuous equivalent
+    ``ln(p) fs`` lies within ``rtol`` × ω_n of the requested one.
+    """
+
+    a: float
+    b: float
+    xi: float
+    omega_n: float
+    fs: float
+    k_p: float
+    k_i: float
+    k_p_f32: float
+    k_i_f32: float
+    requested: np.ndarray
+    poles: np.ndarray
+    stable: bool
+    poles_match: bool
+    max_pole_error: float  # rad/s, continuous-equivalent distance (worst pole)
+
+
+def ip_design(
+    a: float,
+    b: float,
+    xi: float = 1.0,
+    omega_n: float = 2.3,
+    fs: float = FS_DEFAULT,
+    *,
+    rtol: float = 0.01,
+) -> IPDesign:
+    """Gains by :func:`ip_gains` (ValueError if they are not positive), then the closed loop of
+    eq. (27) rebuilt from the REAL32-rounded gains: its poles decide ``stable`` and are compared
+    with the requested ones (``poles_match``)."""
+    k_p, k_i = ip_gains(a, b, xi, omega_n, fs)
+    kp32, ki32 = _as_f32(k_p), _as_f32(k_i)
+    poles = np.sort_complex(ip_closed_loop(a, b, kp32, ki32, fs).poles().astype(complex))
+    want = np.sort_complex(ip_requested_poles(xi, omega_n, fs))
+    s_got = np.log(poles) * fs
+    s_want = np.log(want) * fs
+    # pair each requested pole with the nearest actual one (both sets hold two poles)
+    err = min(
+        max(abs(s_got[0] - s_want[0]), abs(s_got[1] - s_want[1])),
+        max(abs(s_got[0] - s_want[1]), abs(s_got[1] - s_want[0])),
+    )
+    return IPDesign(
+        a=float(a),
+        b=float(b),
+        xi=float(xi),
+        omega_n=float(omega_n),
+        fs=float(fs),
+        k_p=k_p,
+        k_i=k_i,
+        k_p_f32=kp32,
+        k_i_f32=ki32,
+        requested=want,
+        poles=poles,
+        stable=bool(np.max(np.abs(poles)) < 1.0),
+        poles_match=bool(err <= rtol * omega_n),
+        max_pole_error=float(err),
+    )
+
+
+def _as_f32(x: float) -> float:
+    return float(np.float32(x))
 
 
 def ip_closed_loop(
