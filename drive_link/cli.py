@@ -516,29 +516,62 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
+#: Options every command takes, before or after the sub-command: (flags, add_argument keywords
+#: without ``default``, default). The default is filled in after parsing (see :func:`_merge_bus`).
+def _bus_options() -> list[tuple[tuple[str, ...], dict[str, Any], Any]]:
+    return [
+        (("--interface",), {"help": "python-can interface (socketcan, virtual, ...)"}, None),
+        (("--channel",), {"help": "python-can channel (can0, vcan0, ...)"}, None),
+        (("--bitrate",), {"type": int, "help": "bit/s"}, None),
+        (
+            ("--host",),
+            {"help": "loopback hub host (socketcand)"},
+            os.environ.get("DRIVE_LINK_HOST"),
+        ),
+        (("--port",), {"type": int, "help": "loopback hub port"}, _env_int("DRIVE_LINK_PORT")),
+        (
+            ("--node",),
+            {"type": int, "help": "node-ID (default 1)"},
+            _env_int("DRIVE_LINK_NODE") or 1,
+        ),
+        (("--sdo-timeout",), {"type": float, "help": "SDO response timeout per frame, s"}, 0.3),
+        (("--timeout",), {"type": float, "help": "state-change / scan timeout, s"}, 1.0),
+        (("--json",), {"action": "store_true", "help": "print one JSON document"}, False),
+    ]
+
+
+_TOP = "top_"  # dest prefix of the options given before the sub-command
+
+
+def _add_bus_options(p: argparse.ArgumentParser, prefix: str = "") -> None:
+    """The bus options on ``p`` with ``SUPPRESS`` defaults (an option not given leaves no
+    attribute, so the sub-command level cannot overwrite what was given before it)."""
+    g = p.add_argument_group("bus (unset = python-can config / CAN_* environment)")
+    for flags, kw, _default in _bus_options():
+        dest = prefix + flags[0].lstrip("-").replace("-", "_")
+        g.add_argument(*flags, dest=dest, default=argparse.SUPPRESS, **kw)
+
+
 def _bus_parent() -> argparse.ArgumentParser:
     p = _Parser(add_help=False)
-    g = p.add_argument_group("bus (unset = python-can config / CAN_* environment)")
-    g.add_argument(
-        "--interface", default=None, help="python-can interface (socketcan, virtual, ...)"
-    )
-    g.add_argument("--channel", default=None, help="python-can channel (can0, ...)")
-    g.add_argument("--bitrate", type=int, default=None, help="bit/s")
-    g.add_argument(
-        "--host", default=os.environ.get("DRIVE_LINK_HOST"), help="loopback hub host (socketcand)"
-    )
-    g.add_argument(
-        "--port", type=int, default=_env_int("DRIVE_LINK_PORT"), help="loopback hub port"
-    )
-    g.add_argument(
-        "--node", type=int, default=_env_int("DRIVE_LINK_NODE") or 1, help="node-ID (default 1)"
-    )
-    g.add_argument(
-        "--sdo-timeout", type=float, default=0.3, help="SDO response timeout per frame, s"
-    )
-    g.add_argument("--timeout", type=float, default=1.0, help="state-change / scan timeout, s")
-    g.add_argument("--json", action="store_true", help="print one JSON document")
+    _add_bus_options(p)
     return p
+
+
+def _merge_bus(args: argparse.Namespace) -> None:
+    """Bus options from both sides of the sub-command: the one after it wins; a sub-command
+    that defines an option itself with a plain default (e.g. ``design --json``) takes the value
+    given before it when its own is still the default; unset options get their defaults."""
+    for flags, _kw, default in _bus_options():
+        dest = flags[0].lstrip("-").replace("-", "_")
+        top = getattr(args, _TOP + dest, argparse.SUPPRESS)
+        if hasattr(args, _TOP + dest):
+            delattr(args, _TOP + dest)
+        mine = getattr(args, dest, argparse.SUPPRESS)
+        if top is not argparse.SUPPRESS and (mine is argparse.SUPPRESS or mine == default):
+            setattr(args, dest, top)
+        elif mine is argparse.SUPPRESS:
+            setattr(args, dest, default)
 
 
 def _env_int(name: str) -> int | None:
@@ -562,6 +595,7 @@ def build_parser() -> argparse.ArgumentParser:
         description=__doc__.split("\n\n")[0],
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
+    _add_bus_options(ap, _TOP)  # accepted before the sub-command too
     sub = ap.add_subparsers(dest="cmd", metavar="COMMAND", required=True)
 
     def add(
@@ -691,6 +725,7 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point; returns the exit code (see module docstring)."""
     ap = build_parser()
     args = ap.parse_args(argv)
+    _merge_bus(args)
     # Library log lines (canopen, python-can) would break the one-line-error rule.
     logging.getLogger().addHandler(logging.NullHandler())
     for name in ("canopen", "can"):

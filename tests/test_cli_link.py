@@ -193,3 +193,83 @@ def test_usage_errors_are_one_line():
         )
         assert p.returncode == 2
         assert "error:" in one_line_error(p)
+
+
+# --------------------------------------------------------------------------- bus options order
+#: minimal positional arguments per sub-command (parse-only test of every command)
+_POSITIONALS = {
+    "mode": ["speed"],
+    "set-speed": ["100"],
+    "set-current": ["1"],
+    "read": ["statusword"],
+    "write": ["target_velocity", "0"],
+    "set-gains": ["k_p=0.5"],
+    "nmt": ["start"],
+    "step": ["current"],
+    "identify": ["--csv", "x.csv"],
+}
+_BUS = ["--interface", "socketcan", "--channel", "vcan7", "--bitrate", "500000", "--node", "9"]
+_BUS += ["--sdo-timeout", "0.7", "--timeout", "2.5", "--json"]
+_WANT = {
+    "interface": "socketcan",
+    "channel": "vcan7",
+    "bitrate": 500000,
+    "node": 9,
+    "sdo_timeout": 0.7,
+    "timeout": 2.5,
+    "json": True,
+}
+
+
+def _parsed(argv: list[str]) -> dict:
+    ap = cli.build_parser()
+    args = ap.parse_args(argv)
+    cli._merge_bus(args)
+    return {k: getattr(args, k, None) for k in _WANT}
+
+
+def test_every_command_takes_bus_options_before_and_after():
+    sub = next(a for a in cli.build_parser()._actions if a.dest == "cmd")
+    assert len(sub.choices) >= 20
+    for name in sub.choices:
+        pos = _POSITIONALS.get(name, [])
+        before = _parsed([*_BUS, name, *pos])
+        if name in ("design", "identify"):  # offline commands: only --json is theirs
+            assert before["json"] is True, name
+            continue
+        assert before == _WANT, name
+        assert _parsed([name, *pos, *_BUS]) == _WANT, name
+        defaults = _parsed([name, *pos])
+        assert defaults["node"] == 1 and defaults["json"] is False and defaults["timeout"] == 1.0
+
+
+def test_option_after_the_command_wins_and_host_port_both_sides():
+    got = _parsed(["--node", "3", "status", "--node", "5"])
+    assert got["node"] == 5
+    ap = cli.build_parser()
+    args = ap.parse_args(["--host", "127.0.0.1", "nmt", "start", "--port", "29999"])
+    cli._merge_bus(args)
+    assert (args.host, args.port, args.command) == ("127.0.0.1", 29999, "start")
+
+
+def test_bus_options_before_the_command_reach_the_drive(hub_drive):
+    """The README's order (`drive-link --host H --port P status`) talks to the same drive."""
+    cmd = [sys.executable, "-m", "drive_link.cli", "--host", "127.0.0.1"]
+    cmd += ["--port", str(hub_drive.port), "--json", "status"]
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
+    assert p.returncode == 0, p.stderr
+    assert json.loads(p.stdout)["node_id"] == 1
+    out, err = io.StringIO(), io.StringIO()
+    argv = ["--port", str(hub_drive.port), "read", "device_type", "--host", "127.0.0.1", "--json"]
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        rc = cli.main(argv)
+    assert rc == 0, err.getvalue()
+    assert json.loads(out.getvalue()) == {"device_type": 0x00020192}
+    # a bad option before the command is still a one-line usage error
+    p = subprocess.run(
+        [sys.executable, "-m", "drive_link.cli", "--node", "x", "status"],
+        capture_output=True,
+        text=True,
+        timeout=30,
+    )
+    assert p.returncode == 2 and "invalid int value" in one_line_error(p)
