@@ -40,7 +40,7 @@ from . import plant, storage
 from .cia402 import Cia402StateMachine
 from .emcy import HEARTBEAT_LOSS, EmcyManager
 from .heartbeat import HeartbeatConsumer, HeartbeatProducer
-from .nmt import OPERATIONAL, NmtSlave
+from .nmt import CMD_RESET_NODE, OPERATIONAL, NmtSlave
 from .params import ParamChecker
 from .pdo import PdoEngine, is_pdo_config
 from .recorder import (
@@ -89,7 +89,9 @@ MEASUREMENTS = {
     14: "theta_e",
 }
 
-SPEED_ZERO_RPM = 10.0  #: |speed| below this counts as standstill (statusword bit 12, ramps)
+SPEED_ZERO_RPM = 10.0  #: |speed| below this counts as standstill (end of a stop ramp)
+NMT_CONNECTION_LOSS = 0x8100  #: fault code of a 0x6007 = 1 reaction to NMT stop/reset
+RESET_BRAKE_LIMIT_S = 5.0  #: a deferred reset node completes after this much braking anyway (s)
 SPEED_WINDOW_RPM = 20.0  #: target reached window in profile velocity mode
 CURRENT_WINDOW_A = 1.0  #: target reached window in the current modes
 
@@ -203,6 +205,8 @@ class VirtualDrive:
             on_reset_node=self._reset_application,
             on_reset_communication=self._reset_communication,
             on_state_change=self._on_nmt_change,
+            on_abort_connection=self._on_nmt_abort_connection,
+            on_boot=self._on_boot,
         )
         self.emcy = EmcyManager(0x80 + node_id, self._send, self.nmt.emcy_allowed)
         self.sdo = BlockSdoServer(
@@ -237,6 +241,7 @@ class VirtualDrive:
         self._speed_ref = 0.0  # profile output (rpm) fed to the IP loop
         self._last_fault = None
         self._started = False
+        self._reset_deferred_at: float | None = None  # sim time of a deferred reset node
         self._load_parameters()
         # frames reach these only while start() has a Notifier running
         self.network.subscribe(0x000, self.nmt.on_command)
@@ -385,7 +390,14 @@ class VirtualDrive:
         self.network.subscribe(self.sdo2.rx_cobid, self.sdo2.on_request)
 
     def _reset_communication(self) -> None:
-        """NMT reset communication: 0x1000–0x1FFF back to stored values or defaults."""
+        """NMT reset communication: 0x1000–0x1FFF back to stored values or defaults (CiA 301).
+
+        Exception: while the power stage is still on after the 0x6007 reaction (0x6007 = 0, or
+        a stop ramp still braking) the consumer heartbeat 0x1016 keeps its present value, so the
+        master's supervision is never dropped while the motor can turn.
+        """
+        keep_1016 = self.cia402.torque_enabled
+        kept = dict(self.node.data_store.get(0x1016, {})) if keep_1016 else {}
         stored = {}
         if self.store_path is not None:
             try:
@@ -397,11 +409,42 @@ class VirtualDrive:
         for (index, sub), raw in stored.items():
             if index < 0x2000 and index in self.od:
                 self.node.data_store.setdefault(index, {})[sub] = raw
+        if keep_1016:
+            self.node.data_store.pop(0x1016, None)
+            if kept:
+                self.node.data_store[0x1016] = kept
         self._pcache.clear()
         self._configure_communication()
 
-    def _reset_application(self) -> None:
-        """NMT reset node: all parameters to stored values, drive to SWITCH ON DISABLED."""
+    def _reset_application(self) -> bool:
+        """NMT reset node: all parameters to stored values, drive to SWITCH ON DISABLED.
+
+        Runs after the 0x6007 reaction. While its stop ramp still brakes the motor the reset is
+        deferred (returns False): the pacing loop completes it at standstill (or after
+        :data:`RESET_BRAKE_LIMIT_S`), then the node boots. The motor is never left turning under
+        a freshly reset, unsupervised application.
+        """
+        if self.cia402.torque_enabled:
+            self._reset_deferred_at = float(self.sim.time)
+            logger.info("reset node deferred until the stop ramp ends")
+            return False
+        self._do_reset_application()
+        return True
+
+    def _finish_deferred_reset(self) -> None:
+        """Pacing loop: complete a deferred reset node once the motor is braked."""
+        started = self._reset_deferred_at
+        if started is None:
+            return
+        braked = not self.cia402.torque_enabled
+        if not braked and float(self.sim.time) - started < RESET_BRAKE_LIMIT_S:
+            return
+        self._reset_deferred_at = None
+        with self._write_lock:
+            self._do_reset_application()
+        self.nmt.finish_reset()
+
+    def _do_reset_application(self) -> None:
         with self.sim_lock:
             self.cia402 = Cia402StateMachine(self._options, self._reset_fault)
             self._set_sim_mode("off")
@@ -415,6 +458,7 @@ class VirtualDrive:
         self.emcy.clear_all()
         self._mode = MODE_PROFILE_VELOCITY
         self._load_parameters()
+        return None
 
     def save_parameters(self) -> None:
         """0x1010 "save": persistent objects' present values to the store file (atomic)."""
@@ -740,13 +784,34 @@ class VirtualDrive:
 
     def _on_heartbeat_lost(self, node_id: int) -> None:
         self.emcy.raise_error(HEARTBEAT_LOSS, bytes([node_id]))
-        option = self._value(0x6007)
+        self._connection_reaction(self._value(0x6007), HEARTBEAT_LOSS)
+
+    def _connection_reaction(self, option: int, code: int) -> None:
+        """CiA 402 0x6007: 1 fault (0x605E reaction), 2 disable voltage, 3 quick stop (0x605A)."""
         if option == 1:
-            self.cia402.fault(HEARTBEAT_LOSS)
+            self.cia402.fault(code)
         elif option == 2:
             self.cia402.disable_voltage()
         elif option == 3:
             self.cia402.quick_stop()
+
+    def _on_nmt_abort_connection(self, command: int) -> None:
+        """NMT stop / reset communication / reset node: the 0x6007 reaction (CiA 402 §6.3.3).
+
+        Leaving the NMT state in which the master commands the drive while the power stage is
+        on is a loss of the connection. Reset node resets the application, which cannot keep
+        the motor running: there 0x6007 = 0 (no action) acts as 3 (quick stop).
+        """
+        if not self.cia402.operation_enabled:
+            return
+        option = self._value(0x6007)
+        if command == CMD_RESET_NODE and option == 0:
+            option = 3
+        logger.warning("NMT command 0x%02X while OPERATION ENABLED: 0x6007 = %d", command, option)
+        self._connection_reaction(option, NMT_CONNECTION_LOSS)
+
+    def _on_boot(self) -> None:
+        """After every boot-up message (hook for reports that must follow it)."""
 
     def _on_heartbeat_back(self, node_id: int) -> None:
         if self.cia402.fault_code != HEARTBEAT_LOSS:
@@ -852,6 +917,8 @@ class VirtualDrive:
                 tap(rec)
 
     def _periodic(self, now: float) -> None:
+        if self._reset_deferred_at is not None:
+            self._finish_deferred_reset()
         self.hb_consumer.tick(now)
         self.hb_producer.tick(now)
         self.pdo.tick(now)

@@ -4,8 +4,14 @@ States and their heartbeat codes: INITIALISING 0x00, STOPPED 0x04, OPERATIONAL 0
 PRE-OPERATIONAL 0x7F. Commands arrive on COB-ID 0x000 as ``[command, node_id]`` (node_id 0 = all):
 0x01 start, 0x02 stop, 0x80 enter pre-operational, 0x81 reset node, 0x82 reset communication.
 
-After either reset the node runs the given reset hook, sends a boot-up message (0x700+N, data
-``[0x00]``) and enters PRE-OPERATIONAL. Services by state (CiA 301 Table 78):
+Entering STOPPED and both resets first run ``on_abort_connection(command)`` (a CiA 402 drive
+applies its 0x6007 reaction there: leaving the NMT service with the power stage on is a loss of
+the connection). After either reset the node runs the given reset hook, sends a boot-up message
+(0x700+N, data ``[0x00]``) and enters PRE-OPERATIONAL. "Reset node" may be completed later: when
+``on_reset_node`` returns False the node stays INITIALISING (no heartbeat, no SDO) until
+:meth:`NmtSlave.finish_reset` is called (the drive first brakes the motor to standstill).
+
+Services by state (CiA 301 Table 78):
 SDO and EMCY in PRE-OPERATIONAL and OPERATIONAL, PDO only in OPERATIONAL, heartbeat in all
 states but INITIALISING.
 """
@@ -45,6 +51,9 @@ class NmtSlave:
     :param on_reset_node: called on "reset node" (application and communication parameters).
     :param on_reset_communication: called on both resets (communication parameters).
     :param on_state_change: called with ``(old, new)`` after every change.
+    :param on_abort_connection: called with the command before entering STOPPED or a reset.
+    :param on_boot: called after every boot-up message (power-on and both resets).
+    :param on_reset_node: returns None/True when done, False when :meth:`finish_reset` follows.
     """
 
     def __init__(
@@ -54,13 +63,18 @@ class NmtSlave:
         on_reset_node: Callable[[], None] = lambda: None,
         on_reset_communication: Callable[[], None] = lambda: None,
         on_state_change: Callable[[int, int], None] = lambda old, new: None,
+        on_abort_connection: Callable[[int], None] = lambda command: None,
+        on_boot: Callable[[], None] = lambda: None,
     ) -> None:
         self.node_id = node_id
         self._send = send
         self._on_reset_node = on_reset_node
         self._on_reset_comm = on_reset_communication
         self._on_state_change = on_state_change
+        self._on_abort = on_abort_connection
+        self._on_boot = on_boot
         self._state = INITIALISING
+        self.reset_pending = False
         self._lock = threading.RLock()
 
     @property
@@ -95,6 +109,7 @@ class NmtSlave:
             self._state = INITIALISING
             self._send(0x700 + self.node_id, b"\x00")
             self._set_state(PRE_OPERATIONAL)
+        self._on_boot()
 
     def on_command(self, can_id: int, data: bytes, timestamp: float) -> None:
         """Notifier callback for COB-ID 0x000."""
@@ -113,13 +128,30 @@ class NmtSlave:
             if command == CMD_START:
                 self._set_state(OPERATIONAL)
             elif command == CMD_STOP:
+                if self._state != STOPPED:
+                    self._on_abort(command)
                 self._set_state(STOPPED)
             elif command == CMD_PRE_OPERATIONAL:
                 self._set_state(PRE_OPERATIONAL)
             elif command in (CMD_RESET_NODE, CMD_RESET_COMMUNICATION):
+                self._on_abort(command)
                 self._set_state(INITIALISING)
-                if command == CMD_RESET_NODE:
-                    self._on_reset_node()
-                self._on_reset_comm()
-                self._send(0x700 + self.node_id, b"\x00")
-                self._set_state(PRE_OPERATIONAL)
+                if command == CMD_RESET_NODE and self._on_reset_node() is False:
+                    self.reset_pending = True  # finish_reset() completes it
+                    return
+                self._complete_reset()
+
+    def finish_reset(self) -> None:
+        """Complete a deferred reset node: reset communication, boot-up, PRE-OPERATIONAL."""
+        with self._lock:
+            if not self.reset_pending:
+                return
+            self.reset_pending = False
+            self._complete_reset()
+
+    def _complete_reset(self) -> None:
+        with self._lock:
+            self._on_reset_comm()
+            self._send(0x700 + self.node_id, b"\x00")
+            self._set_state(PRE_OPERATIONAL)
+        self._on_boot()
