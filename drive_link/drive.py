@@ -22,9 +22,13 @@ from .live import LiveStreams, MappedField, TpdoConfig
 from .nmt import HeartbeatMonitor, HeartbeatProducer, send_nmt
 from .objects import ObjectInfo, ObjectTable, default_table
 from .sdo import SdoChannel
+from .supervision import SupervisedSdoChannel, Supervisor
 from .trace import Recorder
 
 SAVE_SIGNATURE = 0x65766173  # "save"
+#: 0x2060 store_status (U8, ro) values → name (docs: virtual_drive/node/README.md, OD.md).
+STORE_STATUS: dict[int, str] = {0: "ok", 1: "defaults", 2: "damaged", 3: "unreadable"}
+STORE_STATUS_INDEX = 0x2060
 LOAD_SIGNATURE = 0x64616F6C  # "load"
 
 #: Gains field → (current/speed set, OD name of the active value, OD name of the staged value).
@@ -109,7 +113,12 @@ class Drive:
         self.node_id = node_id
         self.table = table or default_table()
         net = conn.network
-        self.sdo = SdoChannel(net, node_id, 0x600 + node_id, 0x580 + node_id, sdo_timeout, retries)
+        #: re-applies this session's supervision when the drive restarts (see supervision.py)
+        self.supervisor = Supervisor(net, node_id, restart_producer=self._restart_producer)
+        self.sdo = SupervisedSdoChannel(
+            net, node_id, 0x600 + node_id, 0x580 + node_id, sdo_timeout, retries
+        )
+        self.sdo.supervisor = self.supervisor
         self.sdo_trace: SdoChannel = self.sdo
         self.heartbeat = HeartbeatMonitor(net, node_id)
         self._emcy = EmcyListener(net, 0x80 + node_id)
@@ -167,6 +176,7 @@ class Drive:
             raise
         try:
             drive._probe()
+            drive.supervisor.attach(drive.sdo)
             drive._setup_trace_channel()
             drive._setup_emcy()
             if heartbeat_ms:
@@ -208,7 +218,7 @@ class Drive:
             return  # no second server: uploads share the first channel (still locked)
         if rx & 0x80000000 or tx & 0x80000000:
             return
-        self.sdo_trace = SdoChannel(
+        trace = SupervisedSdoChannel(
             self._conn.network,
             self.node_id,
             rx & 0x7FF,
@@ -216,6 +226,8 @@ class Drive:
             self.sdo.client.RESPONSE_TIMEOUT,
             self.sdo.retries,
         )
+        trace.supervisor = self.supervisor
+        self.sdo_trace = trace
 
     def close(self) -> None:
         """Stop the host heartbeat (unconfiguring the drive's consumer if this host set it),
@@ -223,6 +235,7 @@ class Drive:
         if self._closed:
             return
         self._closed = True
+        self.supervisor.close()
         if self._consumer_configured:
             try:
                 self.write("consumer_heartbeat_time.consumer_1", 0)
@@ -301,8 +314,34 @@ class Drive:
 
     def nmt(self, command: str) -> None:
         """Send an NMT command to this node: "start", "stop", "pre-operational",
-        "reset node", "reset communication"."""
+        "reset node", "reset communication" (waits while supervision is being re-armed)."""
+        self.supervisor.wait_ready()
+        self.supervisor.expect_nmt(command)
         send_nmt(self._conn.network, command, self.node_id)
+
+    # ------------------------------------------------------------------ restart supervision
+    @property
+    def boots_seen(self) -> int:
+        """Boot-ups / restarts of the drive noticed during this session."""
+        return self.supervisor.boots_seen
+
+    def on_supervision(self, callback) -> None:
+        """Call ``callback(event_dict)`` when a drive restart is noticed ("reboot_detected",
+        "restart_suspected") and when the session's supervision was re-applied ("rearmed",
+        "verified") or could not be ("rearm_failed"); see :mod:`drive_link.supervision`."""
+        self.supervisor.subscribe(callback)
+
+    def rearm_supervision(self):
+        """Re-apply the session's heartbeat consumer, 0x6007 and PDO settings now."""
+        return self.supervisor.rearm()
+
+    def _restart_producer(self) -> None:
+        """Start the host heartbeat again (its periodic task may have died with a bus error)."""
+        if self._producer is None or self.host_id is None:
+            return
+        period = self._producer.period_ms
+        self._producer.stop()
+        self._producer = HeartbeatProducer(self._conn.bus, self.host_id, period)
 
     def reset(self, communication_only: bool = False, timeout: float = 3.0) -> None:
         """NMT reset node (or communication) and wait for the boot-up message."""
@@ -521,9 +560,31 @@ class Drive:
         return self.live
 
     # ------------------------------------------------------------------ summary
+    def store_status(self) -> str:
+        """Health of the drive's parameter store, 0x2060: "ok" (stored parameters loaded),
+        "defaults" (no store), "damaged" / "unreadable" (stored parameters lost: defaults in
+        use), or "unknown" (firmware without 0x2060)."""
+        from .errors import SdoAbort
+
+        if "store_status" not in self.table:
+            index, sub = STORE_STATUS_INDEX, 0
+        else:
+            obj = self.table["store_status"]
+            index, sub = obj.index, obj.subindex
+        try:
+            raw = self.sdo.upload(index, sub, "store_status")
+        except SdoAbort:
+            return "unknown"
+        if not raw:
+            return "unknown"
+        return STORE_STATUS.get(raw[0], f"code {raw[0]}")
+
     def status(self) -> dict[str, Any]:
-        """A snapshot for displays: NMT and 402 state, mode, key measurements, error register."""
+        """A snapshot for displays: NMT and 402 state, mode, key measurements, error register,
+        parameter store health and restart supervision (``boots_seen``,
+        ``supervision_rearmed_at``)."""
         sw = self.statusword
+        sup = self.supervisor.status()
         return {
             "node_id": self.node_id,
             "nmt_state": self.nmt_state,
@@ -537,4 +598,8 @@ class Drive:
             "i_p_ref_A": float(self.read("measurements.i_p_ref")),
             "speed_ref_rpm": float(self.read("measurements.speed_ref")),
             "V_dc_V": float(self.read("measurements.V_dc")),
+            "store_status": self.store_status(),
+            "boots_seen": sup["boots_seen"],
+            "supervision_rearmed_at": sup["supervision_rearmed_at"],
+            "supervision_ready": sup["supervision_ready"],
         }

@@ -1,0 +1,465 @@
+"""Session supervision that survives a drive restart (CiA 301 §7.2.8.3, CiA 402 0x6007).
+
+A drive that boots again (power cycle, watchdog, NMT reset, a crashed and restarted virtual
+drive) comes back with its heartbeat consumer 0x1016, its abort-connection option 0x6007 and its
+PDO settings as stored or defaulted — usually *without* the supervision this host configured, so
+the motor could then run with nobody watching the host. :class:`Supervisor`:
+
+* keeps a journal of every communication object (0x1000–0x1FFF, except error history and
+  store/restore commands) and 0x6007 this session wrote successfully;
+* notices a restart: a boot-up message (0x700 + N, data 0x00), heartbeats that resume after a gap
+  longer than 3 × the producer time, or a heartbeat falling back to PRE-OPERATIONAL without an
+  NMT command of this session; the last two are confirmed by reading the journal back (a
+  mismatch = the drive lost the session's settings);
+* closes a gate at once (on the bus thread, when the frame arrives) so that user SDO transfers
+  and NMT commands wait, re-applies 0x6007, 0x1016 and the host heartbeat producer first, then
+  the rest of the journal (PDOs by the CiA 301 procedure: COB-ID invalid, mapping count 0,
+  entries, count, COB-ID), then opens the gate.
+
+Times: ``wait_timeout`` (s) bounds how long a user command waits for a re-arm; after a failed
+re-arm user commands raise :class:`SupervisionError` until :meth:`Supervisor.rearm` succeeds.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import struct
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import canopen
+
+from .errors import DriveError, StateError
+from .sdo import SdoChannel
+
+#: Communication objects never replayed: error history, store/restore commands, read-only
+#: identity and error objects.
+NOT_JOURNALLED = frozenset({0x1001, 0x1002, 0x1003, 0x1010, 0x1011})
+ABORT_CONNECTION_OPTION = 0x6007
+CONSUMER_HEARTBEAT = 0x1016
+PRODUCER_HEARTBEAT = 0x1017
+#: First replayed, in this order: the reaction, then the watch itself, then the drive's heartbeat.
+SUPERVISION_FIRST = (ABORT_CONNECTION_OPTION, CONSUMER_HEARTBEAT, PRODUCER_HEARTBEAT)
+
+BOOT_UP = 0x00
+STOPPED = 0x04
+OPERATIONAL = 0x05
+PRE_OPERATIONAL = 0x7F
+
+
+class SupervisionError(StateError):
+    """The drive restarted and the session's supervision could not be re-applied."""
+
+
+def journalled(index: int) -> bool:
+    """True if a write to ``index`` is part of the session's supervision/communication setup."""
+    return (0x1000 <= index <= 0x1FFF and index not in NOT_JOURNALLED) or (
+        index == ABORT_CONNECTION_OPTION
+    )
+
+
+def _now_iso() -> str:
+    return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="milliseconds")
+
+
+def _pdo_group(index: int) -> tuple[str, int] | None:
+    """("rpdo"|"tpdo", k) for the communication/mapping parameter objects of PDO k (0-based)."""
+    for base_comm, base_map, kind in ((0x1400, 0x1600, "rpdo"), (0x1800, 0x1A00, "tpdo")):
+        if base_comm <= index < base_comm + 0x200:
+            return kind, index - base_comm
+        if base_map <= index < base_map + 0x200:
+            return kind, index - base_map
+    return None
+
+
+@dataclass
+class RearmReport:
+    """What one re-arm did: ``reason``, ``written`` / ``failed`` ("0xIIII:SS" → detail),
+    ``at`` (ISO time, UTC), ``seconds`` taken, ``reboot`` (True when the drive had lost the
+    session's settings)."""
+
+    reason: str
+    reboot: bool = False
+    written: list[str] = field(default_factory=list)
+    failed: dict[str, str] = field(default_factory=dict)
+    at: str | None = None
+    seconds: float = 0.0
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "reason": self.reason,
+            "reboot": self.reboot,
+            "written": list(self.written),
+            "failed": dict(self.failed),
+            "at": self.at,
+            "seconds": self.seconds,
+        }
+
+
+class SupervisedSdoChannel(SdoChannel):
+    """An :class:`SdoChannel` whose transfers wait while the supervisor re-arms the drive and
+    whose successful writes of communication objects go into the supervisor's journal."""
+
+    supervisor: Supervisor | None = None
+
+    def upload(self, index: int, subindex: int, name: str = "") -> bytes:
+        if self.supervisor is not None:
+            self.supervisor.wait_ready()
+        return super().upload(index, subindex, name)
+
+    def download(self, index: int, subindex: int, data: bytes, name: str = "") -> None:
+        if self.supervisor is not None:
+            self.supervisor.wait_ready()
+        super().download(index, subindex, data, name)
+        if self.supervisor is not None:
+            self.supervisor.record(index, subindex, bytes(data))
+
+    def upload_block(self, index: int, subindex: int, name: str = "", progress=None) -> bytes:
+        if self.supervisor is not None:
+            self.supervisor.wait_ready()
+        return super().upload_block(index, subindex, name, progress)
+
+
+class Supervisor:
+    """Watches one node for restarts and re-applies the session's supervision.
+
+    :param network: the canopen network of the drive's bus.
+    :param node_id: the drive's node-ID.
+    :param restart_producer: re-creates the host heartbeat producer (None: no producer).
+    :param wait_timeout: longest wait of a user command for a re-arm in progress (s).
+    :param gap_factor: heartbeats resuming after more than this × the producer time count as a
+        possible restart.
+    """
+
+    def __init__(
+        self,
+        network: canopen.Network,
+        node_id: int,
+        restart_producer: Callable[[], None] | None = None,
+        wait_timeout: float = 5.0,
+        gap_factor: float = 3.0,
+    ):
+        self.node_id = node_id
+        self.cob_id = 0x700 + node_id
+        self._network = network
+        self.restart_producer = restart_producer
+        self.wait_timeout = wait_timeout
+        self.gap_factor = gap_factor
+        #: how long (s) a re-arm keeps retrying a node that does not answer yet
+        self.rearm_budget = 4.0
+        self.sdo: SdoChannel | None = None
+        self._lock = threading.Condition()
+        self._journal: dict[tuple[int, int], bytes] = {}  # insertion order = last-write order
+        self._ready = True
+        self._pending: str | None = None  # reason of a queued check/re-arm
+        self._pending_boot = False
+        self._error: str | None = None
+        self._closed = False
+        self._last_state: int | None = None
+        self._last_hb: float | None = None
+        self._producer_ms = 0
+        self._expect_preop_until = 0.0
+        self.boots_seen = 0
+        self.rearmed_at: str | None = None
+        self.last_report: RearmReport | None = None
+        self._callbacks: list[Callable[[dict[str, Any]], None]] = []
+        self._worker = threading.Thread(
+            target=self._run, name=f"supervision-{node_id}", daemon=True
+        )
+        network.subscribe(self.cob_id, self._on_heartbeat)
+        self._worker.start()
+
+    # ------------------------------------------------------------------ wiring
+    def attach(self, sdo: SdoChannel) -> None:
+        """Use ``sdo`` (its unsupervised base methods) for read-backs and re-arm writes; read the
+        drive's heartbeat producer time for the gap rule."""
+        self.sdo = sdo
+        try:
+            raw = SdoChannel.upload(sdo, PRODUCER_HEARTBEAT, 0)
+            self._producer_ms = int.from_bytes(raw[:2], "little")
+        except DriveError:
+            self._producer_ms = 0
+
+    def close(self) -> None:
+        """Stop watching; waiting commands proceed (and meet whatever the drive answers)."""
+        with self._lock:
+            self._closed = True
+            self._ready = True
+            self._lock.notify_all()
+        try:
+            self._network.unsubscribe(self.cob_id, self._on_heartbeat)
+        except (KeyError, ValueError):
+            pass
+        if self._worker.is_alive() and threading.current_thread() is not self._worker:
+            self._worker.join(2.0)
+
+    def subscribe(self, callback: Callable[[dict[str, Any]], None]) -> None:
+        """Call ``callback(event)`` on "restart_suspected", "reboot_detected", "rearmed" and
+        "rearm_failed" (event dict: ``event``, ``reason``, ``boots_seen``, ``at``, and for the
+        last two the :class:`RearmReport` fields). Runs on the bus or supervision thread: keep
+        it short."""
+        self._callbacks.append(callback)
+
+    def _emit(self, event: str, **info: Any) -> None:
+        ev = {"event": event, "node_id": self.node_id, "boots_seen": self.boots_seen, **info}
+        ev.setdefault("at", _now_iso())
+        for cb in list(self._callbacks):
+            try:
+                cb(ev)
+            except Exception:
+                pass
+
+    # ------------------------------------------------------------------ journal
+    def record(self, index: int, subindex: int, data: bytes) -> None:
+        """Note a successful write (only communication objects and 0x6007 are kept)."""
+        if not journalled(index):
+            return
+        with self._lock:
+            self._journal.pop((index, subindex), None)
+            self._journal[(index, subindex)] = data
+            if index == PRODUCER_HEARTBEAT and subindex == 0:
+                self._producer_ms = int.from_bytes(data[:2], "little")
+
+    @property
+    def journal(self) -> dict[tuple[int, int], bytes]:
+        """(index, sub-index) → raw bytes of every journalled write, in last-write order."""
+        with self._lock:
+            return dict(self._journal)
+
+    def expect_nmt(self, command: str) -> None:
+        """The session sends NMT ``command``: a following PRE-OPERATIONAL is expected."""
+        if command in ("pre-operational", "reset node", "reset communication"):
+            self._expect_preop_until = time.monotonic() + 2.0
+
+    # ------------------------------------------------------------------ gate
+    @property
+    def ready(self) -> bool:
+        """False while a re-arm is pending or running."""
+        with self._lock:
+            return self._ready
+
+    def wait_ready(self, timeout: float | None = None) -> None:
+        """Block a user command until no re-arm is pending (:class:`SupervisionError` if a
+        re-arm failed or did not finish within ``timeout`` / ``wait_timeout`` s)."""
+        if threading.current_thread() is self._worker:
+            return
+        limit = self.wait_timeout if timeout is None else timeout
+        deadline = time.monotonic() + limit
+        with self._lock:
+            while not self._ready and not self._closed:
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    raise SupervisionError(
+                        f"node {self.node_id} restarted and re-arming its supervision did not "
+                        f"finish within {limit:g} s; command not sent"
+                    )
+                self._lock.wait(left)
+            if self._error is not None and not self._closed:
+                raise SupervisionError(self._error)
+
+    # ------------------------------------------------------------------ detection (bus thread)
+    def _on_heartbeat(self, can_id: int, data: bytearray, timestamp: float) -> None:
+        if not data:
+            return
+        state = data[0] & 0x7F
+        now = time.monotonic()
+        reason = None
+        boot = False
+        with self._lock:
+            last_hb, last_state = self._last_hb, self._last_state
+            self._last_hb, self._last_state = now, state
+            if state == BOOT_UP:
+                boot = True
+                reason = "boot-up message"
+            elif last_hb is not None and self._producer_ms > 0:
+                gap = now - last_hb
+                limit = max(self.gap_factor * self._producer_ms / 1000.0, 0.15)
+                if gap > limit and state != STOPPED:
+                    reason = f"heartbeat resumed after {gap * 1e3:.0f} ms"
+            if (
+                reason is None
+                and state == PRE_OPERATIONAL
+                and last_state in (OPERATIONAL, STOPPED)
+                and now > self._expect_preop_until
+            ):
+                reason = "heartbeat fell back to PRE-OPERATIONAL"
+            if reason is None or self._closed:
+                return
+            if boot:
+                self.boots_seen += 1
+                self._pending_boot = True
+            self._pending = reason
+            self._ready = False
+            self._error = None
+            self._lock.notify_all()
+        self._emit("reboot_detected" if boot else "restart_suspected", reason=reason)
+
+    # ------------------------------------------------------------------ re-arm (worker)
+    def _run(self) -> None:
+        while True:
+            with self._lock:
+                while self._pending is None and not self._closed:
+                    self._lock.wait()
+                if self._closed:
+                    return
+                reason, boot = self._pending, self._pending_boot
+                self._pending, self._pending_boot = None, False
+            report = self._rearm_with_retries(reason or "", boot)
+            with self._lock:
+                if self._pending is not None:
+                    continue  # another restart meanwhile: go again, gate stays closed
+                if report.failed and any(
+                    k.startswith(("0x6007", "0x1016")) or k == "drive" for k in report.failed
+                ):
+                    self._error = (
+                        f"node {self.node_id} restarted ({report.reason}) and its supervision "
+                        "could not be re-armed: "
+                        + "; ".join(f"{k}: {v}" for k, v in report.failed.items())
+                    )
+                self._ready = True
+                self._lock.notify_all()
+            self._emit(
+                "rearm_failed" if self._error else ("rearmed" if report.reboot else "verified"),
+                **report.to_dict(),
+            )
+
+    def _rearm_with_retries(self, reason: str, boot: bool) -> RearmReport:
+        deadline = time.monotonic() + self.rearm_budget
+        while True:
+            report = self.rearm_now(reason, boot)
+            if "drive" not in report.failed or time.monotonic() > deadline or self._closed:
+                return report
+            time.sleep(0.1)  # the node is not answering yet (still booting): try again
+
+    def rearm(self) -> RearmReport:
+        """Re-apply the session's supervision now (user-requested); clears a failed state."""
+        with self._lock:
+            self._ready = False
+        try:
+            report = self.rearm_now("requested", True)
+        finally:
+            with self._lock:
+                critical = [k for k in report.failed if k.startswith(("0x6007", "0x1016"))]
+                self._error = None if not critical else f"re-arm failed: {report.failed}"
+                self._ready = True
+                self._lock.notify_all()
+        return report
+
+    def rearm_now(self, reason: str, boot: bool) -> RearmReport:
+        """Compare the journal with the drive and write what differs (supervision first).
+
+        ``boot``: the drive is known to have restarted (counted as a reboot even if nothing had
+        to be written). Unsupervised transfers (the gate does not apply to this thread)."""
+        t0 = time.monotonic()
+        report = RearmReport(reason=reason, reboot=boot)
+        sdo = self.sdo
+        if sdo is None:
+            return report
+        journal = self.journal
+        try:
+            first = [k for p in SUPERVISION_FIRST for k in journal if k[0] == p]
+            plain = [k for k in journal if k not in first and _pdo_group(k[0]) is None]
+            groups: dict[tuple[str, int], list[tuple[int, int]]] = {}
+            for k in journal:
+                g = _pdo_group(k[0])
+                if g is not None:
+                    groups.setdefault(g, []).append(k)
+            stale_first = [k for k in first if self._differs(sdo, k, journal[k])]
+            stale_plain = [k for k in plain if self._differs(sdo, k, journal[k])]
+            stale_groups = [
+                g for g, ks in groups.items() if any(self._differs(sdo, k, journal[k]) for k in ks)
+            ]
+        except DriveError as exc:
+            report.failed["drive"] = f"no answer to read-back: {exc}"
+            report.seconds = time.monotonic() - t0
+            return report
+        if stale_first or stale_plain or stale_groups:
+            report.reboot = True
+        if report.reboot and not boot:
+            with self._lock:
+                self.boots_seen += 1
+        # 1. the host heartbeat producer runs (the consumer must see it from its first period)
+        if report.reboot and self.restart_producer is not None:
+            try:
+                self.restart_producer()
+                report.written.append("host heartbeat producer")
+            except Exception as exc:
+                report.failed["host heartbeat producer"] = str(exc)
+        # 2. the supervision objects, then the rest, PDOs last
+        for k in stale_first + stale_plain:
+            self._write(sdo, k, journal[k], report)
+        for g in stale_groups:
+            self._write_pdo(sdo, g, groups[g], journal, report)
+        report.seconds = time.monotonic() - t0
+        if report.reboot:
+            report.at = _now_iso()
+            if not report.failed:
+                self.rearmed_at = report.at
+        self.last_report = report
+        return report
+
+    @staticmethod
+    def _differs(sdo: SdoChannel, key: tuple[int, int], data: bytes) -> bool:
+        try:
+            got = SdoChannel.upload(sdo, key[0], key[1])
+        except DriveError as exc:
+            if getattr(exc, "code", None) is not None:
+                return True  # refused read (object gone?): try writing it
+            raise
+        return got[: len(data)] != data or len(got) < len(data)
+
+    @staticmethod
+    def _write(sdo: SdoChannel, key: tuple[int, int], data: bytes, report: RearmReport) -> None:
+        where = f"0x{key[0]:04X}:{key[1]:02X}"
+        try:
+            SdoChannel.download(sdo, key[0], key[1], data)
+            report.written.append(where)
+        except DriveError as exc:
+            report.failed[where] = str(exc)
+
+    def _write_pdo(
+        self,
+        sdo: SdoChannel,
+        group: tuple[str, int],
+        keys: list[tuple[int, int]],
+        journal: dict[tuple[int, int], bytes],
+        report: RearmReport,
+    ) -> None:
+        """CiA 301 §7.2.2: invalidate the PDO, clear its mapping, write the entries, the count,
+        the other communication parameters and finally the (valid) COB-ID."""
+        kind, k = group
+        comm = (0x1400 if kind == "rpdo" else 0x1800) + k
+        mapping = (0x1600 if kind == "rpdo" else 0x1A00) + k
+        cob_key = (comm, 1)
+        try:
+            cob = journal.get(cob_key) or SdoChannel.upload(sdo, comm, 1)[:4]
+        except DriveError as exc:
+            report.failed[f"0x{comm:04X}:01"] = str(exc)
+            return
+        cob_value = struct.unpack("<I", cob.ljust(4, b"\0"))[0]
+        self._write(sdo, cob_key, struct.pack("<I", cob_value | 0x80000000), report)
+        map_keys = [kk for kk in keys if kk[0] == mapping and kk[1] != 0]
+        if map_keys or (mapping, 0) in journal:
+            self._write(sdo, (mapping, 0), b"\x00", report)
+            for kk in sorted(map_keys):
+                self._write(sdo, kk, journal[kk], report)
+            if (mapping, 0) in journal:
+                self._write(sdo, (mapping, 0), journal[(mapping, 0)], report)
+        for kk in keys:
+            if kk[0] == comm and kk[1] != 1:
+                self._write(sdo, kk, journal[kk], report)
+        self._write(sdo, cob_key, struct.pack("<I", cob_value), report)
+
+    # ------------------------------------------------------------------ summary
+    def status(self) -> dict[str, Any]:
+        """``boots_seen``, ``supervision_rearmed_at`` and the gate state for displays."""
+        with self._lock:
+            return {
+                "boots_seen": self.boots_seen,
+                "supervision_rearmed_at": self.rearmed_at,
+                "supervision_ready": self._ready and self._error is None,
+                "supervision_error": self._error,
+            }
