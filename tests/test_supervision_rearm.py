@@ -284,3 +284,26 @@ def test_failed_rearm_blocks_user_commands_with_one_line(rig):
         d.supervisor.wait_ready(timeout=15.0)
         d.read("statusword")
     assert "\n" not in str(exc.value)
+
+
+def test_pdo_settings_the_session_changed_come_back(rig):
+    """The session remaps TPDO4 (CiA 301 §7.2.2.3 procedure) and slows TPDO1; after a restart
+    both read back as the session left them, not as the drive's defaults."""
+    d = rig.drive
+    d.configure_heartbeat_consumer(CONSUMER_MS)
+    cob = int(d.read("tpdo4_communication.cob_id"))
+    speed_ref = (0x2040 << 16) | (11 << 8) | 32
+    d.write("tpdo4_communication.cob_id", cob | 0x80000000)
+    d.write("tpdo4_mapping.number_of_mapped_objects", 0)
+    d.write("tpdo4_mapping.mapped_object_1", speed_ref)
+    d.write("tpdo4_mapping.number_of_mapped_objects", 1)
+    d.write("tpdo4_communication.cob_id", cob)
+    d.write("tpdo1_communication.event_timer", 20)
+    rig.restart()
+    assert rig.detected.wait(5.0)
+    assert int(d.read("tpdo4_mapping.number_of_mapped_objects")) == 1
+    assert int(d.read("tpdo4_mapping.mapped_object_1")) == speed_ref
+    assert int(d.read("tpdo4_communication.cob_id")) == cob
+    assert int(d.read("tpdo1_communication.event_timer")) == 20
+    assert int(d.read("consumer_heartbeat_time.consumer_1")) == _consumer_value()
+    assert not d.supervisor.last_report.failed
