@@ -146,10 +146,31 @@ def cmd_scan(args: argparse.Namespace) -> int:
     return 0
 
 
+#: What a store_status value means for the user (0x2060).
+_STORE_STATUS_TEXT = {
+    "ok": "stored parameters loaded",
+    "defaults": "no stored parameters: defaults in use",
+    "damaged": "STORED PARAMETERS DAMAGED: defaults in use (EMCY 0x6310), store again",
+    "unreadable": "STORED PARAMETERS UNREADABLE: defaults in use (EMCY 0x6310), store again",
+    "unknown": "not reported by this firmware (no 0x2060)",
+}
+
+
+def _status_text(st: dict) -> str:
+    lines = []
+    for k, v in st.items():
+        if k == "store_status":
+            v = f"{v} ({_STORE_STATUS_TEXT.get(str(v), 'unexpected value')})"
+        elif k == "supervision_rearmed_at" and v is None:
+            v = "never (no restart seen)"
+        lines.append(f"{k:>22}: {v}")
+    return "\n".join(lines)
+
+
 def cmd_status(args: argparse.Namespace, d: Drive) -> int:
     st = d.status()
     st["gains"] = d.read_gains().to_dict()
-    _emit(args, st, lambda: "\n".join(f"{k:>16}: {v}" for k, v in st.items()))
+    _emit(args, st, lambda: _status_text(st))
     return 0
 
 
