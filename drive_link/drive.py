@@ -121,6 +121,7 @@ class Drive:
         self.sdo.supervisor = self.supervisor
         self.sdo_trace: SdoChannel = self.sdo
         self.heartbeat = HeartbeatMonitor(net, node_id)
+        self.heartbeat.attach_reader(self.read)  # 0x1017 wait + SDO fallback of nmt_state
         self._emcy = EmcyListener(net, 0x80 + node_id)
         self._producer: HeartbeatProducer | None = None
         self._consumer_configured = False
