@@ -1,11 +1,14 @@
 """One canopen :class:`~canopen.Network` per python-can bus, shared by every drive on it.
 
 python-can allows one reader per bus, so all drives (and scans) on one bus share one Network and
-its Notifier thread. :class:`BusMonitor` counts every frame for rates and bus load.
+its Notifier thread. :class:`BusMonitor` counts every frame for rates and bus load,
+:class:`~drive_link.bus_health.BusHealth` error frames and the bus state. Frames are sent through
+:class:`PacedNetwork`, which waits out a full transmit queue instead of failing.
 """
 
 from __future__ import annotations
 
+import errno
 import threading
 import time
 from collections import deque
@@ -15,6 +18,65 @@ import can
 import canopen
 
 from .bus import open_bus
+from .bus_health import BusHealth
+
+#: How long one frame may wait for room in a full transmit queue before the send fails (s).
+SEND_DEADLINE = 2.0
+
+
+def queue_full(exc: BaseException) -> bool:
+    """Whether a send failed only because the transmit queue is full: SocketCAN's ENOBUFS
+    (errno 105; python-can raises ``CanOperationError`` with ``error_code`` 105, issue #2004)
+    or python-can's own "Transmit buffer full" after its send timeout."""
+    code = getattr(exc, "error_code", None) or getattr(exc, "errno", None)
+    text = str(exc)
+    return code == errno.ENOBUFS or "No buffer space" in text or "Transmit buffer full" in text
+
+
+class PacedNetwork(canopen.Network):
+    """canopen Network whose sends wait for room in a full transmit queue.
+
+    SocketCAN answers a send into a full queue (``txqueuelen``, 10 by default on real adapters)
+    with ENOBUFS at once; a burst (a scan's 127 probes, a block download's 127 segments) then
+    fails although the bus only needs a few ms to drain. Each send is retried with growing
+    pauses (0.2 ms doubling up to 10 ms) for up to ``send_deadline`` s; only then the last
+    error is raised. ``tx_queue_full`` counts the retries.
+    """
+
+    send_deadline = SEND_DEADLINE
+
+    def __init__(self, bus: can.BusABC | None = None):
+        super().__init__(bus)
+        self.tx_queue_full = 0
+
+    def send_message(self, can_id: int, data: bytes, remote: bool = False) -> None:
+        if not self.bus:
+            raise RuntimeError("Not connected to CAN bus")
+        msg = can.Message(
+            is_extended_id=can_id > 0x7FF,
+            arbitration_id=can_id,
+            data=data,
+            is_remote_frame=remote,
+        )
+        deadline: float | None = None
+        pause = 0.0002
+        while True:
+            try:
+                with self.send_lock:
+                    self.bus.send(msg)
+                break
+            except (can.CanError, OSError) as exc:
+                if not queue_full(exc):
+                    raise
+                now = time.monotonic()
+                if deadline is None:
+                    deadline = now + self.send_deadline
+                elif now >= deadline:
+                    raise
+                self.tx_queue_full += 1
+                time.sleep(min(pause, max(0.0, deadline - now)))
+                pause = min(2 * pause, 0.01)
+        self.check()
 
 
 def frame_bits(dlc: int, extended: bool = False) -> float:
@@ -39,6 +101,8 @@ class BusMonitor(can.Listener):
         self.bits_total = 0.0
 
     def on_message_received(self, msg: can.Message) -> None:
+        if msg.is_error_frame:  # a controller report (BusHealth counts it), not a frame on the wire
+            return
         bits = frame_bits(msg.dlc, msg.is_extended_id)
         now = time.monotonic()
         with self._lock:
@@ -69,8 +133,10 @@ class Connection:
         self.owns_bus = owns_bus
         self.bitrate = bitrate
         self.monitor = BusMonitor()
-        self.network = canopen.Network(bus)
+        self.health = BusHealth(bus)
+        self.network = PacedNetwork(bus)
         self.network.listeners.append(self.monitor)
+        self.network.listeners.append(self.health)
         self.network.NOTIFIER_CYCLE = 0.1
         self.network.connect()
         self.refs = 0

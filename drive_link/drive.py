@@ -560,6 +560,13 @@ class Drive:
                 self._live = None
         return self.live
 
+    # ------------------------------------------------------------------ bus health
+    def bus_health(self) -> dict[str, str | int]:
+        """``bus_state`` ("ERROR_ACTIVE", "ERROR_PASSIVE", "BUS_OFF" or "UNKNOWN") and
+        ``bus_error_frames`` (error frames received since the bus was opened); see
+        :mod:`drive_link.bus_health`."""
+        return self._conn.health.snapshot()
+
     # ------------------------------------------------------------------ summary
     def store_status(self) -> str:
         """Health of the drive's parameter store, 0x2060: "ok" (stored parameters loaded),
@@ -603,4 +610,5 @@ class Drive:
             "boots_seen": sup["boots_seen"],
             "supervision_rearmed_at": sup["supervision_rearmed_at"],
             "supervision_ready": sup["supervision_ready"],
+            **self.bus_health(),
         }

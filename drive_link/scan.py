@@ -34,6 +34,9 @@ class NodeInfo:
         return f"CiA {self.device_type & 0xFFFF}"
 
 
+#: Extra wait (s) after ``timeout`` for the heartbeat of nodes that answered SDO.
+HEARTBEAT_WAIT = 1.5
+
 _PROBE = bytes([0x40, 0x00, 0x10, 0x00, 0, 0, 0, 0])  # upload request 0x1000:00
 
 
@@ -45,9 +48,12 @@ def scan(
     **settings: Any,
 ) -> list[NodeInfo]:
     """Find nodes: probe device_type (0x1000) by SDO on every ID in ``node_ids`` (sent back to
-    back), and listen ``timeout`` s for SDO answers and heartbeats. Nodes with an open
-    :class:`Drive` on the same bus can be passed in ``skip`` (their SDO channel is not probed,
-    so an ongoing transfer is not disturbed) — they are still found by heartbeat.
+    back; a full SocketCAN transmit queue is waited out, see
+    :class:`~drive_link.connection.PacedNetwork`), and listen ``timeout`` s for SDO answers and
+    heartbeats, then up to :data:`HEARTBEAT_WAIT` s more for the heartbeat of nodes that
+    answered. Nodes with an open :class:`Drive` on the same bus can be passed in ``skip`` (their
+    SDO channel is not probed, so an ongoing transfer is not disturbed) — they are still found
+    by heartbeat.
 
     ``bus`` or python-can settings (``interface``, ``channel``, ``bitrate``, ``host``, ``port``).
     """
@@ -94,8 +100,14 @@ def scan(
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
             time.sleep(0.01)
-        # Heartbeats are slower than SDO answers: wait a little longer for nodes seen only so far
-        # by heartbeat to report their state.
+        # Heartbeats are slower than SDO answers (0x1017 is often 100 ms to 1 s): wait up to
+        # HEARTBEAT_WAIT s more for nodes that answered SDO to report their NMT state.
+        deadline = time.monotonic() + HEARTBEAT_WAIT
+        while time.monotonic() < deadline:
+            with lock:
+                if all(i.nmt_state is not None for i in found.values()):
+                    break
+            time.sleep(0.01)
     finally:
         for cob, cb in subs:
             try:
