@@ -2471,6 +2471,19 @@
 #define OD_DISABLE_OPERATION_OPTION_CODE_MAX                     1
 #define OD_DISABLE_OPERATION_OPTION_CODE_REF                     0x605C0010UL
 
+/* ---- 0x605D halt_option_code ---- */
+/* 0x605D:00 halt_option_code INTEGER16 rw - controlword bit 8 (halt): 1 slow-down ramp (0x6084), 2 quick-stop ramp (0x6085), 3/4 act as 2; then hold 0 in OPERATION ENABLED */
+#define OD_HALT_OPTION_CODE_INDEX                                0x605Du
+#define OD_HALT_OPTION_CODE_SUB                                  0x00u
+#define OD_HALT_OPTION_CODE_TYPE                                 OD_TYPE_I16
+#define OD_HALT_OPTION_CODE_CTYPE                                int16_t
+#define OD_HALT_OPTION_CODE_ACCESS                               OD_ACCESS_RW
+#define OD_HALT_OPTION_CODE_PDO                                  0u
+#define OD_HALT_OPTION_CODE_DEFAULT                              1
+#define OD_HALT_OPTION_CODE_MIN                                  1
+#define OD_HALT_OPTION_CODE_MAX                                  4
+#define OD_HALT_OPTION_CODE_REF                                  0x605D0010UL
+
 /* ---- 0x605E fault_reaction_option_code ---- */
 /* 0x605E:00 fault_reaction_option_code INTEGER16 rw */
 #define OD_FAULT_REACTION_OPTION_CODE_INDEX                      0x605Eu
@@ -2526,6 +2539,58 @@
 #define OD_VELOCITY_ACTUAL_VALUE_PDO                             1u
 #define OD_VELOCITY_ACTUAL_VALUE_DEFAULT                         0L /* rpm */
 #define OD_VELOCITY_ACTUAL_VALUE_REF                             0x606C0020UL
+
+/* ---- 0x606D velocity_window ---- */
+/* 0x606D:00 velocity_window UNSIGNED16 rw [rpm] - target reached (statusword bit 10, profile velocity) when |speed - target| <= window for velocity_window_time */
+#define OD_VELOCITY_WINDOW_INDEX                                 0x606Du
+#define OD_VELOCITY_WINDOW_SUB                                   0x00u
+#define OD_VELOCITY_WINDOW_TYPE                                  OD_TYPE_U16
+#define OD_VELOCITY_WINDOW_CTYPE                                 uint16_t
+#define OD_VELOCITY_WINDOW_ACCESS                                OD_ACCESS_RW
+#define OD_VELOCITY_WINDOW_PDO                                   0u
+#define OD_VELOCITY_WINDOW_DEFAULT                               20u /* rpm */
+#define OD_VELOCITY_WINDOW_MIN                                   0u /* rpm */
+#define OD_VELOCITY_WINDOW_MAX                                   6000u /* rpm */
+#define OD_VELOCITY_WINDOW_REF                                   0x606D0010UL
+
+/* ---- 0x606E velocity_window_time ---- */
+/* 0x606E:00 velocity_window_time UNSIGNED16 rw [ms] - time |speed - target| must stay within velocity_window before bit 10 is set */
+#define OD_VELOCITY_WINDOW_TIME_INDEX                            0x606Eu
+#define OD_VELOCITY_WINDOW_TIME_SUB                              0x00u
+#define OD_VELOCITY_WINDOW_TIME_TYPE                             OD_TYPE_U16
+#define OD_VELOCITY_WINDOW_TIME_CTYPE                            uint16_t
+#define OD_VELOCITY_WINDOW_TIME_ACCESS                           OD_ACCESS_RW
+#define OD_VELOCITY_WINDOW_TIME_PDO                              0u
+#define OD_VELOCITY_WINDOW_TIME_DEFAULT                          0u /* ms */
+#define OD_VELOCITY_WINDOW_TIME_MIN                              0u /* ms */
+#define OD_VELOCITY_WINDOW_TIME_MAX                              60000u /* ms */
+#define OD_VELOCITY_WINDOW_TIME_REF                              0x606E0010UL
+
+/* ---- 0x606F velocity_threshold ---- */
+/* 0x606F:00 velocity_threshold UNSIGNED16 rw [rpm] - speed = 0 (statusword bit 12, profile velocity) when |speed| <= threshold for velocity_threshold_time */
+#define OD_VELOCITY_THRESHOLD_INDEX                              0x606Fu
+#define OD_VELOCITY_THRESHOLD_SUB                                0x00u
+#define OD_VELOCITY_THRESHOLD_TYPE                               OD_TYPE_U16
+#define OD_VELOCITY_THRESHOLD_CTYPE                              uint16_t
+#define OD_VELOCITY_THRESHOLD_ACCESS                             OD_ACCESS_RW
+#define OD_VELOCITY_THRESHOLD_PDO                                0u
+#define OD_VELOCITY_THRESHOLD_DEFAULT                            10u /* rpm */
+#define OD_VELOCITY_THRESHOLD_MIN                                0u /* rpm */
+#define OD_VELOCITY_THRESHOLD_MAX                                6000u /* rpm */
+#define OD_VELOCITY_THRESHOLD_REF                                0x606F0010UL
+
+/* ---- 0x6070 velocity_threshold_time ---- */
+/* 0x6070:00 velocity_threshold_time UNSIGNED16 rw [ms] - time |speed| must stay within velocity_threshold before bit 12 is set */
+#define OD_VELOCITY_THRESHOLD_TIME_INDEX                         0x6070u
+#define OD_VELOCITY_THRESHOLD_TIME_SUB                           0x00u
+#define OD_VELOCITY_THRESHOLD_TIME_TYPE                          OD_TYPE_U16
+#define OD_VELOCITY_THRESHOLD_TIME_CTYPE                         uint16_t
+#define OD_VELOCITY_THRESHOLD_TIME_ACCESS                        OD_ACCESS_RW
+#define OD_VELOCITY_THRESHOLD_TIME_PDO                           0u
+#define OD_VELOCITY_THRESHOLD_TIME_DEFAULT                       0u /* ms */
+#define OD_VELOCITY_THRESHOLD_TIME_MIN                           0u /* ms */
+#define OD_VELOCITY_THRESHOLD_TIME_MAX                           60000u /* ms */
+#define OD_VELOCITY_THRESHOLD_TIME_REF                           0x60700010UL
 
 /* ---- 0x6071 target_torque ---- */
 /* 0x6071:00 target_torque INTEGER16 rw [permille of motor_rated_torque] - |target_torque| <= max_torque */
@@ -2676,6 +2741,32 @@
 #define OD_QUICK_STOP_DECELERATION_MIN                           0x00000001UL /* rpm/s */
 #define OD_QUICK_STOP_DECELERATION_MAX                           0x000F4240UL /* rpm/s */
 #define OD_QUICK_STOP_DECELERATION_REF                           0x60850020UL
+
+/* ---- 0x6087 torque_slope ---- */
+/* 0x6087:00 torque_slope UNSIGNED32 rw [permille of motor_rated_torque/s] - rate of change of the torque demand in profile torque mode (and its halt), 0 = step */
+#define OD_TORQUE_SLOPE_INDEX                                    0x6087u
+#define OD_TORQUE_SLOPE_SUB                                      0x00u
+#define OD_TORQUE_SLOPE_TYPE                                     OD_TYPE_U32
+#define OD_TORQUE_SLOPE_CTYPE                                    uint32_t
+#define OD_TORQUE_SLOPE_ACCESS                                   OD_ACCESS_RW
+#define OD_TORQUE_SLOPE_PDO                                      0u
+#define OD_TORQUE_SLOPE_DEFAULT                                  0x00000000UL /* permille of motor_rated_torque/s */
+#define OD_TORQUE_SLOPE_MIN                                      0x00000000UL /* permille of motor_rated_torque/s */
+#define OD_TORQUE_SLOPE_MAX                                      0x000F4240UL /* permille of motor_rated_torque/s */
+#define OD_TORQUE_SLOPE_REF                                      0x60870020UL
+
+/* ---- 0x6088 torque_profile_type ---- */
+/* 0x6088:00 torque_profile_type INTEGER16 rw - 0 linear ramp (the only profile supported) */
+#define OD_TORQUE_PROFILE_TYPE_INDEX                             0x6088u
+#define OD_TORQUE_PROFILE_TYPE_SUB                               0x00u
+#define OD_TORQUE_PROFILE_TYPE_TYPE                              OD_TYPE_I16
+#define OD_TORQUE_PROFILE_TYPE_CTYPE                             int16_t
+#define OD_TORQUE_PROFILE_TYPE_ACCESS                            OD_ACCESS_RW
+#define OD_TORQUE_PROFILE_TYPE_PDO                               0u
+#define OD_TORQUE_PROFILE_TYPE_DEFAULT                           0
+#define OD_TORQUE_PROFILE_TYPE_MIN                               0
+#define OD_TORQUE_PROFILE_TYPE_MAX                               0
+#define OD_TORQUE_PROFILE_TYPE_REF                               0x60880010UL
 
 /* ---- 0x60FF target_velocity ---- */
 /* 0x60FF:00 target_velocity INTEGER32 rw [rpm] - |target_velocity| <= max_motor_speed */

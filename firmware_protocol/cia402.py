@@ -15,6 +15,7 @@ __all__ = [
     "CW_ENABLE_OPERATION_BIT",
     "CW_ENABLE_VOLTAGE",
     "CW_FAULT_RESET",
+    "CW_HALT",
     "CW_QUICK_STOP",
     "CW_QUICK_STOP_BIT",
     "CW_SHUTDOWN",
@@ -32,6 +33,7 @@ __all__ = [
     "SWITCH_ON_DISABLED",
     "SW_INTERNAL_LIMIT",
     "SW_REMOTE",
+    "SW_SPEED_ZERO",
     "SW_TARGET_REACHED",
     "SW_VOLTAGE_ENABLED",
     "SW_WARNING",
@@ -70,6 +72,7 @@ SW_WARNING = 1 << 7
 SW_REMOTE = 1 << 9
 SW_TARGET_REACHED = 1 << 10
 SW_INTERNAL_LIMIT = 1 << 11
+SW_SPEED_ZERO = 1 << 12  # profile velocity: |speed| <= 0x606F for 0x6070 ms
 
 # -- controlword bits and commands -------------------------------------------------------
 CW_SWITCH_ON_BIT = 1 << 0
@@ -77,6 +80,7 @@ CW_ENABLE_VOLTAGE = 1 << 1
 CW_QUICK_STOP_BIT = 1 << 2  # active low: 0 = quick stop
 CW_ENABLE_OPERATION_BIT = 1 << 3
 CW_FAULT_RESET = 1 << 7  # rising edge
+CW_HALT = 1 << 8  # profile modes: decelerate (0x605D) and hold 0
 
 CW_SHUTDOWN = 0x0006
 CW_SWITCH_ON = 0x0007

@@ -33,6 +33,7 @@ from canopen import objectdictionary as odm
 from canopen.node.local import LocalNode
 from canopen.sdo import SdoAbortedError
 
+from firmware_protocol.cia402 import CW_HALT, SW_SPEED_ZERO
 from firmware_protocol.od import load_od
 
 from . import cia402 as sm
@@ -92,8 +93,7 @@ MEASUREMENTS = {
 SPEED_ZERO_RPM = 10.0  #: |speed| below this counts as standstill (end of a stop ramp)
 NMT_CONNECTION_LOSS = 0x8100  #: fault code of a 0x6007 = 1 reaction to NMT stop/reset
 RESET_BRAKE_LIMIT_S = 5.0  #: a deferred reset node completes after this much braking anyway (s)
-SPEED_WINDOW_RPM = 20.0  #: target reached window in profile velocity mode
-CURRENT_WINDOW_A = 1.0  #: target reached window in the current modes
+CURRENT_WINDOW_A = 1.0  #: target reached window in the current modes (A)
 
 
 class DriveLocalNode(LocalNode):
@@ -239,6 +239,13 @@ class VirtualDrive:
         self._mode = MODE_PROFILE_VELOCITY
         self._sim_mode = "off"
         self._speed_ref = 0.0  # profile output (rpm) fed to the IP loop
+        self._i_ref = 0.0  # torque-profile output (A) in the current modes
+        self._i_target = 0.0  # where _i_ref is heading (A)
+        # since when (sim time, s) |speed - target| <= 0x606D / |speed| <= 0x606F, and for
+        # which velocity target the window was measured
+        self._window_since: float | None = None
+        self._window_target = 0.0
+        self._threshold_since: float | None = None
         self._last_fault = None
         self._started = False
         self._reset_deferred_at: float | None = None  # sim time of a deferred reset node
@@ -528,21 +535,61 @@ class VirtualDrive:
         reached = False
         limit = False
         mode_bits = 0
-        if st.state == sm.OPERATION_ENABLED or st.ramp is not None:
+        if st.state == sm.QUICK_STOP_ACTIVE:
+            # CiA 402: in QUICK STOP ACTIVE (0x605A 5..8) bit 10 = the axis is stopped
+            reached = st.ramp is None
+        elif st.state == sm.OPERATION_ENABLED or st.ramp is not None:
             if self._mode == MODE_PROFILE_VELOCITY:
-                target = self._value(0x60FF) if st.ramp is None else 0.0
-                reached = abs(live["speed"] - target) <= SPEED_WINDOW_RPM
+                reached = self._velocity_reached()
                 limit = abs(live["i_p_ref"]) >= 0.999 * self._value(0x2020, 3)
             else:
-                reached = abs(live["i_p"] - live["i_p_ref"]) <= CURRENT_WINDOW_A
-        if self._mode == MODE_PROFILE_VELOCITY and abs(live["speed"]) < SPEED_ZERO_RPM:
-            mode_bits |= 1 << 12
+                reached = (
+                    self._i_ref == self._i_target
+                    and abs(live["i_p"] - live["i_p_ref"]) <= CURRENT_WINDOW_A
+                )
+        if self._mode == MODE_PROFILE_VELOCITY and self._held(
+            self._threshold_since, self._value(0x6070)
+        ):
+            mode_bits |= SW_SPEED_ZERO
         return st.statusword(
             target_reached=reached,
             internal_limit=limit,
             warning=bool(self.hb_consumer.lost),
             mode_bits=mode_bits,
         )
+
+    def _velocity_target(self) -> float:
+        """Velocity (rpm) bit 10 compares with: 0 during a stop ramp or halt, else 0x60FF."""
+        st = self.cia402
+        if st.ramp is not None or st.controlword & CW_HALT:
+            return 0.0
+        return float(self._value(0x60FF))
+
+    def _held(self, since: float | None, time_ms: int) -> bool:
+        return since is not None and float(self.sim.time) - since >= time_ms / 1000.0 - 1e-9
+
+    def _velocity_reached(self) -> bool:
+        """|speed - target| <= 0x606D continuously for 0x606E ms, for the present target."""
+        if self._velocity_target() != self._window_target:
+            return False  # target changed since the last chunk: not measured yet
+        return self._held(self._window_since, self._value(0x606E))
+
+    def _update_windows(self) -> None:
+        """After a chunk: restart or keep the velocity window / threshold timers (sim time)."""
+        t = float(self.sim.time)
+        speed = float(self.live["speed"])
+        target = self._velocity_target()
+        inside = abs(speed - target) <= self._value(0x606D)
+        if not inside or target != self._window_target:
+            self._window_since = t if inside else None
+        elif self._window_since is None:
+            self._window_since = t
+        self._window_target = target
+        if abs(speed) <= self._value(0x606F):
+            if self._threshold_since is None:
+                self._threshold_since = t
+        else:
+            self._threshold_since = None
 
     # -- writes ---------------------------------------------------------------------------
     def _before_write(
@@ -830,30 +877,44 @@ class VirtualDrive:
         if not st.torque_enabled:
             self._set_sim_mode("off")
             self._speed_ref = float(self.live.get("speed", 0.0))  # bumpless start
+            self._i_ref = 0.0
             return
         mode = self._mode
         if st.ramp is not None:
             self._ramp_step(dt)
             return
+        halt = bool(st.controlword & CW_HALT)
         if mode == MODE_PROFILE_VELOCITY:
             self._set_sim_mode("speed")
-            target = float(self._value(0x60FF))
-            self._speed_ref = _ramp_towards(
-                self._speed_ref, target, self._value(0x6083), self._value(0x6084), dt
-            )
+            if halt:  # 0x605D: 1 slow-down ramp (0x6084), 2..4 quick-stop ramp (0x6085)
+                rate = self._value(0x6084) if self._value(0x605D) == 1 else self._value(0x6085)
+                self._speed_ref = _ramp_towards(self._speed_ref, 0.0, rate, rate, dt)
+            else:
+                target = float(self._value(0x60FF))
+                self._speed_ref = _ramp_towards(
+                    self._speed_ref, target, self._value(0x6083), self._value(0x6084), dt
+                )
             self.sim.set_speed_ref(self._speed_ref)
         else:
             self._set_sim_mode("current")
-            self.sim.set_current_ref(self._current_ref(mode))
+            self.sim.set_current_ref(self._current_ref(mode, halt, dt))
 
-    def _current_ref(self, mode: int) -> float:
+    def _current_ref(self, mode: int, halt: bool = False, dt: float = 0.0) -> float:
+        """i_p* (A) of the current modes: profile torque follows 0x6087 (‰ of rated per s,
+        0 = step) toward target_torque, or toward 0 on halt; mode -1 steps to i_p_ref."""
         rated = self._value(0x6075) / 1000.0
-        if mode == MODE_PROFILE_TORQUE:
-            ref = self._value(0x6071) / 1000.0 * rated
-        else:
-            ref = float(self._value(0x2030, 1))
         cap = self._value(0x6073) / 1000.0 * rated
-        return max(-cap, min(cap, ref))
+        if mode == MODE_PROFILE_TORQUE:
+            target = 0.0 if halt else self._value(0x6071) / 1000.0 * rated
+            slope = self._value(0x6087) / 1000.0 * rated  # A/s
+            target = max(-cap, min(cap, target))
+            self._i_ref = _ramp_towards(self._i_ref, target, slope, slope, dt)
+        else:
+            target = 0.0 if halt else float(self._value(0x2030, 1))
+            target = max(-cap, min(cap, target))
+            self._i_ref = target
+        self._i_target = target
+        return max(-cap, min(cap, self._i_ref))
 
     def _ramp_step(self, dt: float) -> None:
         """Stop ramp of quick stop / slow down / fault reaction, in every mode.
@@ -903,6 +964,7 @@ class VirtualDrive:
         else:
             for name in MEASUREMENTS.values():
                 live[name] = last[name]
+        self._update_windows()
         if fault is not None and fault != self._last_fault:
             self._last_fault = fault
             recorder.note_fault(float(fault.t))
