@@ -57,6 +57,16 @@ def require_control(
 ControlDep = Annotated[Bench, Depends(require_control)]
 
 
+async def no_body(request: Request) -> None:
+    """Body-less actions take no body: an empty one (no Content-Type needed) or ``{}``."""
+    raw = (await request.body()).strip()
+    if raw and raw != b"{}":
+        raise HTTPException(422, "this action takes no request body")
+
+
+NoBody = Depends(no_body)
+
+
 def run(fn: Callable[[], T]) -> T:
     """Run a bench operation; map its failure onto an HTTP error."""
     try:
@@ -87,7 +97,9 @@ def post_control(body: ControlIn, bench: BenchDep) -> ControlOut:
     return ControlOut(token=h.token, client=h.client, since=h.since)
 
 
-@router.delete("/control", tags=["control"], summary="Give control back")
+@router.delete(
+    "/control", tags=["control"], summary="Give control back", dependencies=[NoBody]
+)
 def delete_control(
     bench: BenchDep, x_control_token: Annotated[str | None, Header()] = None
 ) -> ControlOut:
@@ -105,6 +117,17 @@ def post_command(body: CommandIn, bench: ControlDep) -> dict[str, Any]:
 def put_mode(body: ModeIn, bench: ControlDep) -> dict[str, Any]:
     run(lambda: bench.set_mode(body.mode))
     return {"mode": bench.drive.mode}
+
+
+@router.post(
+    "/action/cancel",
+    tags=["drive"],
+    summary="Cancel the long action under way (identification, step test, capture); the "
+    "drive is put back as the action found it",
+    dependencies=[NoBody],
+)
+def post_cancel(bench: ControlDep) -> dict[str, Any]:
+    return {"cancelled": bench.cancel_action()}
 
 
 # ------------------------------------------------------------------ setpoints and steps
@@ -133,7 +156,9 @@ def post_sequence(body: SequenceIn, bench: ControlDep) -> dict[str, Any]:
     return {"started": True, "steps": len(steps)}
 
 
-@router.delete("/steps/sequence", tags=["steps"], summary="Stop a running sequence")
+@router.delete(
+    "/steps/sequence", tags=["steps"], summary="Stop a running sequence", dependencies=[NoBody]
+)
 def delete_sequence(bench: ControlDep) -> dict[str, Any]:
     bench.stop_sequence()
     return {"stopped": True}
@@ -171,7 +196,12 @@ def post_ip_design(body: IPDesignIn, bench: BenchDep) -> dict[str, Any]:
     return jsonable(run(lambda: tuning.design_ip(bench, body.xi, body.omega_n, body.a, body.b)))
 
 
-@router.post("/gains/store", tags=["gains"], summary="Store the live gains in the drive (0x1010)")
+@router.post(
+    "/gains/store",
+    tags=["gains"],
+    summary="Store the live gains in the drive (0x1010)",
+    dependencies=[NoBody],
+)
 def post_store(bench: ControlDep) -> dict[str, Any]:
     run(lambda: tuning.store(bench))
     return {"stored": True}
@@ -190,8 +220,8 @@ def get_trace_config(bench: BenchDep) -> TraceIn:
 
 @router.put("/trace/config", tags=["trace"], summary="Set the default trace configuration")
 def put_trace_config(body: TraceIn, bench: ControlDep) -> TraceIn:
-    bench.trace_config = body
-    return body
+    bench.trace_config = run(lambda: body.checked(bench.drive.trace.resolve))
+    return bench.trace_config
 
 
 @router.post(
@@ -200,7 +230,7 @@ def put_trace_config(body: TraceIn, bench: ControlDep) -> TraceIn:
     summary="Arm, trigger and upload one trace (50 kHz); body overrides the stored config",
 )
 def post_capture(bench: ControlDep, body: TraceIn | None = None) -> dict[str, Any]:
-    cfg = body if body is not None else bench.trace_config
+    cfg = run(lambda: (body or bench.trace_config).checked(bench.drive.trace.resolve))
     cap = run(lambda: experiments.capture(bench, cfg))
     return jsonable(cap.summary())
 

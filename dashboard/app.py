@@ -3,18 +3,20 @@
 from __future__ import annotations
 
 import contextlib
+import math
 from collections.abc import AsyncIterator, Callable
 from importlib import resources
 from typing import Any
 
 from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
 from fastapi.responses import HTMLResponse, JSONResponse, RedirectResponse
 from starlette.concurrency import run_in_threadpool
 
 from dashboard import api, stream
-from dashboard.bench import Bench
+from dashboard.bench import Bench, jsonable
 from dashboard.config import BenchConfig
-from dashboard.security import allowed_origins, token_ok
+from dashboard.security import allowed_hosts, allowed_origins, bearer, host_ok, token_ok
 
 BenchOpener = Callable[[BenchConfig], contextlib.AbstractContextManager[Bench]]
 
@@ -75,27 +77,44 @@ def create_app(
     app.state.config = config
     app.state.origins = allowed_origins(config.host, [config.api_port], config.extra_origins)
 
+    hosts = allowed_hosts(config.host)
+
+    @app.exception_handler(RequestValidationError)
+    async def invalid_body(request: Request, exc: RequestValidationError) -> JSONResponse:
+        """422 with JSON-safe details (a NaN or 1e400 in the body must not turn into a 500
+        while the error itself is serialised)."""
+        return JSONResponse({"detail": jsonable(_safe_errors(exc.errors()))}, status_code=422)
+
     @app.middleware("http")
     async def guard(request: Request, call_next: Any):
         path = request.url.path
+        host = request.headers.get("host")
+        if not host:
+            return JSONResponse({"detail": "Host header required"}, status_code=400)
+        if not host_ok(host, hosts):
+            return JSONResponse({"detail": f"host {host!r} not served here"}, status_code=421)
         if config.token is not None:
-            given = request.headers.get("authorization", "").removeprefix("Bearer ").strip() or None
-            given = given or request.query_params.get("token")
-            if not token_ok(config.token, given):
-                return JSONResponse({"detail": "access token required"}, status_code=401)
-        if request.method in STATE_CHANGING and path.startswith("/api/"):
-            ctype = request.headers.get("content-type", "").split(";")[0].strip().lower()
-            if ctype != "application/json":
+            # the token only in the Authorization header: never in URLs (logs, history)
+            if not token_ok(config.token, bearer(request.headers.get("authorization"))):
                 return JSONResponse(
-                    {
-                        "detail": "state-changing calls take a JSON body "
-                        "(Content-Type: application/json)"
-                    },
-                    status_code=415,
+                    {"detail": "access token required (Authorization: Bearer <token>)"},
+                    status_code=401,
+                    headers={"WWW-Authenticate": "Bearer"},
                 )
+        if request.method in STATE_CHANGING and path.startswith("/api/"):
             origin = request.headers.get("origin")
             if origin is not None and origin.rstrip("/") not in app.state.origins:
                 return JSONResponse({"detail": f"origin {origin} not allowed"}, status_code=403)
+            if _has_body(request):
+                ctype = request.headers.get("content-type", "").split(";")[0].strip().lower()
+                if ctype != "application/json":
+                    return JSONResponse(
+                        {
+                            "detail": "a request body must be JSON "
+                            "(Content-Type: application/json)"
+                        },
+                        status_code=415,
+                    )
         return await call_next(request)
 
     @app.get("/", include_in_schema=False)
@@ -114,3 +133,37 @@ def create_app(
     app.include_router(api.router)
     app.include_router(stream.router)
     return app
+
+
+def _has_body(request: Request) -> bool:
+    """True when the request carries a body (Content-Length > 0 or chunked)."""
+    if request.headers.get("transfer-encoding"):
+        return True
+    try:
+        return int(request.headers.get("content-length", "0") or 0) > 0
+    except ValueError:
+        return True
+
+
+def _safe_errors(errors: Any) -> Any:
+    """pydantic's error list without unserialisable inputs (NaN, inf, bytes, exceptions)."""
+    out = []
+    for e in errors:
+        e = dict(e)
+        e.pop("ctx", None)
+        if "input" in e:
+            e["input"] = _plain(e["input"])
+        out.append(e)
+    return out
+
+
+def _plain(x: Any) -> Any:
+    if isinstance(x, float):
+        return x if math.isfinite(x) else str(x)
+    if isinstance(x, (str, int, bool)) or x is None:
+        return x
+    if isinstance(x, dict):
+        return {str(k): _plain(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_plain(v) for v in x]
+    return repr(x)

@@ -6,15 +6,17 @@ that two clients never interleave a half-applied gain set or a capture. Units: r
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import itertools
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import Any
 
 import numpy as np
 
+from dashboard.actions import Found, LongAction
 from dashboard.security import ControlLease
 
 #: The staged gain-set names (0x20F0) → the live object each one mirrors (docs/contracts.md §1).
@@ -75,6 +77,17 @@ def jsonable(x: Any) -> Any:
         return x.hex()
     return x
 
+
+#: Drive.status() fields shown by the dashboard (added by drive_link; absent ones are None).
+STATUS_FIELDS = (
+    "bus_state",
+    "bus_error_frames",
+    "store_status",
+    "boots_seen",
+    "supervision_rearmed_at",
+)
+SEQUENCE_SLACK_S = 5.0  #: a sequence step later than this (busy host) stops the sequence, s
+STATUS_PERIOD_S = 1.0  #: Drive.status() (a dozen SDO reads) at most this often
 
 #: EMCY error codes the drive sends (CiA 301 / CiA 402 meanings), for display.
 EMCY_TEXT = {
@@ -140,6 +153,10 @@ class Bench:
         from dashboard.models import TraceIn
 
         self.trace_config = TraceIn()  # default for POST /api/trace/capture without a body
+        self.sequence_progress: dict[str, Any] | None = None
+        self.action: LongAction | None = None  # the long action under way (progress, cancel)
+        self._drive_cache: dict[str, Any] = {}  # last drive values read for state()
+        self._status_t = 0.0  # time.monotonic() of the last Drive.status() read
 
     # ---------------------------------------------------------------- events
     def emit(self, kind: str, data: dict | None = None) -> None:
@@ -151,8 +168,37 @@ class Bench:
                 pass
 
     # ---------------------------------------------------------------- state
+    def _drive_reads(self) -> dict[str, Any]:
+        """The drive values of :meth:`state` that need SDO: read under the bench lock only (a
+        status read never crosses an action's SDO exchange); while a long action holds the
+        lock, the last values read are returned (``"cached": True``)."""
+        d = self.drive
+        if not self.lock.acquire(timeout=0.05):
+            return {**self._drive_cache, "cached": True}
+        try:
+            vals: dict[str, Any] = {
+                "nmt_state": _safe(lambda: d.nmt_state),
+                "state": _safe(lambda: d.state),
+                "mode": _safe(lambda: d.mode),
+            }
+            now = time.monotonic()
+            if now - self._status_t >= STATUS_PERIOD_S or "status" not in self._drive_cache:
+                self._status_t = now
+                st = _safe(lambda: dict(d.status()), {}) or {}
+                vals["status"] = {k: st.get(k) for k in STATUS_FIELDS}
+            else:
+                vals["status"] = self._drive_cache["status"]
+        finally:
+            self.lock.release()
+        self._drive_cache = vals
+        return {**vals, "cached": False}
+
     def state(self) -> dict[str, Any]:
-        """Connection and drive state for display (values as the drive reports them)."""
+        """Connection and drive state for display (values as the drive reports them).
+
+        Also the fields of ``drive_link.Drive.status()`` named in :data:`STATUS_FIELDS`
+        (None while the installed drive_link does not provide them), read at most once per
+        STATUS_PERIOD_S s."""
         d = self.drive
         stats = {}
         try:
@@ -160,14 +206,19 @@ class Bench:
         except Exception as exc:  # pragma: no cover - shown to the user
             stats = {"error": str(exc)}
         holder = self.lease.holder
+        reads = self._drive_reads()
+        action = self.action
         out: dict[str, Any] = {
             "bus": self.description,
             "node_id": self.node_id,
             "virtual": self.virtual,
-            "nmt_state": _safe(lambda: d.nmt_state),
+            "nmt_state": reads.get("nmt_state"),
             "heartbeat_age_s": _safe(lambda: time.monotonic() - d.heartbeat.last_time),
-            "state": _safe(lambda: d.state),
-            "mode": _safe(lambda: d.mode),
+            "state": reads.get("state"),
+            "mode": reads.get("mode"),
+            "drive_values_cached": reads.get("cached", False),
+            **(reads.get("status") or dict.fromkeys(STATUS_FIELDS)),
+            "action": action.public() if action is not None else None,
             "speed_setpoint": self.speed_setpoint,
             "current_setpoint": self.current_setpoint,
             "T_load": self.T_load,
@@ -176,6 +227,7 @@ class Bench:
             "controller": holder.public() if holder else None,
             "busy": self.busy,
             "sequence_running": self._sequence is not None and self._sequence.is_alive(),
+            "sequence": self.sequence_progress,
             "identified": self.identified,
         }
         return out
@@ -255,22 +307,117 @@ class Bench:
             self.T_load = float(T_load)
         self.emit("load", {"T_load": T_load})
 
+    # ---------------------------------------------------------------- long actions
+    @contextlib.contextmanager
+    def long_action(self, what: str, deadline_s: float) -> Iterator[LongAction]:
+        """Run a long action under the bench lock with a deadline (s), progress and a cancel;
+        on any failure (cancel and timeout included) put the drive back as found, then
+        re-raise with what was restored. Refused (RuntimeError) while another runs."""
+        if self.action is not None or self.busy:
+            raise RuntimeError(f"busy: {self.busy or self.action.what} under way")
+        act = LongAction(what, time.monotonic() + deadline_s)
+        with self.lock:
+            if self.action is not None:
+                raise RuntimeError(f"busy: {self.action.what} under way")
+            found = self._found()
+            act.found = found
+            self.action, self.busy = act, what
+            self.emit("busy", {"what": what})
+            try:
+                yield act
+            except BaseException as exc:
+                undone = self.restore(found)
+                note = "drive put back as found" if not undone else "NOT put back: " + undone
+                self.emit("error", {"message": f"{what}: {exc} ({note})"})
+                if isinstance(exc, Exception):
+                    try:
+                        again = type(exc)(f"{exc} ({note})")
+                    except Exception:
+                        again = RuntimeError(f"{exc} ({note})")
+                    raise again from exc
+                raise
+            finally:
+                self.action, self.busy = None, None
+                self.emit("busy", {"what": None})
+
+    def cancel_action(self) -> bool:
+        """Cancel the long action under way (True if there was one)."""
+        act = self.action
+        if act is None:
+            return False
+        act.cancel_event.set()
+        return True
+
+    def _found(self) -> Found:
+        return Found(
+            enabled=_safe(lambda: self.drive.state) == "OPERATION ENABLED",
+            mode=_safe(lambda: self.drive.mode),
+            speed_rpm=self.speed_setpoint,
+            current_A=self.current_setpoint,
+        )
+
+    def restore(self, found: Found) -> str:
+        """Put the drive back to ``found``; returns what could not be restored ("" if all)."""
+        failed: list[str] = []
+
+        def attempt(name: str, fn: Callable[[], Any]) -> None:
+            try:
+                fn()
+            except Exception as exc:
+                failed.append(f"{name} ({exc})")
+
+        d = self.drive
+        with self.lock:
+            if not found.enabled:
+                attempt("power stage off", lambda: d.disable())
+            attempt("i_p*", lambda: d.set_current(found.current_A))
+            self.current_setpoint = found.current_A
+            if found.mode in ("speed", "current") and _safe(lambda: d.mode) != found.mode:
+                attempt("mode", lambda: self.set_mode(found.mode))
+            attempt("speed setpoint", lambda: d.set_speed(found.speed_rpm))
+            self.speed_setpoint = found.speed_rpm
+            if not found.enabled and _safe(lambda: d.state) == "OPERATION ENABLED":
+                attempt("power stage off", lambda: d.disable())
+        self.emit("state")
+        return ", ".join(failed)
+
     # ---------------------------------------------------------------- sequences
     def start_sequence(self, steps: list[tuple[float, float]]) -> None:
-        """Run (at_s, rpm) speed setpoints in the background; a new one replaces a running one."""
+        """Run (at_s, rpm) speed setpoints in the background; a new one replaces a running one.
+
+        Progress is in ``state()["sequence"]``; a sequence that falls more than
+        SEQUENCE_SLACK_S s behind its schedule, or whose setpoint is refused, stops and puts
+        the drive back as it found it (Stop sequence leaves the last setpoint)."""
         self.stop_sequence()
         self._sequence_stop.clear()
+        found = self._found()
 
         def run() -> None:
             t0 = time.monotonic()
-            for at_s, rpm in steps:
+            total = steps[-1][0] if steps else 0.0
+            for k, (at_s, rpm) in enumerate(steps):
+                self.sequence_progress = {
+                    "step": k + 1,
+                    "steps": len(steps),
+                    "next_at_s": at_s,
+                    "total_s": total,
+                    "elapsed_s": round(time.monotonic() - t0, 2),
+                }
                 if self._sequence_stop.wait(max(0.0, t0 + at_s - time.monotonic())):
+                    self.sequence_progress = None
                     return
                 try:
+                    late = time.monotonic() - (t0 + at_s)
+                    if late > SEQUENCE_SLACK_S:
+                        raise TimeoutError(f"step {k + 1} is {late:.1f} s late")
                     self.set_speed(rpm)
                 except Exception as exc:
-                    self.emit("error", {"message": f"sequence stopped: {exc}"})
+                    undone = self.restore(found)
+                    note = "drive put back as found" if not undone else "NOT put back: " + undone
+                    self.emit("error", {"message": f"sequence stopped: {exc} ({note})"})
+                    self.sequence_progress = None
                     return
+            self.sequence_progress = None
             self.emit("sequence_done")
 
         self._sequence = threading.Thread(target=run, name="speed-sequence", daemon=True)

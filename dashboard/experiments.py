@@ -6,12 +6,11 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Iterator
-from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
 
+from dashboard.actions import LongAction, wait_recorder
 from dashboard.bench import Bench, Capture, as_dict
 from dashboard.models import CurrentStepIn, IdentifyIn, TraceIn
 from dashboard.tuning import read_gains
@@ -20,19 +19,8 @@ from drive_link import identify as ident
 
 TS = 20e-6  #: loop period, s
 COMMUTATION_RETRIES = 4  #: current-step records repeated when a commutation disturbs them
-
-
-@contextmanager
-def _busy(bench: Bench, what: str) -> Iterator[None]:
-    if bench.busy:
-        raise RuntimeError(f"busy: {bench.busy} under way")
-    bench.busy = what
-    bench.emit("busy", {"what": what})
-    try:
-        yield
-    finally:
-        bench.busy = None
-        bench.emit("busy", {"what": None})
+CURRENT_STEP_DEADLINE_S = 30.0  #: a current step test gives up (and restores) after this, s
+IDENTIFY_DEADLINE_S = 20.0  #: identification: this plus 4 × (recorded time) / speed factor, s
 
 
 def _column(trace: Any, name: str) -> np.ndarray:
@@ -56,8 +44,10 @@ def _record(
     trigger: Trigger,
     action: Any = None,
     timeout: float | None = None,
+    act: LongAction | None = None,
 ) -> Any:
-    """Configure, arm, run ``action`` (e.g. a setpoint step), wait, upload; returns the Trace."""
+    """Configure, arm, run ``action`` (e.g. a setpoint step), wait, upload; returns the Trace.
+    With ``act`` (a long action) the waits are cancellable and bounded by its deadline."""
     rec = bench.drive.trace
     rec.stop()
     # drive_link writes length before pre_trigger, and the drive requires pre_trigger < length
@@ -66,13 +56,25 @@ def _record(
     rec.configure(channels, divider, length, pre_trigger, trigger)
     rec.arm()
     if pre_trigger:  # let the pre-trigger buffer fill before the step
-        time.sleep(min(2.0, pre_trigger * divider * TS / _speed_factor(bench) + 0.02))
+        pause = min(2.0, pre_trigger * divider * TS / _speed_factor(bench) + 0.02)
+        act.sleep(pause) if act is not None else time.sleep(pause)
     if action is not None:
         action()
     if timeout is None:
         timeout = 3.0 + 3.0 * length * divider * TS / _speed_factor(bench)
-    rec.wait(timeout)
-    return rec.upload()
+    if act is None:
+        rec.wait(timeout)
+        return rec.upload()
+    act.progress(0.3, "recording")
+    wait_recorder(rec, act, timeout)
+    act.progress(0.6, "uploading the trace")
+
+    def uploaded(done: int, total: int | None) -> None:
+        if total:
+            act.fraction = 0.6 + 0.3 * done / total
+            act.text = f"uploading the trace ({done}/{total} bytes)"
+
+    return rec.upload(progress=uploaded)
 
 
 def _speed_factor(bench: Bench) -> float:
@@ -99,7 +101,8 @@ def capture(bench: Bench, body: TraceIn) -> Capture:
         def action() -> None:
             bench.set_current(body.step_to_A)
 
-    with bench.lock, _busy(bench, "capture"):
+    deadline = 10.0 + 4.0 * body.length * body.divider * TS / _speed_factor(bench)
+    with bench.long_action("capture", deadline) as act:
         tr = _record(
             bench,
             list(body.channels),
@@ -108,6 +111,7 @@ def capture(bench: Bench, body: TraceIn) -> Capture:
             pre_trigger=body.pre_trigger,
             trigger=trig,
             action=action,
+            act=act,
         )
     cols: dict[str, np.ndarray] = {"t": np.asarray(tr.t, dtype=np.float64)}
     for name, v in tr.signals.items():
@@ -155,12 +159,13 @@ def current_step(bench: Bench, body: CurrentStepIn, average_samples: int = 1) ->
     ]
     if len(channels) * length > 16384:
         raise ValueError("duration too long for the recorder at 50 kHz")
-    with bench.lock, _busy(bench, "current step"):
-        for _attempt in range(COMMUTATION_RETRIES):
+    with bench.long_action("current step", CURRENT_STEP_DEADLINE_S) as act:
+        for attempt in range(COMMUTATION_RETRIES):
+            act.progress(attempt / COMMUTATION_RETRIES * 0.2, f"step {attempt + 1}: settling")
             bench.set_current(body.from_A)
             if str(bench.drive.state).upper() != "OPERATION ENABLED":
                 bench.drive.enable(timeout=2.0)
-            time.sleep(0.05 / _speed_factor(bench) + 0.02)
+            act.sleep(0.05 / _speed_factor(bench) + 0.02)
             tr = _record(
                 bench,
                 channels,
@@ -169,6 +174,7 @@ def current_step(bench: Bench, body: CurrentStepIn, average_samples: int = 1) ->
                 pre_trigger=pre,
                 trigger=Trigger(mode="setpoint_step"),
                 action=lambda: bench.set_current(body.to_A),
+                act=act,
             )
             t = np.asarray(tr.t, dtype=np.float64)
             i_abc = np.column_stack([_column(tr, f"i_{ph}") for ph in "abc"])
@@ -245,11 +251,14 @@ def identify(bench: Bench, body: IdentifyIn) -> dict[str, Any]:
     n_post = round(body.duration_s / (divider * TS))
     pre = max(10, n_post // 20)
     length = min(8192, pre + n_post)
-    with bench.lock, _busy(bench, "identification"):
+    sf = _speed_factor(bench)
+    deadline = IDENTIFY_DEADLINE_S + 4.0 * (body.duration_s + 0.1) / sf
+    with bench.long_action("identification", deadline) as act:
+        act.progress(0.05, f"settling at {body.from_A:g} A")
         bench.set_current(body.from_A)
         if not str(bench.drive.state).upper().startswith("OPERATION ENABLED"):
             bench.drive.enable(timeout=2.0)
-        time.sleep(0.1 / _speed_factor(bench) + 0.02)
+        act.sleep(0.1 / sf + 0.02)
         tr = _record(
             bench,
             ["measurements.i_p", "measurements.speed"],
@@ -258,7 +267,11 @@ def identify(bench: Bench, body: IdentifyIn) -> dict[str, Any]:
             pre_trigger=pre,
             trigger=Trigger(mode="setpoint_step"),
             action=lambda: bench.set_current(body.to_A),
+            act=act,
         )
+        act.progress(0.95, "fitting")
+        # the motor ran up to to_A: take it back to where it was (the fit needs no drive)
+        bench.restore(act.found)
     t = np.asarray(tr.t, dtype=np.float64)
     i_p = _column(tr, "i_p")
     speed = _column(tr, "speed")

@@ -1,628 +1,226 @@
-"""The viser GUI: drive state, speed and current plots, tuning, identification, captures, 3D rotor.
+"""The viser GUI: one panel per browser (:mod:`dashboard.gui_panel`), the shared 3D rotor, and
+the two background loops that keep every panel live.
 
-Layout (control panel, top to bottom): status, control buttons, live plots of speed and i_p with
-their references (refreshed at ``config.gui_rate_hz``), then tabs Speed · Current · Tuning ·
-Identify · Captures. Every action goes through :class:`dashboard.bench.Bench` and needs the
-control lease; values shown after an action are the ones read back from the drive.
+Layout (control panel, top to bottom): status (with the live data's freshness), who controls,
+Take control, Drive buttons, progress/cancel of a long action, live plots of speed and i_p with
+their references, then tabs Speed · Current · Tuning · Identify · Captures.
+
+Streaming cannot die silently: the plot loop catches every failure of a tick (counted, shown),
+a watchdog in the status loop restarts a plot thread that died or stopped beating, and the page
+says "STALE" with the data's age when no fresh data arrives (see :mod:`dashboard.live_plot`).
+Every viser send goes through one lock (:mod:`dashboard.gui_guard`).
+
+Control lease: a browser takes control by its first action (or "Take control"); a browser whose
+WebSocket closes keeps it LEASE_GRACE_S seconds (a reload), then loses it. A tab that goes
+silent without closing is dropped by the WebSocket keepalive (ping every 20 s, 20 s timeout),
+then loses the lease LEASE_GRACE_S later.
 """
 
 from __future__ import annotations
 
 import contextlib
+import html
 import io
-import secrets
+import logging
 import threading
 import time
-from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 import viser
-import viser.uplot as uplot
 
-from dashboard import experiments, tuning
-from dashboard.bench import LIVE_SIGNALS, Bench, Capture
+from dashboard import live_plot
+from dashboard.bench import LIVE_SIGNALS, Bench
 from dashboard.config import BenchConfig
-from dashboard.export import capture_csv, capture_png
+from dashboard.gui_guard import guard_handshake, install_send_lock, refuse_share_url
+from dashboard.gui_panel import CURRENT_COLORS, SPEED_COLORS, Panel, _fmt
 from dashboard.gui_scene import RotorScene
 from dashboard.gui_scene import background as scene_background
-from dashboard.models import CONTROLLER_TYPES
-from dashboard.security import allowed_origins, origin_ok
+from dashboard.security import LeaseError, allowed_hosts, allowed_origins
+
+log = logging.getLogger(__name__)
 
 WAKE_TIMEOUT_S = 0.030  #: after a setpoint change, wait at most this for the drive's new reference
-SPEED_COLORS = ("#1f77b4", "#ff7f0e")
-CURRENT_COLORS = ("#2ca02c", "#d62728")
 MIN_SPAN_SPEED_RPM = 50.0  #: the speed plot's y axis spans at least this (rpm)
 MIN_SPAN_I_P_A = 5.0  #: the i_p plot's y axis spans at least this (A)
 BRAND_COLOR = (31, 97, 141)  #: steel blue: buttons, tabs, sliders
+LEASE_GRACE_S = 10.0  #: a browser whose WebSocket closed loses control after this (s)
+PLOT_BUCKETS = 100  #: time buckets per live plot (≤ 3 points each sent: min, max, last)
+WATCHDOG_S = 3.0  #: a plot thread silent for this long is replaced (s)
+DROP_WINDOW_S = 5.0  #: dropped-frame rate over this window (s)
 
+# re-exported for tests and older imports
+from dashboard.live_plot import min_span_envelope  # noqa: E402
 
-def _series(
-    labels: tuple[str, ...], colors: tuple[str, ...], x_label: str
-) -> tuple[uplot.Series, ...]:
-    out: list[uplot.Series] = [uplot.Series(label=x_label)]
-    for lab, col in zip(labels, colors, strict=False):
-        out.append(uplot.Series(label=lab, stroke=col, width=1.5))
-    return tuple(out)
-
-
-def _span_series(label: str) -> uplot.Series:
-    """An invisible series that only widens the y auto-scale (see :func:`min_span_envelope`)."""
-    return uplot.Series(label=label, stroke="rgba(0,0,0,0)", width=0, points={"show": False})
-
-
-def min_span_envelope(n: int, *series: np.ndarray, min_span: float) -> np.ndarray:
-    """``n`` values whose first and last are the centre of ``series`` ∓ ``min_span``/2 (the
-    centre snapped to ``min_span``/10 so the axis stays still at steady state), the rest the
-    centre: drawn invisibly, it makes uPlot's y auto-scale at least ``min_span`` wide (units of
-    the series) without hiding larger swings."""
-    lo = min(float(np.min(c)) for c in series)
-    hi = max(float(np.max(c)) for c in series)
-    q = min_span / 10
-    centre = round((lo + hi) / 2 / q) * q
-    out = np.full(n, centre, dtype=np.float64)
-    out[0], out[-1] = centre - min_span / 2, centre + min_span / 2
-    return out
-
-
-def _fmt(x: Any, spec: str = ".4g") -> str:
-    try:
-        f = float(x)
-    except (TypeError, ValueError):
-        return "–"
-    return format(f, spec) if np.isfinite(f) else "–"
+__all__ = ["LEASE_GRACE_S", "BenchGui", "min_span_envelope"]
 
 
 class BenchGui:
-    """One viser server showing one :class:`Bench`."""
+    """One viser server showing one :class:`Bench` to any number of browsers."""
 
     def __init__(self, bench: Bench, config: BenchConfig) -> None:
         self.bench = bench
         self.config = config
         self.server: viser.ViserServer | None = None
         self.port = 0
+        self.origins: set[str] = set()
+        self.panels: dict[int, Panel] = {}
+        self._panels_lock = threading.Lock()
         self._stop = threading.Event()
         self._wake = threading.Event()  # a setpoint changed: plot now, not at the next tick
         self._wake_target: tuple[str, float] | None = None  # (live signal, commanded value)
-        self._threads: list[threading.Thread] = []
-        self._tokens: dict[int, str] = {}  # viser client id -> lease token
-        self._muted = 0  # >0 while the server itself sets input values (no echo)
+        self._threads: dict[str, threading.Thread] = {}
+        self._plot_generation = 0
+        self._plot_beat = time.monotonic()  # the plot loop's last heartbeat
+        self.plot_restarts = 0  # plot threads replaced by the watchdog
+        self.stream_errors = 0  # plot ticks that failed (and were survived)
+        self.last_stream_error: str | None = None
         self.frames_sent = 0
+        self.last_push = 0.0  # time.monotonic() of the last plot push
+        self.newest_t: float | None = None  # host time of the newest plotted sample
         self.last_live: dict[str, np.ndarray] = {}
+        self._gone: dict[str, float] = {}  # lease token → time.monotonic() its browser left
+        self._drops: list[tuple[float, int]] = []  # (monotonic, dropped total)
+        self.scene: RotorScene | None = None
 
     # ------------------------------------------------------------------ lifecycle
     def start(self) -> None:
-        # viser has no authentication: the GUI stays on loopback even when the API is remote.
-        # Its URL banner prints even with verbose=False: keep stdout for the one URL we print.
-        with contextlib.redirect_stdout(io.StringIO()):
+        install_send_lock()
+        # viser has no authentication: the GUI stays on loopback even when the API is remote
+        # (there, a browser must sign in with the token before it can change anything).
+        with contextlib.redirect_stdout(io.StringIO()):  # viser prints its URL banner anyway
             self.server = viser.ViserServer(
                 host="127.0.0.1", port=self.config.gui_port, verbose=False
             )
         self.port = self.server.get_port()
         self.origins = allowed_origins("127.0.0.1", [self.port, self.config.api_port])
-        self._guard_origin()
+        hosts = allowed_hosts("127.0.0.1")
+        guard_handshake(self.port, lambda: hosts, lambda: self.origins)
+        refuse_share_url(self.server)
         self.server.gui.configure_theme(
             control_width="large",
             dark_mode=False,
             show_logo=False,
-            show_share_button=False,  # it would open a public tunnel
+            show_share_button=False,  # and its request is refused (refuse_share_url)
             brand_color=BRAND_COLOR,
         )
         self.server.gui.main_panel.dock_right()
         self.server.on_client_connect(self._on_connect)
         self.server.on_client_disconnect(self._on_disconnect)
-        self._build()
-        self.bench.lease.on_change(self._on_lease_change)
-        self.bench.listeners.append(self._on_bench_event)
-        for target, name in ((self._plot_loop, "gui-plots"), (self._status_loop, "gui-status")):
-            th = threading.Thread(target=target, name=name, daemon=True)
-            th.start()
-            self._threads.append(th)
-
-    def stop(self) -> None:
-        self._stop.set()
-        self._wake.set()
-        for th in self._threads:
-            th.join(timeout=2.0)
-        with contextlib.suppress(ValueError):
-            self.bench.listeners.remove(self._on_bench_event)
-        if self.server is not None:
-            self.server.stop()
-
-    # ------------------------------------------------------------------ clients and control
-    def _on_connect(self, client: viser.ClientHandle) -> None:
-        self._refresh_status()
-
-    def _guard_origin(self) -> None:
-        """Close a viser WebSocket opened from a foreign page (viser checks no Origin).
-
-        Hooks viser's transport-level connect callback (private API of viser 1.1: the public
-        ``on_client_connect`` fires only after the first camera message, and a foreign page
-        could read the GUI and send clicks before that). Runs on viser's event loop before
-        any message is sent to the new connection.
-        """
-        ws_server = self.server._websock_server
-
-        async def guard(client_conn: Any) -> None:
-            conn = ws_server._live_connections.get(client_conn.client_id)
-            if conn is None:
-                return
-            origin = conn.request.headers.get("Origin") if conn.request is not None else None
-            if not origin_ok(origin, self.origins):
-                await conn.close(1008, "origin not allowed")
-
-        ws_server.on_client_connect(guard)
-
-    def _on_disconnect(self, client: viser.ClientHandle) -> None:
-        self._tokens.pop(client.client_id, None)
-
-    def _client_name(self, client_id: int | None) -> str:
-        return f"browser #{client_id}"
-
-    def _control(self, event: Any) -> bool:
-        """True if the event's browser holds control (taking it when nobody does)."""
-        cid = event.client_id
-        token = self._tokens.get(cid)
-        holder = self.bench.lease.holder
-        if holder is not None and token is not None and holder.token == token:
-            return True
-        if holder is None:
-            token = token or secrets.token_urlsafe(16)
-            self._tokens[cid] = token
-            self.bench.lease.acquire(self._client_name(cid), token=token)
-            return True
-        if event.client is not None:
-            event.client.add_notification(
-                "Watching",
-                f"{holder.client} controls the bench. Press 'Take control' to take over.",
-                auto_close_seconds=4.0,
-                color="yellow",
-            )
-        return False
-
-    def _take_control(self, event: Any) -> None:
-        cid = event.client_id
-        token = self._tokens.get(cid) or secrets.token_urlsafe(16)
-        self._tokens[cid] = token
-        self.bench.lease.acquire(self._client_name(cid), take_over=True, token=token)
-
-    def _on_lease_change(self, old: Any, new: Any) -> None:
-        if self.server is None:
-            return
-        if new is not None and old is not None and old.token != new.token:
-            for client in self.server.get_clients().values():
-                client.add_notification(
-                    "Control taken over",
-                    f"{new.client} took control from {old.client}.",
-                    auto_close_seconds=6.0,
-                    color="orange",
-                )
-        self._refresh_status()
-
-    def _action(
-        self, fn: Callable[[Any], Any], *, needs_control: bool = True
-    ) -> Callable[[Any], None]:
-        """Wrap a GUI callback: lease check, errors shown as a notification to that browser."""
-
-        def cb(event: Any) -> None:
-            if self._muted:
-                return
-            if needs_control and not self._control(event):
-                return
-            try:
-                fn(event)
-            except Exception as exc:
-                if event.client is not None:
-                    event.client.add_notification(
-                        "Refused",
-                        str(exc) or type(exc).__name__,
-                        auto_close_seconds=8.0,
-                        color="red",
-                    )
-            self._refresh_status()
-
-        return cb
-
-    @contextlib.contextmanager
-    def _mute(self):
-        self._muted += 1
-        try:
-            yield
-        finally:
-            self._muted -= 1
-
-    # ------------------------------------------------------------------ layout
-    def _build(self) -> None:
-        gui = self.server.gui
-        self.status_md = gui.add_markdown("connecting …")
-        self.controller_md = gui.add_markdown("")
-        self.take_btn = gui.add_button(
-            "Take control", color="orange", hint="Take control from the holder"
-        )
-        self.take_btn.on_click(self._action(self._take_control, needs_control=False))
-        with gui.add_folder("Drive"):
-            for label, cmd, color in (
-                ("Enable", "enable", "green"),
-                ("Disable", "disable", "gray"),
-                ("Quick stop", "quick_stop", "red"),
-                ("Fault reset", "fault_reset", "yellow"),
-            ):
-                b = gui.add_button(label, color=color)
-                b.on_click(self._action(lambda e, c=cmd: self.bench.command(c)))
-        self.speed_plot = self._live_plot(
-            "Speed", ("speed (rpm)", "speed* (rpm)"), SPEED_COLORS, MIN_SPAN_SPEED_RPM, "rpm"
-        )
-        self.current_plot = self._live_plot(
-            "Pseudo current i_p", ("i_p (A)", "i_p* (A)"), CURRENT_COLORS, MIN_SPAN_I_P_A, "A"
-        )
-        tabs = gui.add_tab_group()
-        with tabs.add_tab("Speed"):
-            self._build_speed_tab()
-        with tabs.add_tab("Current"):
-            self._build_current_tab()
-        with tabs.add_tab("Tuning"):
-            self._build_tuning_tab()
-        with tabs.add_tab("Identify"):
-            self._build_identify_tab()
-        with tabs.add_tab("Captures"):
-            self._build_captures_tab()
         self.scene = RotorScene(self.server) if self.config.scene_3d else None
         if self.scene is None:  # a calm canvas instead of an empty white one
             self.server.scene.set_background_image(scene_background())
             self.server.scene.add_label(
                 "/no_3d", "3D rotor view off (--no-3d)", position=(0.0, 0.0, 0.0)
             )
+        self.bench.lease.on_change(self._on_lease_change)
+        self.bench.listeners.append(self._on_bench_event)
+        self._start_plot_thread()
+        th = threading.Thread(target=self._status_loop, name="gui-status", daemon=True)
+        th.start()
+        self._threads["status"] = th
 
-    def _live_plot(
-        self,
-        title: str,
-        labels: tuple[str, str],
-        colors: tuple[str, str],
-        min_span: float,
-        unit: str,
-    ) -> Any:
-        """A live uPlot of (t, measured, reference) over the last ``live_window_s`` seconds."""
-        x0 = np.linspace(-self.config.live_window_s, 0.0, 2)
-        zero = np.zeros(2)
-        # the live window always ends at t = 0: a fixed x range (zoom still works) instead of
-        # auto-scaling, which sometimes left a plot stuck on a stale x range in the browser
-        live_x = {"x": uplot.Scale(time=False, range=(-self.config.live_window_s, 0.0))}
-        return self.server.gui.add_uplot(
-            (x0, zero, zero, zero),
-            (*_series(labels, colors, "t (s)"), _span_series(f"y span ≥ {min_span:g} {unit}")),
-            scales=live_x,
-            axes=(uplot.Axis(label="t (s)"), uplot.Axis()),
-            title=title,
-            aspect=2.2,
+    def stop(self) -> None:
+        self._stop.set()
+        self._wake.set()
+        for th in list(self._threads.values()):
+            th.join(timeout=2.0)
+        with contextlib.suppress(ValueError):
+            self.bench.listeners.remove(self._on_bench_event)
+        if self.server is not None:
+            self.server.stop()
+
+    def _start_plot_thread(self) -> None:
+        self._plot_generation += 1
+        gen = self._plot_generation
+        self._plot_beat = time.monotonic()
+        th = threading.Thread(
+            target=self._plot_loop, args=(gen,), name=f"gui-plots-{gen}", daemon=True
         )
+        th.start()
+        self._threads["plots"] = th
 
-    def _build_speed_tab(self) -> None:
-        gui = self.server.gui
-        self.speed_in = gui.add_number("Speed setpoint (rpm)", 0.0, min=-4000, max=4000, step=10)
-        gui.add_button("Set speed").on_click(
-            self._action(lambda e: self.bench.set_speed(self.speed_in.value))
-        )
-        self.step_size = gui.add_number("Step size (rpm)", 500.0, min=1, max=4000, step=10)
-        row = gui.add_button("+ step")
-        row.on_click(self._action(lambda e: self._step(+1)))
-        gui.add_button("− step").on_click(self._action(lambda e: self._step(-1)))
-        self.sequence_in = gui.add_text(
-            "Sequence (s:rpm, …)",
-            "0:1000, 3:1500, 6:1000, 9:0",
-            hint="time after start in s : setpoint in rpm",
-        )
-        gui.add_button("Run sequence").on_click(self._action(self._run_sequence))
-        gui.add_button("Stop sequence").on_click(self._action(lambda e: self.bench.stop_sequence()))
-        self.load_in = gui.add_number("Load torque (N·m)", 0.0, min=-20, max=20, step=0.1)
-        b = gui.add_button(
-            "Apply load step",
-            disabled=not self.bench.virtual,
-            hint="virtual drive only: sim_load.T_load",
-        )
-        b.on_click(self._action(lambda e: self.bench.set_load(self.load_in.value)))
+    # ------------------------------------------------------------------ clients and control
+    def _on_connect(self, client: viser.ClientHandle) -> None:
+        panel = Panel(self, client)
+        with self._panels_lock:
+            self.panels[client.client_id] = panel
+        with contextlib.suppress(Exception):
+            panel.load_gains()
+        self.refresh_status()
 
-    def _step(self, sign: int) -> None:
-        rpm = self.bench.step_speed(sign * float(self.step_size.value))
-        with self._mute():
-            self.speed_in.value = rpm
+    def _on_disconnect(self, client: viser.ClientHandle) -> None:
+        with self._panels_lock:
+            panel = self.panels.pop(client.client_id, None)
+        if panel is not None and panel.token is not None and panel.holds_control():
+            self._gone[panel.token] = time.monotonic()
+            self.refresh_status()
 
-    def _run_sequence(self, event: Any) -> None:
-        steps = []
-        for part in self.sequence_in.value.split(","):
-            if not part.strip():
-                continue
-            at, _, rpm = part.partition(":")
-            steps.append((float(at), float(rpm)))
-        if not steps or [s[0] for s in steps] != sorted(s[0] for s in steps):
-            raise ValueError("sequence: give 'time:rpm' pairs in time order")
-        if any(abs(r) > 4000 or t < 0 for t, r in steps):
-            raise ValueError("sequence: rpm within ±4000 and times ≥ 0")
-        self.bench.start_sequence(steps)
+    def panel_list(self) -> list[Panel]:
+        with self._panels_lock:
+            return list(self.panels.values())
 
-    def _build_current_tab(self) -> None:
-        gui = self.server.gui
-        self.i_in = gui.add_number("i_p* (A)", 0.0, min=-200, max=200, step=0.5)
-        gui.add_button("Set current").on_click(
-            self._action(lambda e: self.bench.set_current(self.i_in.value))
-        )
-        with gui.add_folder("Current step test (Fig. 13)"):
-            self.step_from = gui.add_number("From (A)", 15.0, min=-200, max=200, step=0.5)
-            self.step_to = gui.add_number("To (A)", 20.0, min=-200, max=200, step=0.5)
-            self.avg_n = gui.add_number("Moving average (samples)", 1, min=1, max=1000, step=1)
-            gui.add_button("Run current step").on_click(self._action(self._current_step))
-            self.step_md = gui.add_markdown("")
-            self.step_plot = gui.add_uplot(
-                (np.zeros(2), np.zeros(2), np.zeros(2), np.zeros(2), np.zeros(2)),
-                _series(
-                    ("i_p", "ī_p", "i_p*", "model"),
-                    ("#2ca02c", "#9467bd", "#d62728", "#7f7f7f"),
-                    "t (ms)",
-                ),
-                scales={"x": uplot.Scale(time=False, auto=True)},
-                title="Current step at 50 kHz",
-                aspect=2.0,
-            )
+    def _expire_leases(self) -> None:
+        """Release the lease of a browser gone for more than LEASE_GRACE_S."""
+        holder = self.bench.lease.holder
+        now = time.monotonic()
+        for token, since in list(self._gone.items()):
+            if holder is None or holder.token != token:
+                self._gone.pop(token, None)
+            elif now - since >= LEASE_GRACE_S:
+                self._gone.pop(token, None)
+                with contextlib.suppress(LeaseError):
+                    self.bench.lease.release(token)
 
-    def _current_step(self, event: Any) -> None:
-        from dashboard.models import CurrentStepIn
+    def _on_lease_change(self, old: Any, new: Any) -> None:
+        if new is not None and old is not None and old.token != new.token:
+            for p in self.panel_list():
+                if p.token == old.token:
+                    p.notice(p.control_md, f"{new.client} took control from you", "info")
+        self.refresh_status()
 
-        body = CurrentStepIn(from_A=self.step_from.value, to_A=self.step_to.value, duration_ms=2.0)
-        res = experiments.current_step(self.bench, body, average_samples=int(self.avg_n.value))
-        self._show_step(res)
-
-    def _show_step(self, res: dict) -> None:
-        cap: Capture = self.bench.captures[res["capture"]["id"]]
-        c = cap.columns
-        self.step_plot.data = (
-            c["t"] * 1e3,
-            c["i_p"],
-            c["i_p_avg"],
-            c["i_p_ref"],
-            c["model"],
-        )
-        m = res["metrics"]
-        self.step_md.content = (
-            f"**{res['controller']}**: rise {_fmt(m.get('rise_time_s', np.nan) * 1e6, '.0f')} µs · "
-            f"settling {_fmt(m.get('settling_time_s', np.nan) * 1e6, '.0f')} µs · "
-            f"overshoot {_fmt(m.get('overshoot_pct'), '.1f')} % · "
-            f"steady-state error {_fmt(m.get('steady_state_error_A'), '.3f')} A · "
-            f"model RMS error {_fmt(res.get('model_rms_error_A'), '.3f')} A"
-        )
-
-    def _build_tuning_tab(self) -> None:
-        gui = self.server.gui
-        self.type_in = gui.add_dropdown(
-            "Current controller", tuple(CONTROLLER_TYPES), initial_value="deadbeat"
-        )
-        self.Lc_uH = gui.add_number("L_c (µH)", 14.8, min=0.01, max=2000.0, step=0.01)
-        self.Lc_ratio = gui.add_number("L_c / L", 1.0, min=0.001, max=3.0, step=0.001)
-        self.Rc_mOhm = gui.add_number("R_c (mΩ)", 6.2, min=0.0, max=1000.0, step=0.01)
-        self.kp_i = gui.add_number("PI k_p (V/A)", 0.4647, min=0.0, max=100.0, step=0.0001)
-        self.ki_i = gui.add_number("PI k_i (V/A)", 0.0492, min=0.0, max=100.0, step=0.0001)
-        self.kp_w = gui.add_number("IP k_p (A/rpm)", 0.2113, min=0.0, max=100.0, step=0.0001)
-        self.ki_w = gui.add_number("IP k_i (1/sample)", 2.9994e-5, min=0.0, max=1.0, step=1e-9)
-        with gui.add_folder("IP design from ξ, ω_n (eqs. 28–31)", expand_by_default=False):
-            self.xi_in = gui.add_number("ξ", 1.0, min=0.01, max=10.0, step=0.01)
-            self.wn_in = gui.add_number("ω_n (rad/s)", 2.3, min=0.01, max=1000.0, step=0.01)
-            self.a_in = gui.add_number("a", 0.9999785, min=0.0, max=0.99999999, step=1e-7)
-            self.b_in = gui.add_number(
-                "b (rpm/A per sample)", 3.33715e-4, min=1e-9, max=1.0, step=1e-9
-            )
-            gui.add_button("Compute IP gains").on_click(
-                self._action(self._design_ip, needs_control=False)
-            )
-        self.preview_md = gui.add_markdown("")
-        self.force_in = gui.add_checkbox(
-            "Override margin check",
-            False,
-            hint="apply a stable set with poor margins (L_c > 1.5 L, GM < 2 dB or ‖S‖∞ > 5); "
-            "an unstable set is refused regardless",
-        )
-        gui.add_button("Apply gains", color="green").on_click(self._action(self._apply_gains))
-        gui.add_button("Read back").on_click(
-            self._action(lambda e: self._load_gains(), needs_control=False)
-        )
-        self.readback_md = gui.add_markdown("")
-        gui.add_button("Store to drive").on_click(self._action(self._store))
-        self.diff_md = gui.add_markdown("")
-        for h in (self.type_in, self.Rc_mOhm, self.kp_i, self.ki_i, self.kp_w, self.ki_w):
-            h.on_update(self._action(lambda e: self._preview(), needs_control=False))
-        self.Lc_uH.on_update(self._action(self._on_Lc_uH, needs_control=False))
-        self.Lc_ratio.on_update(self._action(self._on_Lc_ratio, needs_control=False))
-
-    def _motor_L(self) -> float:
-        return (
-            float(self.gains.get("motor_L", 14.8e-6)) if getattr(self, "gains", None) else 14.8e-6
-        )
-
-    def _on_Lc_uH(self, event: Any) -> None:
-        with self._mute():
-            self.Lc_ratio.value = round(self.Lc_uH.value * 1e-6 / self._motor_L(), 6)
-        self._preview()
-
-    def _on_Lc_ratio(self, event: Any) -> None:
-        with self._mute():
-            self.Lc_uH.value = round(self.Lc_ratio.value * self._motor_L() * 1e6, 6)
-        self._preview()
-
-    def _changes(self) -> dict[str, float | int]:
-        return {
-            "type": CONTROLLER_TYPES[self.type_in.value],
-            "L_c": float(self.Lc_uH.value) * 1e-6,
-            "R_c": float(self.Rc_mOhm.value) * 1e-3,
-            "k_p": float(self.kp_i.value),
-            "k_i": float(self.ki_i.value),
-            "speed_k_p": float(self.kp_w.value),
-            "speed_k_i": float(self.ki_w.value),
-        }
-
-    def _preview(self) -> None:
-        try:
-            p = tuning.preview(self.bench, self._changes())
-        except Exception as exc:
-            self.preview_md.content = f"**Not applicable:** {exc}"
-            return
-        self.preview_md.content = tuning.preview_markdown(p)
-
-    def _apply_gains(self, event: Any) -> None:
-        tuning.apply(self.bench, self._changes(), force=bool(self.force_in.value))
-        with self._mute():
-            self.force_in.value = False  # an override is for one apply only
-        self._load_gains()
-
-    def _store(self, event: Any) -> None:
-        tuning.store(self.bench)
-        self._show_diff()
-
-    def _design_ip(self, event: Any) -> None:
-        d = tuning.design_ip(
-            self.bench, self.xi_in.value, self.wn_in.value, self.a_in.value, self.b_in.value
-        )
-        with self._mute():
-            self.kp_w.value = float(d["speed_k_p"])
-            self.ki_w.value = float(d["speed_k_i"])
-        self._preview()
-
-    def _load_gains(self) -> None:
-        """Show the gains read back from the drive and put them into the inputs."""
-        g = tuning.read_gains(self.bench)
-        self.gains = g
-        with self._mute():
-            self.type_in.value = g["type"]
-            self.Lc_uH.value = round(g["L_c"] * 1e6, 6)
-            self.Lc_ratio.value = round(g["L_c"] / g["motor_L"], 6)
-            self.Rc_mOhm.value = round(g["R_c"] * 1e3, 6)
-            self.kp_i.value = g["k_p"]
-            self.ki_i.value = g["k_i"]
-            self.kp_w.value = g["speed_k_p"]
-            self.ki_w.value = g["speed_k_i"]
-        self.readback_md.content = tuning.readback_markdown(g)
-        self._preview()
-        self._show_diff()
-
-    def _show_diff(self) -> None:
-        try:
-            self.diff_md.content = tuning.diff_markdown(tuning.stored_diff(self.bench))
-        except Exception as exc:
-            self.diff_md.content = f"stored values: {exc}"
-
-    def _build_identify_tab(self) -> None:
-        gui = self.server.gui
-        gui.add_markdown(
-            "Current step in current mode; fit G(z) = b/(z − a) to the speed (Fig. 16)."
-        )
-        self.id_from = gui.add_number("Identify from (A)", 15.0, min=-200, max=200, step=0.5)
-        self.id_to = gui.add_number("Identify to (A)", 30.0, min=-200, max=200, step=0.5)
-        self.id_dur = gui.add_number("Duration (s)", 1.0, min=0.05, max=20.0, step=0.05)
-        gui.add_button("Run identification").on_click(self._action(self._identify))
-        self.id_md = gui.add_markdown("")
-        self.id_plot = gui.add_uplot(
-            (np.zeros(2), np.zeros(2), np.zeros(2)),
-            _series(("speed (rpm)", "model (rpm)"), ("#1f77b4", "#7f7f7f"), "t (s)"),
-            scales={"x": uplot.Scale(time=False, auto=True)},
-            title="Identification: data and fit",
-            aspect=2.0,
-        )
-        gui.add_button("Use a, b in IP design").on_click(
-            self._action(self._use_identified, needs_control=False)
-        )
-
-    def _identify(self, event: Any) -> None:
-        from dashboard.models import IdentifyIn
-
-        res = experiments.identify(
-            self.bench,
-            IdentifyIn(
-                from_A=self.id_from.value, to_A=self.id_to.value, duration_s=self.id_dur.value
-            ),
-        )
-        cap = self.bench.captures[res["capture"]["id"]]
-        c = cap.columns
-        self.id_plot.data = (c["t"], c["speed"], c["model"])
-        self.id_md.content = (
-            f"a = **{res['a']:.8f}**, b = **{res['b']:.6g}** rpm/(A·sample) at Ts = 20 µs · "
-            f"fit RMS error {_fmt(res['rms_error_rpm'], '.3g')} rpm"
-        )
-
-    def _use_identified(self, event: Any) -> None:
-        ident = self.bench.identified
-        if not ident:
-            raise ValueError("run an identification first")
-        with self._mute():
-            self.a_in.value = float(ident["a"])
-            self.b_in.value = float(ident["b"])
-        self._design_ip(event)
-
-    def _build_captures_tab(self) -> None:
-        gui = self.server.gui
-        self.cap_dd = gui.add_dropdown("Capture", ("none",), initial_value="none")
-        gui.add_button("Download CSV").on_click(
-            self._action(lambda e: self._download(e, "csv"), needs_control=False)
-        )
-        gui.add_button("Download PNG").on_click(
-            self._action(lambda e: self._download(e, "png"), needs_control=False)
-        )
-        with gui.add_folder("Trace (i_p at 50 kHz)"):
-            self.tr_len = gui.add_number("Length (samples)", 1000, min=2, max=8192, step=1)
-            self.tr_div = gui.add_number("Divider", 1, min=1, max=5000, step=1)
-            gui.add_button("Capture now").on_click(self._action(self._capture_now))
-
-    def _capture_now(self, event: Any) -> None:
-        from dashboard.models import TraceIn
-
-        experiments.capture(
-            self.bench,
-            TraceIn(length=int(self.tr_len.value), divider=int(self.tr_div.value), pre_trigger=0),
-        )
-
-    def _download(self, event: Any, fmt: str) -> None:
-        if self.cap_dd.value == "none" or event.client is None:
-            raise ValueError("no capture yet")
-        cap = self.bench.captures[int(self.cap_dd.value.split(" ")[0].lstrip("#"))]
-        data = capture_csv(cap) if fmt == "csv" else capture_png(cap)
-        event.client.send_file_download(
-            f"capture_{cap.id}_{cap.kind}.{fmt}", data, save_immediately=True
-        )
-
-    # ------------------------------------------------------------------ updates
+    # ------------------------------------------------------------------ bench events
     def _on_bench_event(self, kind: str, data: dict) -> None:
         if kind == "capture":
-            opts = tuple(f"#{c.id} {c.kind}" for c in self.bench.captures.values())
-            self.cap_dd.options = opts
-            with self._mute():
-                self.cap_dd.value = opts[-1]
+            for p in self.panel_list():
+                with contextlib.suppress(Exception):
+                    p.show_captures()
         elif kind == "gains":
-            with contextlib.suppress(Exception):
-                self._load_gains()
+            for p in self.panel_list():
+                with contextlib.suppress(Exception):
+                    p.show_readback(data)
+                    p.gains = data
         elif kind == "setpoint":
             if "rpm" in data:
                 self._wake_target = ("measurements.speed_ref", float(data["rpm"]))
             elif "i_p_ref" in data:
                 self._wake_target = ("measurements.i_p_ref", float(data["i_p_ref"]))
             self._wake.set()
-            with self._mute():
-                if "rpm" in data:
-                    self.speed_in.value = float(data["rpm"])
-                if "i_p_ref" in data:
-                    self.i_in.value = float(data["i_p_ref"])
-        elif kind == "error" and self.server is not None:
-            for client in self.server.get_clients().values():
-                client.add_notification(
-                    "Bench", data.get("message", ""), auto_close_seconds=6.0, color="red"
-                )
+        elif kind == "error":
+            for p in self.panel_list():
+                with contextlib.suppress(Exception):
+                    p.notice(p.control_md, data.get("message", ""))
 
-    def _plot_loop(self) -> None:
-        """Push the live window to both plots at gui_rate_hz, and at once after a setpoint
-        change: as soon as the drive streams the new reference back (at most WAKE_TIMEOUT_S)."""
+    # ------------------------------------------------------------------ plots
+    def _plot_loop(self, generation: int) -> None:
+        """Push the live window to every panel at gui_rate_hz, and at once after a setpoint
+        change. A failing tick is counted and survived; a newer generation replaces this one."""
         period = 1.0 / self.config.gui_rate_hz
         next_t = time.monotonic()
-        while not self._stop.is_set():
-            if self._wake.wait(max(0.0, next_t - time.monotonic())):
-                self._wake.clear()
-                self._push_after_setpoint()
-                next_t = time.monotonic() + period
-                continue
-            self._push_plots()
+        while not self._stop.is_set() and generation == self._plot_generation:
+            self._plot_beat = time.monotonic()
+            try:
+                if self._wake.wait(max(0.0, next_t - time.monotonic())):
+                    self._wake.clear()
+                    self._push_after_setpoint()
+                    next_t = time.monotonic() + period
+                    continue
+                self.push_plots()
+            except Exception as exc:  # never die: count, show, go on
+                self.stream_errors += 1
+                self.last_stream_error = f"{type(exc).__name__}: {exc}"
+                log.warning("live plot tick failed: %s", self.last_stream_error)
+                time.sleep(min(0.5, period))
             next_t += period
             if time.monotonic() - next_t > 1.0:
                 next_t = time.monotonic()
@@ -633,21 +231,21 @@ class BenchGui:
         target = self._wake_target
         deadline = time.monotonic() + WAKE_TIMEOUT_S
         while target is not None and time.monotonic() < deadline and not self._stop.is_set():
-            if self._push_plots(require=target):
+            if self.push_plots(require=target):
                 return
             time.sleep(0.001)
-        self._push_plots()
+        self.push_plots()
 
-    def _push_plots(self, require: tuple[str, float] | None = None) -> bool:
-        """Send the live window to both plots; with ``require`` = (signal, value) only if the
-        window's last sample of that signal equals value. Returns whether it sent."""
-        if self.server is None or not self.server.get_clients():
+    def push_plots(self, require: tuple[str, float] | None = None) -> bool:
+        """Send the decimated live window to every panel's plots; with ``require`` =
+        (signal, value) only if the window's last sample of that signal equals value. Only new
+        data is sent (nothing when no sample arrived since the last push). Returns whether the
+        data was current enough (see ``require``)."""
+        panels = self.panel_list()
+        if not panels:
             return True  # nobody watches: no work
         names = list(LIVE_SIGNALS)
-        try:
-            w = self.bench.drive.live.window(self.config.live_window_s, names)
-        except Exception:
-            return True
+        w = self.bench.drive.live.window(self.config.live_window_s, names)
         t = np.asarray(w["t"], dtype=np.float64)
         cols = [np.asarray(w[n], dtype=np.float64) for n in names]
         ok = np.isfinite(t)
@@ -660,37 +258,127 @@ class BenchGui:
             col = cols[names.index(require[0])]
             if abs(col[-1] - require[1]) > 1e-3:
                 return False
-        x = t - t[-1]
+        newest = float(t[-1])
+        if self.newest_t is not None and newest <= self.newest_t and require is None:
+            return True  # nothing new: send nothing
+        self.newest_t = newest
+        td, cd = live_plot.decimate(t, cols, PLOT_BUCKETS)
+        x = td - newest
         n = len(x)
-        speed_env = min_span_envelope(n, cols[0], cols[1], min_span=MIN_SPAN_SPEED_RPM)
-        current_env = min_span_envelope(n, cols[2], cols[3], min_span=MIN_SPAN_I_P_A)
-        self.speed_plot.data = (x, cols[0], cols[1], speed_env)
-        self.current_plot.data = (x, cols[2], cols[3], current_env)
+        speed = (
+            x,
+            cd[0],
+            cd[1],
+            live_plot.min_span_envelope(n, cd[0], cd[1], min_span=MIN_SPAN_SPEED_RPM),
+        )
+        current = (
+            x,
+            cd[2],
+            cd[3],
+            live_plot.min_span_envelope(n, cd[2], cd[3], min_span=MIN_SPAN_I_P_A),
+        )
+        for p in panels:
+            try:
+                p.speed_plot.data = speed
+                p.current_plot.data = current
+            except Exception as exc:  # one broken browser must not stop the others
+                self.stream_errors += 1
+                self.last_stream_error = f"{type(exc).__name__}: {exc}"
         self.frames_sent += 1
+        self.last_push = time.monotonic()
         self.last_live = w
         if self.scene is not None:
-            self.scene.update(float(cols[0][-1]), w)
+            with contextlib.suppress(Exception):
+                self.scene.update(float(cols[0][-1]), w)
         return True
 
+    # ------------------------------------------------------------------ status
     def _status_loop(self) -> None:
-        loaded = False
         while not self._stop.wait(0.25):
-            if not loaded:  # the gains read back once at start (retried until it works)
-                try:
-                    self._load_gains()
-                    loaded = True
-                except Exception:
-                    pass
-            self._refresh_status()
+            try:
+                self._watchdog()
+                self._expire_leases()
+                self.refresh_status()
+            except Exception as exc:  # shown on the next good tick; never die
+                log.warning("status tick failed: %s", exc)
 
-    def _refresh_status(self) -> None:
+    def _watchdog(self) -> None:
+        """Replace a plot thread that died or stopped beating."""
+        th = self._threads.get("plots")
+        silent = time.monotonic() - self._plot_beat
+        if th is None or not th.is_alive() or silent > WATCHDOG_S:
+            self.plot_restarts += 1
+            log.warning(
+                "live plot thread %s: restarting", "silent" if th and th.is_alive() else "dead"
+            )
+            self._start_plot_thread()
+
+    def freshness(self) -> tuple[bool, str]:
+        """(stale, text) of the live view for the page."""
+        latest_t = None
+        with contextlib.suppress(Exception):
+            w = self.bench.drive.live.window(0.5, ["measurements.speed"])
+            if len(w["t"]):
+                latest_t = float(w["t"][-1])
+        age = live_plot.data_age_s(latest_t)
+        push_age = time.monotonic() - self.last_push if self.last_push else None
+        return live_plot.freshness_text(age, push_age)
+
+    def _drop_rate(self, dropped: Any) -> float | None:
+        """Dropped TPDO frames per second over the last DROP_WINDOW_S."""
+        try:
+            total = int(dropped)
+        except (TypeError, ValueError):
+            return None
+        now = time.monotonic()
+        self._drops.append((now, total))
+        self._drops = [(t, d) for t, d in self._drops if now - t <= DROP_WINDOW_S]
+        t0, d0 = self._drops[0]
+        return (total - d0) / (now - t0) if now - t0 > 0.5 else 0.0
+
+    def refresh_status(self) -> None:
         if self.server is None:
+            return
+        panels = self.panel_list()
+        if not panels:
             return
         try:
             s = self.bench.state()
         except Exception as exc:
-            self.status_md.content = f"**state unavailable:** {exc}"
+            for p in panels:
+                p.show_status(f"<b>state unavailable:</b> {html.escape(str(exc))}")
             return
+        stale, fresh_txt = self.freshness()
+        status = self._status_html(s, stale, fresh_txt)
+        legends = (
+            _legend(("speed", "speed*"), "rpm", SPEED_COLORS, stale, fresh_txt),
+            _legend(("i_p", "i_p*"), "A", CURRENT_COLORS, stale, fresh_txt),
+        )
+        ctl = s.get("controller")
+        gone = None
+        holder = self.bench.lease.holder
+        if holder is not None and holder.token in self._gone:
+            gone = LEASE_GRACE_S - (time.monotonic() - self._gone[holder.token])
+        for p in panels:
+            try:
+                p.show_status(status)
+                p.show_legends(*legends)
+                p.show_action(s.get("action"), s.get("sequence"))
+                txt = _controller_text(ctl, p, gone)
+                if p.controller_md.content != txt:
+                    p.controller_md.content = txt
+            except Exception as exc:
+                log.warning("status for browser #%s failed: %s", p.cid, exc)
+        if self.scene is not None:
+            latest = {}
+            with contextlib.suppress(Exception):
+                latest = self.bench.drive.live.latest()
+            self.scene.show_status(
+                f"{_fmt(latest.get('measurements.speed'), '.0f')} rpm · {s.get('state')} · "
+                f"i_p {_fmt(latest.get('measurements.i_p'), '.1f')} A"
+            )
+
+    def _status_html(self, s: dict, stale: bool, fresh_txt: str) -> str:
         live = s.get("live") or {}
         load = live.get("bus_load")
         latest = {}
@@ -704,26 +392,79 @@ class BenchGui:
             or "none"
         )
         hb = s.get("heartbeat_age_s")
-        self.status_md.content = (
-            f"**Bus** {s['bus']} · **node** {s['node_id']}  \n"
-            f"**NMT** {s.get('nmt_state')} · **402** {s.get('state')} · "
-            f"**mode** {s.get('mode')}  \n"
-            f"**speed** {_fmt(latest.get('measurements.speed'), '.1f')} rpm "
-            f"(set {_fmt(s['speed_setpoint'], '.0f')}) · "
-            f"**i_p** {_fmt(latest.get('measurements.i_p'), '.2f')} A  \n"
-            f"**heartbeat age** {_fmt(hb * 1e3 if hb is not None else None, '.0f')} ms · "
-            f"**bus load** {_fmt(load * 100 if load is not None else None, '.1f')} % · "
-            f"**dropped** {live.get('dropped', '–')} · **faults/EMCY** {emcy_txt}"
+        rate = self._drop_rate(live.get("dropped"))
+        e = html.escape
+        fresh = (
+            f"<b style='color:#b03a2e'>⚠ {e(fresh_txt)}</b>"
+            if stale
+            else f"<span style='color:#1e8449'>● {e(fresh_txt)}</span>"
         )
-        if self.scene is not None:
-            self.scene.show_status(
-                f"{_fmt(latest.get('measurements.speed'), '.0f')} rpm · {s.get('state')} · "
-                f"i_p {_fmt(latest.get('measurements.i_p'), '.1f')} A"
+        if self.stream_errors or self.plot_restarts:
+            fresh += (
+                f" <span title='{e(self.last_stream_error or '')}'>· stream recovered "
+                f"{self.stream_errors} error(s), {self.plot_restarts} restart(s)</span>"
             )
-        ctl = s.get("controller")
-        self.controller_md.content = (
-            f"**In control:** {ctl['client']} since "
-            f"{time.strftime('%H:%M:%S', time.localtime(ctl['since']))}"
-            if ctl
-            else "**In control:** nobody (the first action takes control)"
+        cached = " (last read: an action holds the drive)" if s.get("drive_values_cached") else ""
+        extra = []
+        for key, label in (
+            ("bus_state", "CAN"),
+            ("bus_error_frames", "error frames"),
+            ("store_status", "parameter store"),
+            ("boots_seen", "boots seen"),
+            ("supervision_rearmed_at", "supervision re-armed"),
+        ):
+            v = s.get(key)
+            if v is not None:
+                warn = (key == "bus_state" and v != "ERROR_ACTIVE") or (
+                    key == "store_status" and v != "ok"
+                )
+                txt = f"<b>{label}</b> {e(str(v))}"
+                extra.append(f"<span style='color:#b03a2e'>{txt}</span>" if warn else txt)
+        drops = (
+            f"<span title='TPDO frames that the drive&#39;s event timer promised but that did "
+            f"not arrive, per second over the last {DROP_WINDOW_S:g} s (total since start: "
+            f"{e(str(live.get('dropped', '–')))})'><b>dropped</b> "
+            f"{_fmt(rate, '.1f')} frames/s</span>"
         )
+        lines = [
+            fresh,
+            f"<b>Bus</b> {e(str(s['bus']))} · <b>node</b> {s['node_id']}",
+            f"<b>NMT</b> {e(str(s.get('nmt_state')))} · <b>402</b> {e(str(s.get('state')))} · "
+            f"<b>mode</b> {e(str(s.get('mode')))}{cached}",
+            f"<b>speed</b> {_fmt(latest.get('measurements.speed'), '.1f')} rpm "
+            f"(set {_fmt(s['speed_setpoint'], '.0f')}) · "
+            f"<b>i_p</b> {_fmt(latest.get('measurements.i_p'), '.2f')} A "
+            f"(set {_fmt(s.get('current_setpoint'), '.1f')})",
+            f"<b>heartbeat age</b> {_fmt(hb * 1e3 if hb is not None else None, '.0f')} ms · "
+            f"<b>bus load</b> {_fmt(load * 100 if load is not None else None, '.1f')} % · {drops}",
+            f"<b>faults/EMCY</b> {e(emcy_txt)}",
+        ]
+        if extra:
+            lines.append(" · ".join(extra))
+        return "<div style='font-size:0.85em;line-height:1.35'>" + "<br>".join(lines) + "</div>"
+
+
+def _legend(
+    names: tuple[str, str], unit: str, colors: tuple[str, str], stale: bool, fresh_txt: str
+) -> str:
+    sw = " ".join(
+        f"<span style='color:{c}'>━</span> {html.escape(n)} ({unit})"
+        for n, c in zip(names, colors, strict=True)
+    )
+    mark = (
+        f"<b style='color:#b03a2e'>⚠ {html.escape(fresh_txt)}</b>"
+        if stale
+        else "<span style='color:#1e8449'>● live</span>"
+    )
+    return f"<div style='font-size:0.8em'>{sw} · {mark}</div>"
+
+
+def _controller_text(ctl: dict | None, panel: Panel, gone: float | None) -> str:
+    if not ctl:
+        return "**In control:** nobody (your first action takes control)"
+    you = " (you)" if panel.holds_control() else ""
+    since = time.strftime("%H:%M:%S", time.localtime(ctl["since"]))
+    txt = f"**In control:** {ctl['client']}{you} since {since}"
+    if gone is not None:
+        txt += f" · its page closed: control frees in {max(0.0, gone):.0f} s"
+    return txt

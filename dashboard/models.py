@@ -6,6 +6,7 @@ Gain names are the drive's staged gain-set names (object 0x20F0, docs/contracts.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
@@ -15,9 +16,11 @@ TYPE_NAMES = {v: k for k, v in CONTROLLER_TYPES.items()}
 
 
 class Strict(BaseModel):
-    """Unknown fields are errors (a typo must not be silently ignored)."""
+    """Unknown fields are errors (a typo must not be silently ignored); values are taken as
+    typed (pydantic strict mode: no ``"300"`` → 300, no ``true`` → 1, no ``"yes"`` → true) and
+    must be finite (no NaN, no ±inf, no 1e400)."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
 
 
 class ControlIn(Strict):
@@ -131,7 +134,7 @@ class TraceIn(Strict):
     length: int = Field(1000, ge=2, le=16384, description="samples per channel")
     pre_trigger: int = Field(100, ge=0, le=16383)
     trigger: Literal["immediate", "setpoint_step", "signal", "fault"] = "immediate"
-    trigger_level: float | None = None
+    trigger_level: float | None = Field(None, description="trigger level in the source's unit")
     trigger_edge: Literal["rising", "falling", "either"] = "rising"
     step_to_A: float | None = Field(
         None, ge=-200, le=200, description="with trigger=setpoint_step: i_p* to step to once armed"
@@ -146,7 +149,24 @@ class TraceIn(Strict):
             raise ValueError("pre_trigger must be < length")
         if self.trigger == "signal" and self.trigger_level is None:
             raise ValueError("trigger=signal needs trigger_level")
+        if len(set(self.channels)) != len(self.channels):
+            raise ValueError("channels: each channel once")
         return self
+
+    def checked(self, known: Callable[[str], str]) -> TraceIn:
+        """This config with every channel resolved by ``known`` (drive_link's resolver: an OD
+        name or a bare measurement name); ValueError names an unknown or non-measurement
+        channel (→ 422, nothing stored)."""
+        names = []
+        for c in self.channels:
+            try:
+                full = known(c)
+            except Exception as exc:
+                raise ValueError(f"unknown trace channel {c!r}") from exc
+            if not full.startswith("measurements."):
+                raise ValueError(f"trace channel {c!r} is not a measurement")
+            names.append(full)
+        return self.model_copy(update={"channels": names})
 
 
 class IdentifyIn(Strict):

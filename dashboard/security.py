@@ -124,3 +124,36 @@ def token_ok(expected: str | None, given: str | None) -> bool:
     if expected is None:
         return True
     return given is not None and hmac.compare_digest(expected, given)
+
+
+def allowed_hosts(host: str) -> set[str]:
+    """Host names (without port) the bench answers to: loopback names, plus ``host`` itself
+    (the configured bind address, e.g. with --allow-remote). Anything else is refused (421), so
+    a page on a rebinding DNS name cannot read the bench."""
+    names = {"127.0.0.1", "localhost", "[::1]", "::1"}
+    if host not in ("0.0.0.0", "::", ""):
+        names.add(host.lower())
+    return names
+
+
+def host_ok(host_header: str | None, allowed: set[str]) -> bool:
+    """True when an HTTP Host header names one of ``allowed`` (the port is not compared: the
+    request reached this socket, so it is ours)."""
+    if not host_header:
+        return False
+    h = host_header.strip().lower()
+    if h.startswith("["):
+        name = h[: h.find("]") + 1] if "]" in h else h
+    else:
+        name = h.rsplit(":", 1)[0] if h.count(":") == 1 else h
+    return name in allowed or name.strip("[]") in allowed
+
+
+def bearer(authorization: str | None) -> str | None:
+    """The token of an ``Authorization: Bearer <token>`` header (None otherwise)."""
+    if not authorization:
+        return None
+    scheme, _, value = authorization.strip().partition(" ")
+    if scheme.lower() != "bearer" or not value.strip():
+        return None
+    return value.strip()

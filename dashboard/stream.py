@@ -1,36 +1,61 @@
-"""WebSocket /api/stream: live values for scripts and other pages (Origin and token checked)."""
+"""WebSocket /api/stream: live values for scripts and other pages (Host, Origin and token checked).
+
+With an access token configured, the client's first message must be
+``{"type": "auth", "token": "<token>"}`` within AUTH_TIMEOUT_S (never in the URL, where it
+would land in logs and history); nothing is sent before it.
+"""
 
 from __future__ import annotations
 
 import asyncio
 import json
+import time
 
 import numpy as np
 from fastapi import APIRouter, WebSocket, WebSocketDisconnect
 from starlette.concurrency import run_in_threadpool
 
 from dashboard.bench import Bench, jsonable
-from dashboard.security import origin_ok, token_ok
+from dashboard.security import allowed_hosts, host_ok, origin_ok, token_ok
 
 router = APIRouter()
+
+AUTH_TIMEOUT_S = 5.0  #: time for the first (auth) message when a token is configured
+
+
+async def _authenticate(ws: WebSocket, token: str) -> bool:
+    try:
+        raw = await asyncio.wait_for(ws.receive_text(), AUTH_TIMEOUT_S)
+        msg = json.loads(raw)
+        given = msg.get("token") if isinstance(msg, dict) and msg.get("type") == "auth" else None
+    except (TimeoutError, asyncio.TimeoutError, ValueError, KeyError, WebSocketDisconnect):
+        given = None
+    return token_ok(token, given if isinstance(given, str) else None)
 
 
 @router.websocket("/api/stream")
 async def stream(ws: WebSocket) -> None:
-    """Every 1/stream_rate_hz s: ``{"type":"live", "t":[s], "<signal>":[...]}`` with the samples
-    new since the last message; every second also ``{"type":"state", ...}``. Read-only."""
+    """Every 1/stream_rate_hz s (on a fixed schedule): ``{"type":"live", "t":[s],
+    "<signal>":[...]}`` with the samples new since the last message; every second also
+    ``{"type":"state", ...}``. Read-only."""
     app = ws.app
+    config = app.state.config
+    if not host_ok(ws.headers.get("host"), allowed_hosts(config.host)):
+        await ws.close(code=1008, reason="host not served here")
+        return
     if not origin_ok(ws.headers.get("origin"), app.state.origins):
         await ws.close(code=1008, reason="origin not allowed")
         return
-    if not token_ok(app.state.config.token, ws.query_params.get("token")):
-        await ws.close(code=1008, reason="access token required")
-        return
     await ws.accept()
+    if config.token is not None and not await _authenticate(ws, config.token):
+        await ws.close(code=1008, reason="access token required (first message)")
+        return
     bench: Bench = app.state.bench
-    period = 1.0 / app.state.config.stream_rate_hz
+    period = 1.0 / config.stream_rate_hz
+    per_state = max(1, round(1.0 / period))
     last_t = -np.inf
     tick = 0
+    next_t = time.monotonic()
     try:
         while True:
             try:
@@ -45,10 +70,14 @@ async def stream(ws: WebSocket) -> None:
                 msg = {"type": "live"}
                 msg.update({k: np.asarray(v)[new] for k, v in w.items()})
                 await ws.send_text(json.dumps(jsonable(msg)))
-            if tick % max(1, round(1.0 / period)) == 0:
+            if tick % per_state == 0:
                 state = await run_in_threadpool(bench.state)
                 await ws.send_text(json.dumps(jsonable({"type": "state", **state})))
             tick += 1
-            await asyncio.sleep(period)
+            next_t += period
+            now = time.monotonic()
+            if now - next_t > 1.0:  # far behind (a stalled host): start a new schedule
+                next_t = now
+            await asyncio.sleep(max(0.0, next_t - now))
     except (WebSocketDisconnect, RuntimeError):
         return

@@ -39,7 +39,7 @@ def f32(x: float) -> float:
 @pytest.fixture(scope="module")
 def client():
     cfg = BenchConfig(virtual=True, speed_factor=SPEED_FACTOR, gui_port=0)
-    with TestClient(create_app(cfg, gui=False)) as c:
+    with TestClient(create_app(cfg, gui=False), base_url="http://127.0.0.1:8000") as c:
         yield c
 
 
@@ -127,7 +127,7 @@ def test_stream_checks_origin_and_streams(client):
         ) as ws:
             ws.receive_text()
     assert exc.value.code == 1008
-    with client.websocket_connect("/api/stream", headers={"origin": "http://127.0.0.1:8000"}) as ws:
+    with client.websocket_connect("ws://127.0.0.1:8000/api/stream", headers={"origin": "http://127.0.0.1:8000"}) as ws:
         kinds = set()
         for _ in range(10):
             msg = json.loads(ws.receive_text())
@@ -201,7 +201,7 @@ def test_fault_shown_with_emcy_and_reset(client, hdr):
     s = client.get("/api/state").json()
     assert s["state"] == "FAULT"  # CiA 402 state name
     assert s["emcy"][-1]["code"] == 0x2310 and s["emcy"][-1]["text"] == "continuous overcurrent"
-    with client.websocket_connect("/api/stream") as ws:  # the stream carries the EMCY too
+    with client.websocket_connect("ws://127.0.0.1:8000/api/stream") as ws:  # the stream carries the EMCY too
         msg = {"type": "live"}
         while msg["type"] != "state":
             msg = json.loads(ws.receive_text())

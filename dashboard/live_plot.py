@@ -1,0 +1,80 @@
+"""What the live plots send: decimated windows (at most a few hundred points per series) and
+the data's freshness. No viser here: plain arrays in, plain arrays out.
+
+Units: t in s (host clock, as drive_link.live stamps frames), values in the series' own units.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+STALE_AFTER_S = 1.0  #: the live view says "stale" when the newest sample is older than this
+
+
+def decimate(
+    t: np.ndarray, cols: list[np.ndarray], buckets: int = 100
+) -> tuple[np.ndarray, list[np.ndarray]]:
+    """Keep, per time bucket (``buckets`` over t's span), the samples where each series has its
+    minimum and maximum, every sample where a series changes step-wise across a bucket edge
+    is kept through the bucket's last sample, and always the first and last sample: the drawn
+    line keeps every peak and the newest value. Returns (t, cols) at the kept indices (sorted,
+    unique); inputs shorter than 3 × ``buckets`` come back unchanged."""
+    n = len(t)
+    if n <= 3 * buckets:
+        return t, cols
+    edges = np.linspace(t[0], t[-1], buckets + 1)
+    b = np.clip(np.searchsorted(edges, t, side="right") - 1, 0, buckets - 1)
+    starts = np.flatnonzero(np.r_[True, b[1:] != b[:-1]])
+    ends = np.r_[starts[1:], n]
+    keep = [np.array([0, n - 1]), ends - 1]
+    for c in cols:
+        finite = np.where(np.isfinite(c), c, np.nanmean(c) if np.isfinite(c).any() else 0.0)
+        keep.append(starts + _argext(finite, starts, ends, np.minimum))
+        keep.append(starts + _argext(finite, starts, ends, np.maximum))
+    idx = np.unique(np.concatenate(keep))
+    return t[idx], [c[idx] for c in cols]
+
+
+def _argext(v: np.ndarray, starts: np.ndarray, ends: np.ndarray, ufunc) -> np.ndarray:
+    """Per segment [starts[i], ends[i]) the offset of its min (ufunc=np.minimum) or max."""
+    ext = ufunc.reduceat(v, starts)
+    out = np.empty(len(starts), dtype=np.int64)
+    for i, (s, e) in enumerate(zip(starts, ends, strict=True)):
+        out[i] = int(np.argmax(v[s:e] == ext[i]))
+    return out
+
+
+def min_span_envelope(n: int, *series: np.ndarray, min_span: float) -> np.ndarray:
+    """``n`` values whose first and last are the centre of ``series`` ∓ ``min_span``/2 (the
+    centre snapped to ``min_span``/10 so the axis stays still at steady state), the rest the
+    centre: drawn invisibly, it makes uPlot's y auto-scale at least ``min_span`` wide (units of
+    the series) without hiding larger swings."""
+    lo = min(float(np.min(c)) for c in series)
+    hi = max(float(np.max(c)) for c in series)
+    q = min_span / 10
+    centre = round((lo + hi) / 2 / q) * q
+    out = np.full(n, centre, dtype=np.float64)
+    out[0], out[-1] = centre - min_span / 2, centre + min_span / 2
+    return out
+
+
+def data_age_s(newest_t: float | None, now: float | None = None) -> float | None:
+    """Seconds since the newest sample (host clock, ≥ 0), or None before any sample."""
+    if newest_t is None or not math.isfinite(newest_t):
+        return None
+    return max(0.0, (time.time() if now is None else now) - newest_t)
+
+
+def freshness_text(age_s: float | None, push_age_s: float | None = None) -> tuple[bool, str]:
+    """(stale, text) for the page: fresh data shows its age in ms; data older than
+    STALE_AFTER_S, no data at all, or plots not refreshed for that long show "STALE"."""
+    if age_s is None:
+        return True, "STALE · no live data yet"
+    if push_age_s is not None and push_age_s > STALE_AFTER_S and age_s <= STALE_AFTER_S:
+        return True, f"STALE · plots not refreshed for {push_age_s:.1f} s"
+    if age_s > STALE_AFTER_S:
+        return True, f"STALE · newest data {age_s:.1f} s old"
+    return False, f"live · data {age_s * 1e3:.0f} ms old"
