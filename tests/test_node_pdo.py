@@ -9,6 +9,7 @@ import time
 
 import pytest
 from canopen.sdo import SdoAbortedError
+from conftest import RunQueueProbe, min_rate
 from test_node_support import Bench
 
 pytestmark = pytest.mark.timeout(60)
@@ -26,20 +27,22 @@ def test_tpdo_rates_follow_event_timers(bench):
     time.sleep(0.1)
     stats = bench.drive.runner.stats
     i0 = stats.iterations
+    probe = RunQueueProbe()  # what the kernel gave this process (drive and master) meanwhile
     t0 = time.monotonic()
     time.sleep(1.0)
     t1 = time.monotonic()
+    probe.stop()
     ticks = stats.iterations - i0
     n = {cob: len(bench.log.of(cob, t0)) for cob in (0x181, 0x281, 0x381, 0x481)}
     rates = {cob: k / (t1 - t0) for cob, k in n.items()}
     # 1 ms timers: one frame per 1 ms loop tick; the loop itself keeps ~1 kHz unless this
     # shared machine starves the process (drive and master share one interpreter here)
-    assert 700 < rates[0x281] < 1100, rates
+    assert min_rate(1000, probe.wait) < rates[0x281] < 1100, (rates, probe)
     assert n[0x281] >= 0.95 * min(ticks, 1000 * (t1 - t0)), (n, ticks)
     assert abs(n[0x381] - n[0x281]) <= 3
     # 10 ms timers: 100 Hz
-    assert 85 < rates[0x181] < 110, rates
-    assert 85 < rates[0x481] < 110, rates
+    assert min_rate(100, probe.wait) < rates[0x181] < 110, (rates, probe)
+    assert min_rate(100, probe.wait) < rates[0x481] < 110, (rates, probe)
 
 
 def test_tpdo_payloads_match_sdo_reads(bench):

@@ -1,0 +1,61 @@
+"""Shared test helpers.
+
+:class:`RunQueueProbe`: what the machine delivered to a process during a measurement window,
+read from the kernel's scheduler statistics (``/proc/PID/task/*/schedstat``: time on a CPU and
+time spent runnable but waiting for one). A test that asserts the rate of something driven by
+the virtual drive's 1 ms loop (TPDOs at 1 kHz) bounds it by :func:`min_rate`: the full rate on an
+idle machine, less in proportion to the time the kernel kept the drive's threads waiting. So the
+test holds on a busy host (load 5–25 on 2 cores) and still fails when the product itself is slow
+(e.g. an event timer at half rate on an idle machine).
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from pathlib import Path
+
+
+def _schedstat(pid: int) -> tuple[float, float]:
+    """(s on a CPU, s waiting on a run queue) summed over the threads of ``pid`` (0, 0 if the
+    kernel has no schedstat)."""
+    cpu = wait = 0
+    try:
+        tasks = list(Path(f"/proc/{pid}/task").iterdir())
+    except OSError:
+        return 0.0, 0.0
+    for t in tasks:
+        try:
+            fields = (t / "schedstat").read_text().split()
+        except OSError:
+            continue  # thread gone
+        cpu += int(fields[0])
+        wait += int(fields[1])
+    return cpu / 1e9, wait / 1e9
+
+
+class RunQueueProbe:
+    """``p = RunQueueProbe(pid)`` … ``p.stop()`` → run-queue wait of ``pid``'s threads over the
+    window, in seconds per second (0 = never kept waiting; may exceed 1 with several threads)."""
+
+    def __init__(self, pid: int | None = None) -> None:
+        self.pid = os.getpid() if pid is None else pid
+        self._t0 = time.monotonic()
+        self._cpu0, self._wait0 = _schedstat(self.pid)
+        self.cpu = self.wait = 0.0
+
+    def stop(self) -> float:
+        dt = max(time.monotonic() - self._t0, 1e-9)
+        cpu1, wait1 = _schedstat(self.pid)
+        self.cpu = (cpu1 - self._cpu0) / dt
+        self.wait = (wait1 - self._wait0) / dt
+        return self.wait
+
+    def __repr__(self) -> str:
+        return f"run-queue wait {self.wait:.2f} s/s, CPU {self.cpu:.2f} s/s (pid {self.pid})"
+
+
+def min_rate(nominal_hz: float, wait: float, margin: float = 0.9) -> float:
+    """Lowest acceptable rate of a ``nominal_hz`` stream from a process kept waiting ``wait``
+    s/s by the kernel: ``margin × nominal × (1 − wait)`` (Hz)."""
+    return margin * nominal_hz * max(0.0, 1.0 - wait)
