@@ -1,20 +1,32 @@
-"""A locked SDO client channel with retries and one-line errors.
+"""A locked SDO client channel that resends unanswered requests and restarts broken transfers.
 
 canopen's :class:`~canopen.sdo.SdoClient` has no lock: two threads on one channel corrupt each
 other's transfers. :class:`SdoChannel` serialises every transfer on its channel; a drive uses one
 channel per SDO server (0x1200 for status and parameters, 0x1201 for trace uploads) so a long
 upload never blocks status reads.
 
-Retries: a transfer that times out or loses sync (lost frames: a protocol abort such as
-0x05040001 or 0x05040003) is repeated from its start up to ``retries`` times. Reads and writes
-of one object are idempotent, so a repeat is allowed by the protocol; an abort that refuses the
-value or the access is never retried.
+Two levels of recovery:
+
+- a request that gets no answer is sent again (``retries`` times, waiting ``timeout``,
+  2 × ``timeout``, … s; :mod:`drive_link.sdo_segmented`, :mod:`drive_link.sdo_block`); block
+  uploads also recover lost segments through ``ackseq``;
+- a transfer that still breaks in the middle (lost sync, a protocol abort such as 0x05040001,
+  0x05040003 or 0x05040004, CRC or length mismatch) is started again from its beginning, up to
+  ``restarts`` times and within ``deadline_s`` s in all. Reads and writes of one object are
+  idempotent, so a repeat is allowed by the protocol; an abort that refuses the value or the
+  access is never retried.
+
+A node that answers no initiate request at all fails at once with :class:`DriveTimeout`
+("did not answer … (N attempts)"); a transfer that cannot be completed fails with one line
+naming the last reason. Wrong data is never returned: lengths and block-upload CRCs are
+checked.
 """
 
 from __future__ import annotations
 
 import contextlib
 import threading
+import time
 from collections.abc import Callable, Iterator
 
 import can
@@ -22,8 +34,10 @@ import canopen
 from canopen.sdo.client import SdoClient
 from canopen.sdo.exceptions import SdoAbortedError, SdoCommunicationError
 
+from . import sdo_segmented
 from .errors import BusError, DriveTimeout, SdoAbort
 from .sdo_block import block_upload
+from .sdo_segmented import NoAnswer
 
 #: progress(bytes_done, bytes_total_or_None)
 Progress = Callable[[int, "int | None"], None]
@@ -52,8 +66,10 @@ class _Client(SdoClient):
 class SdoChannel:
     """One SDO client channel (request COB-ID ``rx_cobid``, response COB-ID ``tx_cobid``).
 
-    ``timeout`` is the per-frame response timeout in s; ``retries`` the number of repeats after
-    a timeout.
+    ``timeout``: s to wait for an answer before a request is sent again (doubling each time);
+    ``retries``: resends of an unanswered request; ``restarts``: how often a transfer that
+    broke in the middle is started again; ``deadline_s``: s one read/write/upload may take in
+    all, restarts included.
     """
 
     def __init__(
@@ -64,17 +80,23 @@ class SdoChannel:
         tx_cobid: int,
         timeout: float = 0.3,
         retries: int = 2,
+        restarts: int = 3,
+        deadline_s: float = 60.0,
     ):
         self.node_id = node_id
         self.rx_cobid = rx_cobid
         self.tx_cobid = tx_cobid
         self.retries = retries
+        self.restarts = restarts
+        self.deadline_s = deadline_s
         self.lock = threading.RLock()
         self._network = network
         self.client = _Client(rx_cobid, tx_cobid, canopen.ObjectDictionary())
         self.client.network = network
         self.client.RESPONSE_TIMEOUT = timeout
         self.client.MAX_RETRIES = 1
+        #: transfers started again after a break, since this channel was made (benchmarks)
+        self.restarted = 0
         network.subscribe(tx_cobid, self.client.on_response)
 
     def close(self) -> None:
@@ -85,22 +107,34 @@ class SdoChannel:
             pass
 
     def _run(self, what: str, index: int, subindex: int, name: str, fn):
-        attempts = self.retries + 1
-        for attempt in range(attempts):
+        where = name or f"0x{index:04X}:{subindex:02X}"
+        deadline = time.monotonic() + self.deadline_s
+        attempts = self.restarts + 1
+        for attempt in range(1, attempts + 1):
+            more = attempt < attempts and time.monotonic() < deadline
             try:
                 with self.lock:
-                    return fn()
+                    return fn(deadline)
             except SdoAbortedError as exc:
-                if exc.code in PROTOCOL_ABORTS and attempt + 1 < attempts:
+                if exc.code in PROTOCOL_ABORTS and more:
+                    self.restarted += 1
                     continue  # the transfer lost sync (lost frames): start it again
                 raise SdoAbort(exc.code, index, subindex, name, what) from None
-            except SdoCommunicationError as exc:
-                if attempt + 1 < attempts:
+            except NoAnswer as exc:
+                if not exc.initial and more:
+                    self.restarted += 1
                     continue
-                where = name or f"0x{index:04X}:{subindex:02X}"
                 raise DriveTimeout(
                     f"node {self.node_id} did not answer SDO {what} of {where} "
-                    f"({attempts} attempts): {exc}"
+                    f"({exc.requests} attempts): {exc}"
+                ) from None
+            except SdoCommunicationError as exc:
+                if more:
+                    self.restarted += 1
+                    continue
+                raise DriveTimeout(
+                    f"SDO {what} of {where} on node {self.node_id} failed after {attempt} "
+                    f"attempt{'s' if attempt > 1 else ''}: {exc}"
                 ) from None
             except can.CanError as exc:
                 raise BusError(f"CAN send failed: {exc}") from None
@@ -123,17 +157,22 @@ class SdoChannel:
     def upload(self, index: int, subindex: int, name: str = "") -> bytes:
         """Read an object (expedited or segmented) and return its raw bytes."""
 
-        def go() -> bytes:
-            with self.client.open(index, subindex, buffering=0) as fp:
-                return fp.read()
+        def go(deadline: float) -> bytes:
+            return sdo_segmented.upload(
+                self.client, index, subindex, self.client.RESPONSE_TIMEOUT, self.retries
+            )
 
         return self._run("read", index, subindex, name, go)
 
     def download(self, index: int, subindex: int, data: bytes, name: str = "") -> None:
-        """Write raw bytes to an object (expedited if ≤ 4 bytes, else segmented)."""
+        """Write raw bytes to an object (expedited if ≤ 4 bytes, else segmented). A request is
+        sent again only when it got no answer (see :mod:`drive_link.sdo_segmented`)."""
 
-        def go() -> None:
-            self.client.download(index, subindex, bytes(data))
+        def go(deadline: float) -> None:
+            sdo_segmented.download(
+                self.client, index, subindex, bytes(data), self.client.RESPONSE_TIMEOUT,
+                self.retries,
+            )  # fmt: skip
 
         self._run("write", index, subindex, name, go)
 
@@ -144,11 +183,18 @@ class SdoChannel:
         name: str = "",
         progress: Progress | None = None,
     ) -> bytes:
-        """Read a large object with SDO block upload (CiA 301 §7.2.4.3.10), reporting progress."""
+        """Read a large object with SDO block upload (CiA 301 §7.2.4.3.10), reporting progress;
+        lost segments are recovered, a broken upload is started again (see the module doc)."""
 
-        def go() -> bytes:
+        def go(deadline: float) -> bytes:
             return block_upload(
-                self.client, index, subindex, progress, timeout=self.client.RESPONSE_TIMEOUT
+                self.client,
+                index,
+                subindex,
+                progress,
+                timeout=self.client.RESPONSE_TIMEOUT,
+                resends=self.retries,
+                deadline=deadline,
             )
 
         return self._run("block upload", index, subindex, name, go)

@@ -1,43 +1,61 @@
-"""SDO block upload, client side (CiA 301 §7.2.4.3.12–7.2.4.3.16), robust to lost frames.
+"""SDO block upload, client side (CiA 301 §7.2.4.3.12–7.2.4.3.16), robust to lost, late and
+duplicated frames.
 
-canopen 2.4.1's client acknowledges in the middle of a sub-block when it sees a gap, while the
-server is still sending; on a lossy link that desynchronises both sides. Here the client never
-acknowledges early: after a gap it ignores the rest of the sub-block, and acknowledges the last
-in-order segment (``ackseq``) when the sub-block ends (segment ``blksize`` or the last segment
-seen) or when no segment arrives for ``timeout`` s; the server then re-sends from ``ackseq + 1``
-as a new sub-block numbered from 1. The CRC-16/CCITT (``binascii.crc_hqx``, init 0) of the
-whole data is checked when the server supports it.
+Within a sub-block the client takes segments in sequence. At the first gap (a lost segment) it
+acknowledges at once the last segment it has in sequence (``ackseq``); the server sends the rest
+again as a new sub-block numbered from 1. The segments of the old sub-block still on their way
+("leftovers") carry sequence numbers above the highest one seen before the acknowledgement, and
+a new sub-block starts at 1, so leftovers are recognised and dropped. A sub-block whose last
+segment was lost ends after ``silence_s`` without a segment and is acknowledged the same way.
+An acknowledgement (or the start request) that gets no sub-block within ``ack_wait`` s is sent
+again, waiting twice as long each time (at most 2 s). The sub-block size is halved after a loss
+and doubled after a clean sub-block.
+
+Acknowledgement numbers (an extension in a reserved byte): CiA 301 gives sub-blocks no number,
+so a server that gets the same acknowledgement twice (the client resent it because the answer
+was late, not lost) takes the second one for the next sub-block and skips data. drive_link puts
+a number 1..255 into reserved byte 3 of each acknowledgement (a resend keeps its number); the
+drive ignores an acknowledgement with the number it has just answered, so resends are harmless
+and can be quick. Servers that do not know the extension ignore the byte (CiA 301: reserved). If
+a resent acknowledgement stays unanswered ``escalate_after`` times, the client asks for the
+whole sub-block again (``ackseq`` 0, new number): the answer itself was lost.
+
+Never accepts wrong data: the total length is checked against the size the server announced
+and, when the server supports it, the CRC-16/CCITT (``binascii.crc_hqx``, init 0) of the whole
+data. With a server without the extension a late answer can still make it skip a sub-block:
+the length or CRC check then fails with :class:`SdoCommunicationError` and the caller
+(:class:`drive_link.sdo.SdoChannel`) restarts the upload.
+
+A server without block transfer (abort 0x05040001 to the initiate) or one that switches
+protocol (a normal upload response) is read by segmented upload instead.
 """
 
 from __future__ import annotations
 
 import binascii
-import queue
 import struct
+import time
 from collections.abc import Callable
 
 from canopen.sdo.client import SdoClient
 from canopen.sdo.exceptions import SdoAbortedError, SdoCommunicationError
+
+from .sdo_segmented import Exchange, NoAnswer, continue_upload, upload
 
 CCS_BLOCK_UPLOAD = 0xA0  # client command specifier 5
 SCS_BLOCK_UPLOAD = 0xC0  # server command specifier 6
 CRC_SUPPORTED = 0x04
 SIZE_INDICATED = 0x02
 CS_INITIATE, CS_END, CS_ACK, CS_START = 0, 1, 2, 3
-ABORT = 0x80
+ABORT_COMMAND = 0x05040001
+ABORT_CRC = 0x05040004
+MIN_BLKSIZE = 16
 
-#: Figures of the last block upload in this process (for benchmarks): acks, stalls, gaps.
+#: Figures of the last block upload in this process (for benchmarks): acks, gaps (sub-blocks
+#: with a lost segment), silences (sub-blocks whose end was lost), resends (acknowledgements
+#: or start requests sent again), leftovers (late segments of an acknowledged sub-block),
+#: duplicates (frames delivered twice).
 last_stats: dict[str, int] = {}
-
-
-def _get(client: SdoClient, timeout: float) -> bytes | None:
-    try:
-        data = client.responses.get(block=True, timeout=timeout)
-    except queue.Empty:
-        return None
-    if data[0] == ABORT and len(data) >= 8:
-        raise SdoAbortedError(struct.unpack_from("<I", data, 4)[0])
-    return bytes(data)
 
 
 def block_upload(
@@ -47,112 +65,177 @@ def block_upload(
     progress: Callable[[int, int | None], None] | None = None,
     blksize: int = 127,
     timeout: float = 0.3,
-    max_stalls: int = 8,
-    stall_s: float = 0.06,
+    resends: int = 2,
+    ack_resends: int = 8,
+    silence_s: float = 0.05,
+    deadline: float | None = None,
+    ack_wait: float = 0.1,
+    escalate_after: int = 4,
 ) -> bytes:
-    """Upload ``index``:``subindex`` by block transfer with ``client``'s COB-IDs.
+    """Upload ``index``:``subindex`` by block transfer on ``client``'s COB-IDs.
 
-    ``timeout``: s to wait for the answer to the initiate request; ``stall_s``: s without a
-    segment before the client acknowledges what it has (a stall; segments follow each other
-    within ~0.13 ms at 1 Mbit/s); ``max_stalls``: stalls in a row before giving up
-    (:class:`SdoCommunicationError`).
-    Raises :class:`SdoAbortedError` when the server aborts.
+    ``timeout``: s to wait for the answer to the initiate request before sending it again
+    (doubling); ``resends``: resends of the initiate request; ``ack_wait``: s to wait for the
+    answer to the start request or an acknowledgement (doubling, at most 2 s);
+    ``ack_resends``: resends of one of them; ``silence_s``: s without a segment before a
+    sub-block counts as ended; ``deadline``: ``time.monotonic()`` value after which
+    the upload gives up. Raises :class:`SdoAbortedError` (the server aborted),
+    :class:`NoAnswer` (the initiate request got no answer) or :class:`SdoCommunicationError`
+    (the upload lost sync, CRC or length mismatch, deadline).
     """
-    send = client.network.send_message
-    rx = client.rx_cobid
-    client.responses = queue.Queue()  # drop stale frames of an earlier transfer
-    req = struct.pack(
-        "<BHBBB", CCS_BLOCK_UPLOAD | CRC_SUPPORTED | CS_INITIATE, index, subindex, blksize, 0
+    ex = Exchange(client, index, subindex)
+    init = struct.pack(
+        "<BHBBB2x", CCS_BLOCK_UPLOAD | CRC_SUPPORTED | CS_INITIATE, index, subindex, blksize, 0
     )
-    send(rx, req + b"\0\0")
-    resp = None
-    for _ in range(max_stalls):
-        resp = _get(client, timeout)
-        if resp is not None:
-            break
-        send(rx, req + b"\0\0")  # initiate is idempotent until the server sends data
-    if resp is None:
-        raise SdoCommunicationError("no answer to the block upload request")
-    if resp[0] & 0xE1 != SCS_BLOCK_UPLOAD | CS_INITIATE:
-        client.abort(0x05040001)
-        raise SdoCommunicationError(f"unexpected block upload response 0x{resp[0]:02X}")
-    r_index, r_sub = struct.unpack_from("<HB", resp, 1)
-    if (r_index, r_sub) != (index, subindex):
-        raise SdoCommunicationError("block upload response for another object")
+
+    def initiate_answer(r: bytes) -> bool:
+        same = struct.unpack_from("<HB", r, 1) == (index, subindex)
+        return same and (r[0] & 0xE1 == SCS_BLOCK_UPLOAD | CS_INITIATE or r[0] & 0xE0 == 0x40)
+
+    try:
+        resp = ex.request(init, initiate_answer, timeout, resends, initial=True)
+    except SdoAbortedError as exc:
+        if exc.code != ABORT_COMMAND:
+            raise
+        # the server has no block transfer: read the object by segmented upload
+        return upload(client, index, subindex, timeout, resends)
+    if resp[0] & 0xE0 == 0x40:  # protocol switch: a normal upload follows
+        return continue_upload(ex, resp, timeout, resends)
+    return _receive(
+        ex, resp, progress, blksize, min(ack_wait, timeout), ack_resends, escalate_after,
+        silence_s, deadline,
+    )  # fmt: skip
+
+
+def _receive(
+    ex: Exchange,
+    resp: bytes,
+    progress: Callable[[int, int | None], None] | None,
+    blksize: int,
+    ack_wait: float,
+    ack_resends: int,
+    escalate_after: int,
+    silence_s: float,
+    deadline: float | None,
+) -> bytes:
     size = struct.unpack_from("<I", resp, 4)[0] if resp[0] & SIZE_INDICATED else None
     crc_on = bool(resp[0] & CRC_SUPPORTED)
-    send(rx, bytes([CCS_BLOCK_UPLOAD | CS_START, 0, 0, 0, 0, 0, 0, 0]))
-    if progress:
-        progress(0, size)
-
-    data = bytearray()
-    block = bytearray()  # in-order segments of the current sub-block
-    ackseq = 0  # last in-order seqno of the current sub-block
-    prev_ack: bytes | None = None  # the last acknowledgement sent
-    done = False  # the last segment arrived in order and was acknowledged
-    stalls = 0
-
-    blk_now = blksize  # size of the sub-block being received
-    stats = {"acks": 0, "stalls": 0, "gaps": 0, "frames": 0}
+    stats = dict.fromkeys(("acks", "gaps", "silences", "resends", "leftovers", "duplicates"), 0)
+    stats["frames"] = 0
     last_stats.clear()
     last_stats.update(stats)
 
-    def acknowledge() -> None:
-        nonlocal ackseq, block, prev_ack, blk_now
-        stats["acks"] += 1
-        stats["gaps"] += ackseq < blk_now and not done
-        # adapt the next sub-block: halve it after a loss, grow it back after a clean one
-        clean = ackseq >= blk_now
-        blk_now = min(blksize, blk_now * 2) if clean else max(8, blk_now // 2)
-        prev_ack = bytes([CCS_BLOCK_UPLOAD | CS_ACK, ackseq, blk_now, 0, 0, 0, 0, 0])
-        send(rx, prev_ack)
+    data = bytearray()
+    block = bytearray()  # in-sequence segments of the current sub-block
+    ackseq = 0  # last in-sequence seqno of the current sub-block
+    seen_max = 0  # highest seqno seen in the current sub-block
+    blk = blksize  # sub-block size asked for (the server sends min(blk, what is left))
+    awaiting = True  # no segment of the next sub-block seen yet
+    old_max = 127  # while awaiting: seqnos above this are leftovers of the previous sub-block
+    finished = False  # the last segment arrived in sequence and was acknowledged
+    pending = bytes([CCS_BLOCK_UPLOAD | CS_START]) + bytes(7)  # sent again when unanswered
+    wait = ack_wait
+    quiet = 0
+    tag = 0  # number of the last acknowledgement (1..255, in reserved byte 3)
+    prev = b""  # the previous frame (a duplicate of it is dropped)
+
+    def send_ack(seq: int) -> None:
+        nonlocal pending, tag
+        tag = tag % 255 + 1
+        pending = bytes([CCS_BLOCK_UPLOAD | CS_ACK, seq, blk, tag, 0, 0, 0, 0])
+        ex.send(pending)
+    ex.send(pending)
+    if progress:
+        progress(0, size)
+
+    def acknowledge(clean: bool) -> None:
+        nonlocal block, ackseq, seen_max, blk, awaiting, old_max, wait, quiet
         data.extend(block)
+        if size is not None and len(data) > size + 6:
+            raise SdoCommunicationError("block upload: more data than announced (lost sync)")
+        blk = min(blksize, blk * 2) if clean else max(MIN_BLKSIZE, blk // 2)
+        old_max = 127 if clean else seen_max
+        stats["acks"] += 1
+        send_ack(ackseq)
         block = bytearray()
-        ackseq = 0
+        ackseq = seen_max = 0
+        awaiting = True
+        wait = ack_wait
+        quiet = 0
         if progress:
-            progress(min(len(data), size) if size else len(data), size)
+            progress(min(len(data), size) if size is not None else len(data), size)
 
     while True:
-        frame = _get(client, stall_s)
+        if deadline is not None and time.monotonic() > deadline:
+            raise SdoCommunicationError("block upload did not finish in time")
+        frame = ex.next(wait if awaiting else silence_s)
         if frame is None:
-            stats["stalls"] += 1
-            last_stats.update(stats)
-            stalls += 1
-            if stalls > max_stalls:
-                raise SdoCommunicationError("block upload stalled (frames lost)")
-            if ackseq == 0 and not block:
-                # nothing new since the last acknowledgement (or the start): it was lost
-                send(rx, prev_ack or bytes([CCS_BLOCK_UPLOAD | CS_START, 0, 0, 0, 0, 0, 0, 0]))
-            else:
-                acknowledge()  # the end of the sub-block was lost
+            if awaiting:  # the request or its whole answer was lost, or the server is slow
+                quiet += 1
+                if quiet > ack_resends:
+                    raise SdoCommunicationError(
+                        f"block upload stalled: no answer to {quiet} acknowledgements"
+                    )
+                stats["resends"] += 1
+                if quiet == escalate_after and not finished:
+                    # the server ignores repeats of an answered start or acknowledgement: if
+                    # its answer was lost as a whole, ask for that sub-block again
+                    send_ack(0)
+                else:
+                    ex.send(pending)
+                wait = min(2.0, wait * 2)
+            else:  # the end of the sub-block was lost
+                stats["silences"] += 1
+                acknowledge(clean=False)
             continue
-        stalls = 0
         stats["frames"] += 1
-        if done:
-            if frame[0] & 0xE1 == SCS_BLOCK_UPLOAD | CS_END:
+        if frame == prev:  # the bus delivered the same frame twice
+            stats["duplicates"] += 1
+            continue
+        prev = frame
+        if finished:
+            if frame[0] & 0xE3 == SCS_BLOCK_UPLOAD | CS_END and (
+                size is None or (frame[0] >> 2) & 0x07 == (7 - size % 7) % 7
+            ):
                 break
-            continue  # a late segment of a re-sent sub-block
+            stats["leftovers"] += 1
+            continue
         seqno, last = frame[0] & 0x7F, bool(frame[0] & 0x80)
+        if awaiting:
+            if seqno == 0 or seqno > old_max:
+                old_max = max(old_max, seqno)
+                stats["leftovers"] += 1
+                continue
+            awaiting = False
         if seqno == ackseq + 1:
-            ackseq = seqno
+            ackseq = seen_max = seqno
             block += frame[1:8]
             if last:
-                done = True
-                acknowledge()
-            elif seqno >= blk_now:
-                acknowledge()
-        elif seqno >= blk_now or last:
-            acknowledge()  # the sub-block ended with a gap: the server re-sends after ackseq
+                finished = True
+                acknowledge(clean=True)
+            elif seqno >= blk:
+                acknowledge(clean=True)
+        elif seqno > ackseq:  # a gap: acknowledge what arrived in sequence right away
+            seen_max = seqno
+            stats["gaps"] += 1
+            acknowledge(clean=False)
+        # seqno <= ackseq: the same segment twice (a duplicate frame): ignored
+    last_stats.update(stats)
     n_unused = (frame[0] >> 2) & 0x07
     if n_unused:
         del data[-n_unused:]
+    if size is not None and len(data) != size:
+        ex.send(struct.pack("<BHBI", 0x80, ex.index, ex.subindex, ABORT_COMMAND))
+        raise SdoCommunicationError(f"block upload returned {len(data)} of {size} bytes")
     if crc_on:
         crc = struct.unpack_from("<H", frame, 1)[0]
         if binascii.crc_hqx(bytes(data), 0) != crc:
-            client.abort(0x05040004)
+            ex.send(struct.pack("<BHBI", 0x80, ex.index, ex.subindex, ABORT_CRC))
             raise SdoCommunicationError("block upload CRC mismatch")
-    send(rx, bytes([CCS_BLOCK_UPLOAD | CS_END, 0, 0, 0, 0, 0, 0, 0]))
-    last_stats.update(stats)
-    if size is not None and len(data) != size:
-        raise SdoCommunicationError(f"block upload returned {len(data)} of {size} bytes")
+    ex.send(bytes([CCS_BLOCK_UPLOAD | CS_END]) + bytes(7))
+    if progress:
+        progress(len(data), size)
     return bytes(data)
+
+
+__all__ = ["NoAnswer", "block_upload", "last_stats"]

@@ -25,7 +25,10 @@ on the channel; a repeated block-upload "start" is ignored once the first sub-bl
 acknowledgement while the upload-end response is out makes the server send that response again;
 a repeated client "end" is ignored. A repeated block-upload *acknowledgement* of a sub-block the
 server already answered cannot be told from the acknowledgement of the next sub-block (CiA 301
-gives sub-blocks no number); the CRC of the end response exposes the damage to the client.
+gives sub-blocks no number): a standard client's repeat is taken as the next acknowledgement and
+the CRC of the end response exposes the damage to the client. drive_link's client numbers its
+acknowledgements 1..255 in reserved byte 3 (standard clients send 0 there, and other servers
+ignore it); an acknowledgement with the number of the one just answered is ignored.
 
 Timeout (:attr:`BlockSdoServer.timeout`, 10 s): an open transfer (segmented or block) that gets
 no client frame for that long is aborted with 0x05040000 (SDO protocol timed out) and forgotten.
@@ -139,6 +142,7 @@ class BlockSdoServer(SdoServer):
         self._blksize = 0
         self._sent = 0  # block upload: segments sent in the current sub-block
         self._acks = 0  # block upload: acknowledgements received
+        self._last_tag = 0  # block upload: number of the last acknowledgement (0 = none)
         self._end_frame = b""  # block upload: the end response (sent again on a repeated ack)
         self._crc_on = False
         self._chunks: list[bytes] = []
@@ -385,10 +389,16 @@ class BlockSdoServer(SdoServer):
             else:
                 raise self._no_transfer()
         elif cs == _CS_ACK:
-            ackseq, blksize = req[1], req[2]
+            ackseq, blksize, tag = req[1], req[2], req[3]
             if self._mode == "up_end":
                 self.send_response(self._end_frame)  # the client did not get the end
                 return
+            if tag and tag == self._last_tag and self._mode == "up":
+                # drive_link numbers its acknowledgements in reserved byte 3: this one was
+                # answered already (the client was impatient); its sub-block is on its way
+                logger.debug("repeated block upload ack %d ignored", tag)
+                return
+            self._last_tag = tag
             if self._mode == "up_init":
                 self._mode = "up"  # the start request was lost: ackseq 0 acts as start
             elif self._mode != "up":

@@ -1,0 +1,200 @@
+"""SDO expedited and segmented transfers, client side (CiA 301 §7.2.4.3.3–7.2.4.3.8), with
+resends of unanswered requests.
+
+Every request waits for the response it asked for and ignores any other frame on the response
+COB-ID (a late duplicate of an earlier answer, a segment with the other toggle bit). A request
+with no matching answer within ``timeout`` s is sent again, waiting twice as long each time, up
+to ``resends`` times. The server answers a repeated segment request with the same segment
+(upload) or the same confirmation without storing twice (download); an initiate request starts
+the transfer afresh. So a resent READ is always harmless. A resent WRITE request is only sent
+when no answer came: if the first one reached the drive and only its confirmation was lost,
+the drive executes the same write twice — the same value to the same object, which is
+harmless for every object of this drive (parameters, controlword commands that name a target
+state, store/restore, trace commands).
+"""
+
+from __future__ import annotations
+
+import queue
+import struct
+import time
+from collections.abc import Callable
+
+from canopen.sdo.client import SdoClient
+from canopen.sdo.exceptions import SdoAbortedError, SdoCommunicationError
+
+ABORT = 0x80
+TOGGLE = 0x10
+
+
+class NoAnswer(SdoCommunicationError):  # noqa: N818 (named like canopen's errors)
+    """A request got no matching answer after every resend.
+
+    ``requests``: how many times it was sent; ``initial``: True for the initiate request of a
+    transfer (nothing had been exchanged: the node is absent or mute).
+    """
+
+    def __init__(self, message: str, requests: int, initial: bool) -> None:
+        super().__init__(message)
+        self.requests = requests
+        self.initial = initial
+
+
+class Exchange:
+    """Requests and responses of one transfer on ``client``'s COB-IDs (object
+    ``index``:``subindex``; an abort frame naming another object is ignored)."""
+
+    def __init__(self, client: SdoClient, index: int, subindex: int) -> None:
+        self.client = client
+        self.index = index
+        self.subindex = subindex
+        self.requests_sent = 0
+        self.drain()
+
+    def drain(self) -> None:
+        """Forget frames of earlier transfers."""
+        q = self.client.responses
+        while True:
+            try:
+                q.get_nowait()
+            except queue.Empty:
+                return
+
+    def send(self, frame: bytes) -> None:
+        self.requests_sent += 1
+        self.client.network.send_message(self.client.rx_cobid, bytes(frame).ljust(8, b"\0"))
+
+    def next(self, timeout: float) -> bytes | None:
+        """The next response frame within ``timeout`` s, or None.
+
+        Raises :class:`SdoAbortedError` for an abort of this transfer's object.
+        """
+        deadline = time.monotonic() + timeout
+        while True:
+            left = deadline - time.monotonic()
+            try:
+                data = self.client.responses.get(timeout=max(0.0, left))
+            except queue.Empty:
+                return None
+            data = bytes(data).ljust(8, b"\0")
+            if data[0] == ABORT:
+                index, subindex, code = struct.unpack_from("<HBI", data, 1)
+                if (index, subindex) == (self.index, self.subindex):
+                    raise SdoAbortedError(code)
+                continue  # the end of some other transfer
+            return data
+
+    def request(
+        self,
+        frame: bytes,
+        accept: Callable[[bytes], bool],
+        timeout: float,
+        resends: int,
+        initial: bool = False,
+    ) -> bytes:
+        """Send ``frame`` and return the first response ``accept`` takes; resend it after
+        ``timeout``, 2 × ``timeout``, … s without one, at most ``resends`` times."""
+        wait = timeout
+        for _ in range(resends + 1):
+            self.send(frame)
+            deadline = time.monotonic() + wait
+            while (left := deadline - time.monotonic()) > 0:
+                resp = self.next(left)
+                if resp is None:
+                    break
+                if accept(resp):
+                    return resp
+            wait *= 2
+        what = "initiate" if initial else "segment"
+        raise NoAnswer(f"no answer to the {what} request", resends + 1, initial)
+
+
+def _same_object(frame: bytes, index: int, subindex: int) -> bool:
+    return struct.unpack_from("<HB", frame, 1) == (index, subindex)
+
+
+def _segment_of(scs: int, toggle: int) -> Callable[[bytes], bool]:
+    """Accepts a segment response (server command ``scs``) with the toggle bit ``toggle``."""
+    return lambda r: r[0] & 0xE0 == scs and r[0] & TOGGLE == toggle
+
+
+def upload(
+    client: SdoClient, index: int, subindex: int, timeout: float = 0.3, resends: int = 2
+) -> bytes:
+    """Read ``index``:``subindex`` (expedited or segmented) and return its bytes.
+
+    Raises :class:`SdoAbortedError` (the server aborted), :class:`NoAnswer` or
+    :class:`SdoCommunicationError` (the data length disagrees with the announced size).
+    """
+    ex = Exchange(client, index, subindex)
+    init = struct.pack("<BHB4x", 0x40, index, subindex)
+    resp = ex.request(
+        init,
+        lambda r: r[0] & 0xE0 == 0x40 and _same_object(r, index, subindex),
+        timeout,
+        resends,
+        initial=True,
+    )
+    return continue_upload(ex, resp, timeout, resends)
+
+
+def continue_upload(ex: Exchange, resp: bytes, timeout: float, resends: int) -> bytes:
+    """The rest of an upload whose initiate response is ``resp`` (scs 2)."""
+    cmd = resp[0]
+    if cmd & 0x02:  # expedited
+        n = 4 - ((cmd >> 2) & 0x03) if cmd & 0x01 else 4
+        return bytes(resp[4 : 4 + n])
+    size = struct.unpack_from("<I", resp, 4)[0] if cmd & 0x01 else None
+    data = bytearray()
+    toggle = 0
+    while True:
+        seg = ex.request(bytes([0x60 | toggle]), _segment_of(0x00, toggle), timeout, resends)
+        n = 7 - ((seg[0] >> 1) & 0x07)
+        data += seg[1 : 1 + n]
+        if size is not None and len(data) > size:
+            raise SdoCommunicationError(f"segmented upload sent more than {size} bytes announced")
+        if seg[0] & 0x01:
+            break
+        toggle ^= TOGGLE
+    if size is not None and len(data) != size:
+        raise SdoCommunicationError(f"segmented upload returned {len(data)} of {size} bytes")
+    return bytes(data)
+
+
+def download(
+    client: SdoClient,
+    index: int,
+    subindex: int,
+    data: bytes,
+    timeout: float = 0.3,
+    resends: int = 2,
+) -> None:
+    """Write ``data`` to ``index``:``subindex`` (expedited if ≤ 4 bytes, else segmented).
+
+    Raises :class:`SdoAbortedError` (the server refused), :class:`NoAnswer`.
+    """
+    data = bytes(data)
+    ex = Exchange(client, index, subindex)
+
+    def confirmed(r: bytes) -> bool:
+        return r[0] == 0x60 and _same_object(r, index, subindex)
+
+    if 0 < len(data) <= 4:
+        cmd = 0x23 | ((4 - len(data)) << 2)
+        frame = struct.pack("<BHB", cmd, index, subindex) + data.ljust(4, b"\0")
+        ex.request(frame, confirmed, timeout, resends, initial=True)
+        return
+    frame = struct.pack("<BHBI", 0x21, index, subindex, len(data))
+    ex.request(frame, confirmed, timeout, resends, initial=True)
+    toggle = 0
+    pos = 0
+    while True:
+        chunk = data[pos : pos + 7]
+        pos += 7
+        last = pos >= len(data)
+        cmd = toggle | ((7 - len(chunk)) << 1) | (1 if last else 0)
+        frame = bytes([cmd]) + chunk.ljust(7, b"\0")
+        ex.request(frame, _segment_of(0x20, toggle), timeout, resends)
+        if last:
+            return
+        toggle ^= TOGGLE
