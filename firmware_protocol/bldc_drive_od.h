@@ -1310,6 +1310,7 @@
 #define OD_MOTOR__R_DEFAULT                                      0.0062f /* Ohm */
 #define OD_MOTOR__R_MIN                                          0.0001f /* Ohm */
 #define OD_MOTOR__R_MAX                                          1.0f /* Ohm */
+#define OD_MOTOR__R_CONFIG_ONLY                                  1u /* write only with the power stage off, else 0x08000022 */
 #define OD_MOTOR__R_REF                                          0x20000120UL
 /* 0x2000:02 motor.L REAL32 rw [H] - phase inductance */
 #define OD_MOTOR__L_INDEX                                        0x2000u
@@ -1321,6 +1322,7 @@
 #define OD_MOTOR__L_DEFAULT                                      1.48e-05f /* H */
 #define OD_MOTOR__L_MIN                                          1e-06f /* H */
 #define OD_MOTOR__L_MAX                                          0.001f /* H */
+#define OD_MOTOR__L_CONFIG_ONLY                                  1u /* write only with the power stage off, else 0x08000022 */
 #define OD_MOTOR__L_REF                                          0x20000220UL
 /* 0x2000:03 motor.K_rpm REAL32 rw [V/rpm] - back-EMF constant, line-to-line */
 #define OD_MOTOR__K_RPM_INDEX                                    0x2000u
@@ -1332,6 +1334,7 @@
 #define OD_MOTOR__K_RPM_DEFAULT                                  0.0125f /* V/rpm */
 #define OD_MOTOR__K_RPM_MIN                                      0.0001f /* V/rpm */
 #define OD_MOTOR__K_RPM_MAX                                      1.0f /* V/rpm */
+#define OD_MOTOR__K_RPM_CONFIG_ONLY                              1u /* write only with the power stage off, else 0x08000022 */
 #define OD_MOTOR__K_RPM_REF                                      0x20000320UL
 /* 0x2000:04 motor.pole_pairs UNSIGNED16 rw [1] */
 #define OD_MOTOR__POLE_PAIRS_INDEX                               0x2000u
@@ -1343,6 +1346,7 @@
 #define OD_MOTOR__POLE_PAIRS_DEFAULT                             4u /* 1 */
 #define OD_MOTOR__POLE_PAIRS_MIN                                 1u /* 1 */
 #define OD_MOTOR__POLE_PAIRS_MAX                                 32u /* 1 */
+#define OD_MOTOR__POLE_PAIRS_CONFIG_ONLY                         1u /* write only with the power stage off, else 0x08000022 */
 #define OD_MOTOR__POLE_PAIRS_REF                                 0x20000410UL
 /* 0x2000:05 motor.rated_current REAL32 rw [A] */
 #define OD_MOTOR__RATED_CURRENT_INDEX                            0x2000u
@@ -1354,6 +1358,7 @@
 #define OD_MOTOR__RATED_CURRENT_DEFAULT                          100.0f /* A */
 #define OD_MOTOR__RATED_CURRENT_MIN                              1.0f /* A */
 #define OD_MOTOR__RATED_CURRENT_MAX                              200.0f /* A */
+#define OD_MOTOR__RATED_CURRENT_CONFIG_ONLY                      1u /* write only with the power stage off, else 0x08000022 */
 #define OD_MOTOR__RATED_CURRENT_REF                              0x20000520UL
 /* 0x2000:06 motor.V_dc_nominal REAL32 rw [V] - nominal DC-link voltage */
 #define OD_MOTOR__V_DC_NOMINAL_INDEX                             0x2000u
@@ -1365,6 +1370,7 @@
 #define OD_MOTOR__V_DC_NOMINAL_DEFAULT                           48.0f /* V */
 #define OD_MOTOR__V_DC_NOMINAL_MIN                               10.0f /* V */
 #define OD_MOTOR__V_DC_NOMINAL_MAX                               100.0f /* V */
+#define OD_MOTOR__V_DC_NOMINAL_CONFIG_ONLY                       1u /* write only with the power stage off, else 0x08000022 */
 #define OD_MOTOR__V_DC_NOMINAL_REF                               0x20000620UL
 
 /* ---- 0x2010 current_controller ---- */
@@ -1403,7 +1409,7 @@
 #define OD_CURRENT_CONTROLLER__L_C_MIN                           1e-08f /* H */
 #define OD_CURRENT_CONTROLLER__L_C_MAX                           0.002f /* H */
 #define OD_CURRENT_CONTROLLER__L_C_REF                           0x20100220UL
-/* 0x2010:03 current_controller.R_c REAL32 rw [Ohm] - controller estimate of R */
+/* 0x2010:03 current_controller.R_c REAL32 rw [Ohm] - controller estimate of R: 0 (Gamma_c = Ts/(2 L_c)) or 1e-4..2 motor.R */
 #define OD_CURRENT_CONTROLLER__R_C_INDEX                         0x2010u
 #define OD_CURRENT_CONTROLLER__R_C_SUB                           0x03u
 #define OD_CURRENT_CONTROLLER__R_C_TYPE                          OD_TYPE_REAL32
@@ -1413,6 +1419,7 @@
 #define OD_CURRENT_CONTROLLER__R_C_DEFAULT                       0.0062f /* Ohm */
 #define OD_CURRENT_CONTROLLER__R_C_MIN                           0.0f /* Ohm */
 #define OD_CURRENT_CONTROLLER__R_C_MAX                           1.0f /* Ohm */
+#define OD_CURRENT_CONTROLLER__R_C_MIN_NONZERO                   0.0001f /* Ohm: 0 or >= this */
 #define OD_CURRENT_CONTROLLER__R_C_REF                           0x20100320UL
 /* 0x2010:04 current_controller.k_p REAL32 rw [V/A] - PI proportional gain k_p,i (eq. 22) */
 #define OD_CURRENT_CONTROLLER__K_P_INDEX                         0x2010u
@@ -1737,7 +1744,7 @@
 #define OD_PROTECTION__HIGHEST_SUB_INDEX_PDO                     0u
 #define OD_PROTECTION__HIGHEST_SUB_INDEX_DEFAULT                 3u
 #define OD_PROTECTION__HIGHEST_SUB_INDEX_REF                     0x20500008UL
-/* 0x2050:01 protection.overcurrent_trip REAL32 rw [A] - instantaneous phase overcurrent trip (EMCY 0x2320) */
+/* 0x2050:01 protection.overcurrent_trip REAL32 rw [A] - instantaneous phase overcurrent trip (EMCY 0x2310) */
 #define OD_PROTECTION__OVERCURRENT_TRIP_INDEX                    0x2050u
 #define OD_PROTECTION__OVERCURRENT_TRIP_SUB                      0x01u
 #define OD_PROTECTION__OVERCURRENT_TRIP_TYPE                     OD_TYPE_REAL32
@@ -1747,6 +1754,7 @@
 #define OD_PROTECTION__OVERCURRENT_TRIP_DEFAULT                  300.0f /* A */
 #define OD_PROTECTION__OVERCURRENT_TRIP_MIN                      1.0f /* A */
 #define OD_PROTECTION__OVERCURRENT_TRIP_MAX                      1000.0f /* A */
+#define OD_PROTECTION__OVERCURRENT_TRIP_CONFIG_ONLY              1u /* write only with the power stage off, else 0x08000022 */
 #define OD_PROTECTION__OVERCURRENT_TRIP_REF                      0x20500120UL
 /* 0x2050:02 protection.overvoltage_trip REAL32 rw [V] - DC-link overvoltage trip (EMCY 0x3210) */
 #define OD_PROTECTION__OVERVOLTAGE_TRIP_INDEX                    0x2050u
@@ -1758,6 +1766,7 @@
 #define OD_PROTECTION__OVERVOLTAGE_TRIP_DEFAULT                  60.0f /* V */
 #define OD_PROTECTION__OVERVOLTAGE_TRIP_MIN                      1.0f /* V */
 #define OD_PROTECTION__OVERVOLTAGE_TRIP_MAX                      100.0f /* V */
+#define OD_PROTECTION__OVERVOLTAGE_TRIP_CONFIG_ONLY              1u /* write only with the power stage off, else 0x08000022 */
 #define OD_PROTECTION__OVERVOLTAGE_TRIP_REF                      0x20500220UL
 /* 0x2050:03 protection.undervoltage_trip REAL32 rw [V] - DC-link undervoltage trip (EMCY 0x3220) */
 #define OD_PROTECTION__UNDERVOLTAGE_TRIP_INDEX                   0x2050u
@@ -1769,6 +1778,7 @@
 #define OD_PROTECTION__UNDERVOLTAGE_TRIP_DEFAULT                 36.0f /* V */
 #define OD_PROTECTION__UNDERVOLTAGE_TRIP_MIN                     0.0f /* V */
 #define OD_PROTECTION__UNDERVOLTAGE_TRIP_MAX                     100.0f /* V */
+#define OD_PROTECTION__UNDERVOLTAGE_TRIP_CONFIG_ONLY             1u /* write only with the power stage off, else 0x08000022 */
 #define OD_PROTECTION__UNDERVOLTAGE_TRIP_REF                     0x20500320UL
 
 /* ---- 0x20F0 gain_set ---- */
@@ -1817,6 +1827,7 @@
 #define OD_GAIN_SET__R_C_DEFAULT                                 0.0062f /* Ohm */
 #define OD_GAIN_SET__R_C_MIN                                     0.0f /* Ohm */
 #define OD_GAIN_SET__R_C_MAX                                     1.0f /* Ohm */
+#define OD_GAIN_SET__R_C_MIN_NONZERO                             0.0001f /* Ohm: 0 or >= this */
 #define OD_GAIN_SET__R_C_REF                                     0x20F00320UL
 /* 0x20F0:04 gain_set.k_p REAL32 rw [V/A] - staged copy of current_controller.k_p */
 #define OD_GAIN_SET__K_P_INDEX                                   0x20F0u
@@ -2221,6 +2232,7 @@
 #define OD_SIM_LOAD__K_GEN_DEFAULT                               0.006921f /* N*m/rpm */
 #define OD_SIM_LOAD__K_GEN_MIN                                   0.0f /* N*m/rpm */
 #define OD_SIM_LOAD__K_GEN_MAX                                   1.0f /* N*m/rpm */
+#define OD_SIM_LOAD__K_GEN_CONFIG_ONLY                           1u /* write only with the power stage off, else 0x08000022 */
 #define OD_SIM_LOAD__K_GEN_REF                                   0x50000220UL
 /* 0x5000:03 sim_load.J REAL32 rw [kg*m^2] - total inertia, default from the paper's identified b = 3.33715e-4 rpm/(A sample) */
 #define OD_SIM_LOAD__J_INDEX                                     0x5000u
@@ -2232,6 +2244,7 @@
 #define OD_SIM_LOAD__J_DEFAULT                                   0.06831f /* kg*m^2 */
 #define OD_SIM_LOAD__J_MIN                                       1e-05f /* kg*m^2 */
 #define OD_SIM_LOAD__J_MAX                                       10.0f /* kg*m^2 */
+#define OD_SIM_LOAD__J_CONFIG_ONLY                               1u /* write only with the power stage off, else 0x08000022 */
 #define OD_SIM_LOAD__J_REF                                       0x50000320UL
 /* 0x5000:04 sim_load.B REAL32 rw [N*m*s/rad] - viscous friction, default 10 % of the speed-proportional torque identified in the paper (a = 0.9999785) */
 #define OD_SIM_LOAD__B_INDEX                                     0x5000u
@@ -2243,6 +2256,7 @@
 #define OD_SIM_LOAD__B_DEFAULT                                   0.007344f /* N*m*s/rad */
 #define OD_SIM_LOAD__B_MIN                                       0.0f /* N*m*s/rad */
 #define OD_SIM_LOAD__B_MAX                                       10.0f /* N*m*s/rad */
+#define OD_SIM_LOAD__B_CONFIG_ONLY                               1u /* write only with the power stage off, else 0x08000022 */
 #define OD_SIM_LOAD__B_REF                                       0x50000420UL
 
 /* ---- 0x5010 sim_fault ---- */
@@ -2304,6 +2318,7 @@
 #define OD_SIM_INVERTER__T_BT_DEFAULT                            0.0f /* s */
 #define OD_SIM_INVERTER__T_BT_MIN                                0.0f /* s */
 #define OD_SIM_INVERTER__T_BT_MAX                                2e-05f /* s */
+#define OD_SIM_INVERTER__T_BT_CONFIG_ONLY                        1u /* write only with the power stage off, else 0x08000022 */
 #define OD_SIM_INVERTER__T_BT_REF                                0x50200120UL
 /* 0x5020:02 sim_inverter.T_DD REAL32 rw [s] - virtual inverter driver delay */
 #define OD_SIM_INVERTER__T_DD_INDEX                              0x5020u
@@ -2315,6 +2330,7 @@
 #define OD_SIM_INVERTER__T_DD_DEFAULT                            0.0f /* s */
 #define OD_SIM_INVERTER__T_DD_MIN                                0.0f /* s */
 #define OD_SIM_INVERTER__T_DD_MAX                                2e-05f /* s */
+#define OD_SIM_INVERTER__T_DD_CONFIG_ONLY                        1u /* write only with the power stage off, else 0x08000022 */
 #define OD_SIM_INVERTER__T_DD_REF                                0x50200220UL
 /* 0x5020:03 sim_inverter.T_SD REAL32 rw [s] - virtual sampling delay */
 #define OD_SIM_INVERTER__T_SD_INDEX                              0x5020u
@@ -2326,6 +2342,7 @@
 #define OD_SIM_INVERTER__T_SD_DEFAULT                            0.0f /* s */
 #define OD_SIM_INVERTER__T_SD_MIN                                0.0f /* s */
 #define OD_SIM_INVERTER__T_SD_MAX                                2e-05f /* s */
+#define OD_SIM_INVERTER__T_SD_CONFIG_ONLY                        1u /* write only with the power stage off, else 0x08000022 */
 #define OD_SIM_INVERTER__T_SD_REF                                0x50200320UL
 /* 0x5020:04 sim_inverter.V_G REAL32 rw [V] - virtual switch voltage drop */
 #define OD_SIM_INVERTER__V_G_INDEX                               0x5020u
@@ -2337,6 +2354,7 @@
 #define OD_SIM_INVERTER__V_G_DEFAULT                             0.0f /* V */
 #define OD_SIM_INVERTER__V_G_MIN                                 0.0f /* V */
 #define OD_SIM_INVERTER__V_G_MAX                                 5.0f /* V */
+#define OD_SIM_INVERTER__V_G_CONFIG_ONLY                         1u /* write only with the power stage off, else 0x08000022 */
 #define OD_SIM_INVERTER__V_G_REF                                 0x50200420UL
 
 /* ---- 0x5030 sim_info ---- */
@@ -2642,6 +2660,7 @@
 #define OD_MOTOR_RATED_CURRENT_DEFAULT                           0x000186A0UL /* mA */
 #define OD_MOTOR_RATED_CURRENT_MIN                               0x000003E8UL /* mA */
 #define OD_MOTOR_RATED_CURRENT_MAX                               0x00030D40UL /* mA */
+#define OD_MOTOR_RATED_CURRENT_CONFIG_ONLY                       1u /* write only with the power stage off, else 0x08000022 */
 #define OD_MOTOR_RATED_CURRENT_REF                               0x60750020UL
 
 /* ---- 0x6076 motor_rated_torque ---- */
@@ -2655,6 +2674,7 @@
 #define OD_MOTOR_RATED_TORQUE_DEFAULT                            0x00003660UL /* mN*m */
 #define OD_MOTOR_RATED_TORQUE_MIN                                0x00000064UL /* mN*m */
 #define OD_MOTOR_RATED_TORQUE_MAX                                0x000186A0UL /* mN*m */
+#define OD_MOTOR_RATED_TORQUE_CONFIG_ONLY                        1u /* write only with the power stage off, else 0x08000022 */
 #define OD_MOTOR_RATED_TORQUE_REF                                0x60760020UL
 
 /* ---- 0x6077 torque_actual_value ---- */
@@ -2796,8 +2816,12 @@
  *      abort code is TOO_HIGH for the bounded object, TOO_LOW for the bound) ---- */
 /* current_controller.L_c < 2 * motor.L - deadbeat loop stable for L_c < 2 L */
 #define OD_CURRENT_CONTROLLER__L_C_BOUND_FACTOR                  2.0f
-/* gain_set.L_c < 2 * motor.L - staged L_c, checked when the staged set is written or applied (gain_set_apply) */
+/* gain_set.L_c < 2 * motor.L - staged L_c, checked when it or motor.L is written and when applied (gain_set_apply) */
 #define OD_GAIN_SET__L_C_BOUND_FACTOR                            2.0f
+/* current_controller.R_c <= 2 * motor.R - deadbeat loop stable for R_c <= 2 R (with 0 < L_c < 2 L; larger R_c/R can be unstable, e.g. R_c > 107 R at L_c = L) */
+#define OD_CURRENT_CONTROLLER__R_C_BOUND_FACTOR                  2.0f
+/* gain_set.R_c <= 2 * motor.R - staged R_c, checked like gain_set.L_c */
+#define OD_GAIN_SET__R_C_BOUND_FACTOR                            2.0f
 /* |setpoints.i_p_ref| <= speed_controller.current_limit - pseudo-current reference within the current limit */
 #define OD_SETPOINTS__I_P_REF_BOUND_FACTOR                       1.0f
 /* |target_velocity| <= max_motor_speed - speed reference within 0x6080 */
@@ -2810,5 +2834,23 @@
 #define OD_TRACE_CONFIG__LENGTH_BOUND_FACTOR                     1.0f
 /* trace_config.pre_trigger < trace_config.length - the trigger lies inside the record */
 #define OD_TRACE_CONFIG__PRE_TRIGGER_BOUND_FACTOR                1.0f
+
+/* ---- IP speed loop stability rule (see OD.md): accept (k_p, k_i) only if
+ *      k_p > 0, k_i > 0, k_p k_i b > 0, 2 (1 + a) - k_p b (2 + k_i) > 0
+ *      and |a - k_p b| < 1, slowest pole |p| <= exp(-Ts / OD_SPEED_LOOP_TAU_MAX) ---- */
+#define OD_SPEED_MODEL_A                                         0.9999785f /* identified pole a, eq. (26) */
+#define OD_SPEED_MODEL_B                                         0.000333715f /* rpm/(A sample), eq. (26) */
+#define OD_LOOP_TS                                               2e-05f /* s */
+#define OD_SPEED_LOOP_TAU_MAX                                    10.0f /* s */
+
+/* ---- EMCY error codes the drive sends (see OD.md) ---- */
+#define OD_EMCY_OVERCURRENT                                      0x2310u
+#define OD_EMCY_DC_OVERVOLTAGE                                   0x3210u
+#define OD_EMCY_DC_UNDERVOLTAGE                                  0x3220u
+#define OD_EMCY_DATA_SET_LOST                                    0x6310u
+#define OD_EMCY_NMT_CONNECTION_LOSS                              0x8100u
+#define OD_EMCY_HEARTBEAT_LOSS                                   0x8130u
+#define OD_EMCY_RPDO_VALUE                                       0x8200u
+#define OD_EMCY_RPDO_LENGTH                                      0x8210u
 
 #endif /* BLDC_DRIVE_OD_H */

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import re
 
+from . import stability
+from .emcy_codes import EMCY_CODES
 from .entry import Entry
 from .od import ObjectDictionaryView
 
@@ -180,6 +182,10 @@ def render_header(view: ObjectDictionaryView) -> str:
             define(f"{m}_MIN", _c_number(e, e.low), unit)
         if e.high is not None:
             define(f"{m}_MAX", _c_number(e, e.high), unit)
+        if e.min_nonzero is not None:
+            define(f"{m}_MIN_NONZERO", _c_number(e, e.min_nonzero), f"{unit}: 0 or >= this")
+        if e.config_only:
+            define(f"{m}_CONFIG_ONLY", "1u", "write only with the power stage off, else 0x08000022")
         if e.bit_length:
             define(f"{m}_REF", f"0x{e.od_reference:08X}UL")
         for value, label in sorted((e.enum or {}).items()):
@@ -191,6 +197,18 @@ def render_header(view: ObjectDictionaryView) -> str:
     for c in view.constraints:
         add(f"/* {_c_comment(str(c))}{' - ' + c.reason if c.reason else ''} */")
         define(f"{macro_name(c.lhs)}_BOUND_FACTOR", f"{float(c.factor)!r}f")
+    add("")
+    add("/* ---- IP speed loop stability rule (see OD.md): accept (k_p, k_i) only if")
+    add(" *      k_p > 0, k_i > 0, k_p k_i b > 0, 2 (1 + a) - k_p b (2 + k_i) > 0")
+    add(" *      and |a - k_p b| < 1, slowest pole |p| <= exp(-Ts / OD_SPEED_LOOP_TAU_MAX) ---- */")
+    define("OD_SPEED_MODEL_A", f"{stability.A_IDENTIFIED!r}f", "identified pole a, eq. (26)")
+    define("OD_SPEED_MODEL_B", f"{stability.B_IDENTIFIED!r}f", "rpm/(A sample), eq. (26)")
+    define("OD_LOOP_TS", f"{stability.TS!r}f", "s")
+    define("OD_SPEED_LOOP_TAU_MAX", f"{stability.TAU_MAX!r}f", "s")
+    add("")
+    add("/* ---- EMCY error codes the drive sends (see OD.md) ---- */")
+    for code, (stem, _when) in sorted(EMCY_CODES.items()):
+        define(f"OD_EMCY_{stem}", f"0x{code:04X}u")
     add("")
     add("#endif /* BLDC_DRIVE_OD_H */")
     return "\n".join(lines) + "\n"

@@ -89,8 +89,23 @@ CONSTRAINTS: tuple[Constraint, ...] = (
         "<",
         2,
         "motor.L",
-        reason="staged L_c, checked when the staged set is written or applied (gain_set_apply)",
-        checked_on=("gain_set.L_c",),
+        reason="staged L_c, checked when it or motor.L is written and when applied "
+        "(gain_set_apply)",
+    ),
+    Constraint(
+        "current_controller.R_c",
+        "<=",
+        2,
+        "motor.R",
+        reason="deadbeat loop stable for R_c <= 2 R (with 0 < L_c < 2 L; larger R_c/R can be "
+        "unstable, e.g. R_c > 107 R at L_c = L)",
+    ),
+    Constraint(
+        "gain_set.R_c",
+        "<=",
+        2,
+        "motor.R",
+        reason="staged R_c, checked like gain_set.L_c",
     ),
     Constraint(
         "setpoints.i_p_ref",

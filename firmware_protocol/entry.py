@@ -55,6 +55,10 @@ _INT_RANGE = {
 SIGNED = {0x02, 0x03, 0x04}
 REAL32 = 0x08
 _FLT_MAX = 3.4028234663852886e38
+FLT_MIN_NORMAL = 1.1754943508222875e-38
+"""Smallest normal float32: nonzero REAL32 values below it (subnormals, or values that round
+to 0 in float32) are refused: the F28335 FPU flushes subnormals to zero, so the DSP would not
+compute with the value the master wrote."""
 Number = int | float
 
 
@@ -101,6 +105,13 @@ class Entry:
     obj_flags: int = 0
     object_name: str = ""
     sub_name: str = ""
+    min_nonzero: Number | None = None
+    config_only: bool = False
+    """Custom EDS key ``ConfigOnly=1``: the object defines the plant or its protection and may
+    be written only while the power stage is off (abort 0x08000022 in OPERATION ENABLED and
+    during stop ramps)."""
+    """Custom EDS key ``MinNonZero``: a nonzero value must satisfy ``|value| >= min_nonzero``
+    (e.g. R_c is 0 or at least 1e-4 Ohm); values in between are refused as too low."""
 
     @property
     def type_name(self) -> str:
@@ -145,7 +156,9 @@ class Entry:
         Raises :class:`LimitError` with 0x06090030 for NaN/inf, a non-number, a non-integral
         value for an integer type or a value outside the enumeration; 0x06090031 above the
         high limit (or the type's range); 0x06090032 below the low limit. REAL32 values and
-        limits are compared after rounding to float32, as the drive stores them.
+        limits are compared after rounding to float32, as the drive stores them; a nonzero
+        REAL32 that is subnormal (or 0) in float32 gets 0x06090030, a nonzero value below
+        :attr:`min_nonzero` 0x06090032.
         """
         dt = self.data_type
         if dt in (0x09,):
@@ -186,6 +199,16 @@ class Entry:
             code = ABORT_VALUE_TOO_HIGH if value > 0 else ABORT_VALUE_TOO_LOW
             raise LimitError(code, f"{self.name} = {value}{unit} does not fit in a REAL32")
         v32 = f32(value)
+        if value != 0.0 and abs(v32) < FLT_MIN_NORMAL:
+            raise LimitError(
+                ABORT_INVALID_VALUE,
+                f"{self.name} = {value:g}{unit} is subnormal in float32 (0 or |x| >= 1.18e-38)",
+            )
+        if self.min_nonzero is not None and v32 != 0.0 and abs(v32) < f32(self.min_nonzero):
+            raise LimitError(
+                ABORT_VALUE_TOO_LOW,
+                f"{self.name} = {value:g}{unit} must be 0 or at least {self.min_nonzero:g}{unit}",
+            )
         if self.high is not None and v32 > f32(float(self.high)):
             raise LimitError(
                 ABORT_VALUE_TOO_HIGH, f"{self.name} = {value:g}{unit} above {self.high:g}{unit}"

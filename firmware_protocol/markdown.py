@@ -3,6 +3,8 @@ mapping, enumerations and cross-object constraints."""
 
 from __future__ import annotations
 
+from . import stability
+from .emcy_codes import EMCY_CODES
 from .entry import Entry
 from .od import ObjectDictionaryView
 
@@ -43,6 +45,7 @@ def render_markdown(view: ObjectDictionaryView) -> str:
     add("(`firmware_protocol.load_od().entry(name)`); C macros in `bldc_drive_od.h` use")
     add("`OD_<OBJECT>__<SUB>_...` (double underscore between record and sub-object).")
     add("Limits are inclusive static limits; `$NODEID` defaults are shown for node-ID 1.")
+    add("A nonzero REAL32 must be a normal float32 (|x| >= 1.18e-38; subnormals abort 0x06090030).")
     add("PDO = may be mapped into a PDO (and recorded by the trace).")
     for low, high, title in _RANGES:
         rows = [e for e in view.entries if low <= e.index <= high]
@@ -60,6 +63,8 @@ def render_markdown(view: ObjectDictionaryView) -> str:
             limits = ""
             if e.low is not None or e.high is not None:
                 limits = f"[{_md_value(e, e.low)}, {_md_value(e, e.high)}]"
+            if e.min_nonzero is not None:
+                limits = f"0 or [{_md_value(e, e.min_nonzero)}, {_md_value(e, e.high)}]"
             cells = [
                 f"`{e.name}`",
                 f"0x{e.index:04X}:{e.subindex:02X}",
@@ -114,4 +119,39 @@ def render_markdown(view: ObjectDictionaryView) -> str:
     add("|---|---|")
     for c in view.constraints:
         add(f"| `{_md(str(c))}` | {_md(c.reason)} |")
+    add("")
+    add("## Stability rule of the IP speed loop")
+    add("")
+    add("Checked by the drive when `speed_controller.k_p`/`k_i` is written (with the other's")
+    add("present value) and when the staged `gain_set.speed_k_p`/`speed_k_i` are applied")
+    add("(`gain_set_apply` 2/3, as a pair; staging is order-free). On the identified model")
+    a, b = stability.A_IDENTIFIED, stability.B_IDENTIFIED
+    add(f"G(z) = b/(z - a), a = {a}, b = {b} rpm/(A sample),")
+    add(f"Ts = {stability.TS * 1e6:g} us, the IP law (eq. 27) gives z^2 + d1 z + d2 with")
+    add("d1 = k_p b (1 + k_i) - 1 - a and d2 = a - k_p b. Accepted only if k_p > 0 and k_i > 0")
+    add("(else 0x06090032) and k_p k_i b > 0, 2 (1 + a) - k_p b (2 + k_i) > 0, |d2| < 1 (Jury:")
+    add("both poles strictly inside the unit circle; else 0x06090031), and the slowest pole")
+    add(f"no slower than {stability.TAU_MAX:g} s: |p| <= exp(-Ts / {stability.TAU_MAX:g} s)")
+    add("(else 0x06090032). Gains are rounded to float32 first; the poles are computed on")
+    add("w = z - 1 without cancellation.")
+    add("Python: `firmware_protocol.stability.check_ip_speed_gains`.")
+    add("")
+    add("## Configuration-only objects (power stage off)")
+    add("")
+    add("They define the plant or its protection (EDS key `ConfigOnly=1`, C macro `_CONFIG_ONLY`);")
+    add("a write while the power stage is on (OPERATION ENABLED or a stop ramp running) aborts")
+    add("with 0x08000022 and changes nothing.")
+    add("")
+    add("| name | index:sub |")
+    add("|---|---|")
+    for e in view.entries:
+        if e.config_only:
+            add(f"| `{e.name}` | 0x{e.index:04X}:{e.subindex:02X} |")
+    add("")
+    add("## EMCY codes")
+    add("")
+    add("| code | C macro | sent when |")
+    add("|---|---|---|")
+    for code, (stem, when) in sorted(EMCY_CODES.items()):
+        add(f"| 0x{code:04X} | `OD_EMCY_{stem}` | {_md(when)} |")
     return "\n".join(out) + "\n"

@@ -3,7 +3,8 @@
 Structure (objects, sub-objects, data types, access, PDO flags, defaults with ``$NODEID``
 resolved) comes from :func:`canopen.import_od`; what canopen 2.4.1 drops or ignores (REAL32
 ``LowLimit``/``HighLimit``, the custom ``Unit=``/``Enum=`` keys, ``ObjFlags``,
-``StorageLocation``) is read from the same file with :mod:`configparser`.
+``StorageLocation``, ``MinNonZero``,
+``ConfigOnly``) is read from the same file with :mod:`configparser`.
 
 Names follow ``docs/contracts.md`` §1: ``"<object>.<sub>"`` for records and arrays (e.g.
 ``"current_controller.L_c"``), the bare object name for variables (e.g. ``"controlword"``).
@@ -240,6 +241,7 @@ def _entry_from(
     low = _parse_number(section["LowLimit"], dt) if "LowLimit" in section else None
     high = _parse_number(section["HighLimit"], dt) if "HighLimit" in section else None
     enum = MappingProxyType(_parse_enum(section["Enum"])) if "Enum" in section else None
+    min_nonzero = _parse_number(section["MinNonZero"], dt) if "MinNonZero" in section else None
     default = var.default
     if dt == REAL32 and default is not None:
         default = float(default)
@@ -261,6 +263,8 @@ def _entry_from(
         obj_flags=int(section.get("ObjFlags", "0"), 0),
         object_name=object_name,
         sub_name=var.name if object_name != name else "",
+        min_nonzero=min_nonzero,
+        config_only=section.get("ConfigOnly", "0").strip() == "1",
     )
 
 

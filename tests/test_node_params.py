@@ -49,7 +49,7 @@ def raw_write(bench, index, sub, data: bytes) -> int:
         ("current_controller.k_p", -0.1, 0x06090032),
         ("speed_controller.current_limit", 500.0, 0x06090031),
         ("setpoints.i_p_ref", 250.0, 0x06090031),
-        ("motor.L", 5e-6, 0x06090032),  # would put the present L_c = 14.8 µH above 2L
+        ("motor.L", 5e-6, 0x08000022),  # plant definition: only with the power stage off
         ("producer_heartbeat_time", 65000, 0x06090031),
         ("trace_config.divider", 0, 0x06090032),
         ("current_controller.type", 3, 0x06090031),
@@ -92,12 +92,18 @@ def test_gain_set_refused_as_a_whole(bench):
     active = {k: bench.read(f"current_controller.{k}") for k in ("L_c", "k_p", "type")}
     bench.write("gain_set.type", 1)
     bench.write("gain_set.k_p", 0.3)
-    bench.write("gain_set.L_c", 2.5 * L)  # staged: accepted entry by entry (limits only)
-    assert abort_code(bench, "gain_set_apply", 3) == 0x06090031
+    # a staged L_c >= 2 motor.L is refused on write already (OD.md: checked on write)
+    assert abort_code(bench, "gain_set.L_c", 2.5 * L) == 0x06090031
+    assert bench.read("gain_set.L_c") == pytest.approx(L)
+    bench.write("gain_set.speed_k_i", 0.0)  # IP loop without integral action: checked at apply
+    assert abort_code(bench, "gain_set_apply", 3) == 0x06090032
     assert {k: bench.read(f"current_controller.{k}") for k in active} == active
     assert bench.drive.sim.current.type == "deadbeat"
     assert abort_code(bench, "gain_set_apply", 4) == 0x06090031
     assert abs(bench.read("measurements.i_p") - 15.0) < 1.5
+    bench.write("gain_set.speed_k_i", 2.9994e-5)
+    bench.write("gain_set.type", 0)
+    bench.write("gain_set.k_p", 0.4647)
 
 
 def test_gain_set_applied_at_once(bench):

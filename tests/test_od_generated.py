@@ -204,7 +204,9 @@ def test_markdown_lists_every_object_once_with_its_attributes() -> None:
         assert cells[3] == r["AccessType"]
         assert cells[4] == r.get("Unit", "")
         assert (cells[7] == "yes") == (r["PDOMapping"] == "1")
-        if "LowLimit" in r:
+        if "MinNonZero" in r:  # "0 or [min_nonzero, high]"
+            assert cells[6].startswith("0 or [") and cells[6].endswith("]"), r["name"]
+        elif "LowLimit" in r:
             assert cells[6].startswith("[") and cells[6].endswith("]"), r["name"]
     # one table per range
     for title in ("0x1000-0x1FFF", "0x2000-0x4FFF", "0x5000-0x5FFF", "0x6000-0x9FFF"):

@@ -190,7 +190,7 @@ def test_L_c_constraint_matches_deadbeat_stability(view, L: float) -> None:
     for ratio in (0.05, 0.3, 0.7, 1.0, 1.5, 1.9, 1.97, 2.03, 2.2, 3.0, 5.0):
         L_c = ratio * L
         stable = _deadbeat_closed_loop_stable(L, R, L_c, R)
-        values = {"motor.L": L, "current_controller.L_c": L_c}
+        values = {"motor.L": L, "current_controller.L_c": L_c, "gain_set.L_c": L_c}
         try:
             view.check_constraints(values)
             accepted = True

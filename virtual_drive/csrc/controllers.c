@@ -40,13 +40,18 @@ int cc_current_configure(cc_current_t *c, int type, float Ts, float L_c, float R
     c->T_SD = T_SD;
     c->V_G = V_G;
     c->emf_ff = emf_ff ? 1 : 0;
-    /* eq. (4), (5) with the estimates; expm1f keeps 1 - Phi_c accurate in float32. */
+    /* eq. (4), (5) with the estimates: Gamma_c = (1 - Phi_c) / (2 R_c)
+     *   = Ts / (2 L_c) * g(x),  g(x) = expm1(x) / x,  x = -R_c Ts / L_c,
+     * which tends to Ts / (2 L_c) as R_c -> 0.  Dividing by R_c directly fails for tiny R_c:
+     * x underflows to 0 (or a subnormal) in float32 and (1 - Phi_c) / (2 R_c) becomes 0 or
+     * wrong (R_c = 1.4e-45 gave Gamma_c = 0 -> 1/Gamma_c = inf -> overcurrent trip).  For
+     * |x| < 1e-3, g(x) = 1 + x/2 + x^2/6 to float32 precision (next term x^3/24 < 5e-11). */
     x = -R_c * Ts / L_c;
     c->Phi_c = expf(x);
-    if (R_c > 0.0f) {
-        c->Gamma_c = -expm1f(x) / (2.0f * R_c);
+    if (x > -1.0e-3f) {
+        c->Gamma_c = Ts / (2.0f * L_c) * (1.0f + x * (0.5f + x * (1.0f / 6.0f)));
     } else {
-        c->Gamma_c = Ts / (2.0f * L_c);
+        c->Gamma_c = Ts / (2.0f * L_c) * (expm1f(x) / x);
     }
     return 0;
 }

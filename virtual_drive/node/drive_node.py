@@ -39,7 +39,7 @@ from firmware_protocol.od import load_od
 from . import cia402 as sm
 from . import plant, storage
 from .cia402 import Cia402StateMachine
-from .emcy import HEARTBEAT_LOSS, EmcyManager
+from .emcy import HEARTBEAT_LOSS, NMT_CONNECTION_LOSS, EmcyManager
 from .heartbeat import HeartbeatConsumer, HeartbeatProducer
 from .nmt import CMD_RESET_NODE, OPERATIONAL, NmtSlave
 from .params import ParamChecker
@@ -91,7 +91,6 @@ MEASUREMENTS = {
 }
 
 SPEED_ZERO_RPM = 10.0  #: |speed| below this counts as standstill (end of a stop ramp)
-NMT_CONNECTION_LOSS = 0x8100  #: fault code of a 0x6007 = 1 reaction to NMT stop/reset
 RESET_BRAKE_LIMIT_S = 5.0  #: a deferred reset node completes after this much braking anyway (s)
 CURRENT_WINDOW_A = 1.0  #: target reached window in the current modes (A)
 
@@ -623,6 +622,9 @@ class VirtualDrive:
                 raise SdoAbortedError(ABORT_DEVICE_STATE)
             if value not in SUPPORTED_MODES:
                 raise SdoAbortedError(ABORT_INVALID_VALUE)
+        entry = self.checker.entry(index, sub)
+        if entry is not None and entry.config_only and self.cia402.torque_enabled:
+            raise SdoAbortedError(ABORT_DEVICE_STATE)  # plant definition: power stage off only
         if is_pdo_config(index):
             self.checker.check(index, sub, value)
             self.pdo.check_write(index, sub, value)
@@ -697,6 +699,8 @@ class VirtualDrive:
         for name, value in changes.items():
             self.checker.check(*_index_of(self.view, name), value)
         self.checker.check_rules(changes, staged=True)
+        if which & 2:
+            self.checker.check_speed_gains(staged[11], staged[12])
         with self.sim_lock:
             old_current = {k: self._value(0x2010, s) for s, k in plant.CURRENT_KW.items()}
             try:
@@ -855,6 +859,8 @@ class VirtualDrive:
         if command == CMD_RESET_NODE and option == 0:
             option = 3
         logger.warning("NMT command 0x%02X while OPERATION ENABLED: 0x6007 = %d", command, option)
+        if option == 1:
+            self.emcy.raise_error(NMT_CONNECTION_LOSS)  # 0x603F/0x1003 (no frame in STOPPED)
         self._connection_reaction(option, NMT_CONNECTION_LOSS)
 
     def _on_boot(self) -> None:

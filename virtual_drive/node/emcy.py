@@ -14,12 +14,32 @@ import struct
 import threading
 from collections.abc import Callable
 
+from firmware_protocol.emcy_codes import (  # the codes of OD.md / the C header
+    DATA_SET_LOST,
+    DC_OVERVOLTAGE,
+    DC_UNDERVOLTAGE,
+    HEARTBEAT_LOSS,
+    NMT_CONNECTION_LOSS,
+    OVERCURRENT,
+    RPDO_LENGTH,
+    RPDO_VALUE,
+)
+
+__all__ = [
+    "DATA_SET_LOST",
+    "DC_OVERVOLTAGE",
+    "DC_UNDERVOLTAGE",
+    "HEARTBEAT_LOSS",
+    "NMT_CONNECTION_LOSS",
+    "OVERCURRENT",
+    "RPDO_LENGTH",
+    "RPDO_VALUE",
+    "EmcyManager",
+    "register_bits",
+]
+
 logger = logging.getLogger(__name__)
 
-OVERCURRENT = 0x2310
-DC_OVERVOLTAGE = 0x3210
-DC_UNDERVOLTAGE = 0x3220
-HEARTBEAT_LOSS = 0x8130
 ERROR_RESET = 0x0000
 
 #: 0x1001 bits: 0 generic, 1 current, 2 voltage, 3 temperature, 4 communication.

@@ -3,8 +3,12 @@
 Order: the object's own limits and type (:meth:`firmware_protocol.od.Entry.check`: NaN/inf and
 non-integral → 0x06090030, above → 0x06090031, below → 0x06090032), then the cross-object rules
 of :data:`firmware_protocol.od.CONSTRAINTS` with the other objects' present values (e.g.
-``current_controller.L_c < 2 motor.L``: the deadbeat loop is unstable for L_c ≥ 2L). The staged
-gain set (0x20F0) is checked as a whole when 0x20F1 is written, not entry by entry.
+``current_controller.L_c < 2 motor.L``: the deadbeat loop is unstable for L_c ≥ 2L). The rules
+on the staged gain set (0x20F0) hold on every write of either side (a staged L_c ≥ 2 motor.L is
+refused when written, and so is a motor.L below half of an active or staged L_c) and the set is
+checked again as a whole when 0x20F1 is written. Speed-loop gains must form a stable IP loop
+(:func:`firmware_protocol.stability.check_ip_speed_gains`): a write of 0x2020:1/2 is checked with
+the other gain's present value, the staged pair 0x20F0:11/12 when it is applied.
 """
 
 from __future__ import annotations
@@ -14,12 +18,15 @@ from collections.abc import Callable, Mapping
 from canopen.sdo import SdoAbortedError
 
 from firmware_protocol.od import Entry, LimitError, ObjectDictionaryView
+from firmware_protocol.stability import check_ip_speed_gains
 
 Number = int | float
 
 ABORT_INVALID_VALUE = 0x06090030
 ABORT_VALUE_TOO_HIGH = 0x06090031
 ABORT_VALUE_TOO_LOW = 0x06090032
+
+_IP_GAINS = ("speed_controller.k_p", "speed_controller.k_i")
 
 
 class ParamChecker:
@@ -48,20 +55,25 @@ class ParamChecker:
             raise SdoAbortedError(exc.abort_code) from exc
         if isinstance(value, (int, float)):
             self.check_rules({entry.name: value}, staged=False)
+            if entry.name in _IP_GAINS:
+                gains = {n: self._current(n) for n in _IP_GAINS} | {entry.name: value}
+                self.check_speed_gains(*(gains[n] for n in _IP_GAINS))
         return value
+
+    @staticmethod
+    def check_speed_gains(k_p: Number, k_i: Number) -> None:
+        """The IP speed loop's stability rule (OD.md), as SdoAbortedError."""
+        try:
+            check_ip_speed_gains(float(k_p), float(k_i))
+        except LimitError as exc:
+            raise SdoAbortedError(exc.abort_code) from exc
 
     def check_rules(self, changes: Mapping[str, Number], staged: bool) -> None:
         """Cross-object rules for ``changes`` (names → new values) with present values.
 
-        ``staged`` False skips rules on the staged gain set (``gain_set.*``), which are checked
-        when the set is applied.
+        ``staged`` is True when the staged gain set is applied as a whole (0x20F1).
         """
-        rules = {
-            c
-            for name in changes
-            for c in self.view.constraints_for(name)
-            if staged or not c.lhs.startswith("gain_set.")
-        }
+        rules = {c for name in changes for c in self.view.constraints_for(name)}
         if not rules:
             return
         changed = next(iter(changes)) if len(changes) == 1 else None
