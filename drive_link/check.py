@@ -405,6 +405,308 @@ def item_heartbeat_consumer(d: Drive, opts: dict) -> str:
     return f"EMCY 0x8130 and reaction to {state} after heartbeat loss"
 
 
+# --------------------------------------------------------------------------- issue 10 items
+HALT_BIT = 1 << 8  #: controlword bit 8 (CiA 402 §6.2.1)
+TARGET_REACHED = 1 << 10  #: statusword bit 10
+ABORT_REFUSED_VALUE = (ABORT_RANGE, ABORT_HIGH, ABORT_LOW, 0x06040043)
+SPIN_RPM = 300  #: modest speed for the motion items (a real vehicle may be on the bench)
+
+
+def _spin(d: Drive, rpm: int = SPIN_RPM) -> float:
+    """NMT start, profile velocity at ``rpm``, OPERATION ENABLED; wait until it turns (bounded
+    by the drive's own profile acceleration 0x6083). Returns the speed reached (rpm)."""
+    _to_switch_on_disabled(d)
+    d.nmt("start")
+    d.set_mode("speed")
+    rpm = min(rpm, int(d.read("max_motor_speed")))
+    d.set_speed(rpm)
+    d.enable(timeout=2.0)
+    acc = max(int(d.read("profile_acceleration")), 1)
+    deadline = time.monotonic() + 2.0 * rpm / acc + 5.0
+    v = float(d.read("measurements.speed"))
+    while v < 0.8 * rpm and time.monotonic() < deadline:
+        time.sleep(0.02)
+        v = float(d.read("measurements.speed"))
+    _expect(v >= 0.8 * rpm, f"motor did not come up to {rpm} rpm (at {v:.0f} rpm)")
+    return v
+
+
+def _stop_time(d: Drive, rpm: float, name: str = "quick_stop_deceleration") -> float:
+    """Bound (s) for a ramp from ``rpm`` to 0 on deceleration object ``name`` (rpm/s)."""
+    dec = max(int(d.read(name)), 1)
+    return 2.0 * abs(rpm) / dec + 2.0
+
+
+def _wait_standstill(d: Drive, timeout: float, window: float = 15.0) -> float:
+    deadline = time.monotonic() + timeout
+    while True:
+        v = float(d.read("measurements.speed"))
+        if abs(v) <= window or time.monotonic() > deadline:
+            return v
+        time.sleep(0.02)
+
+
+def item_nmt_reaction(d: Drive, opts: dict) -> str:
+    """CiA 402 §6.3.3 / CiA 301 §7.3.2: NMT Stop and Reset Communication while OPERATION
+    ENABLED run the abort connection option 0x6007 (here 3 = quick stop): the motor stops and
+    the drive leaves OPERATION ENABLED."""
+    option0 = int(d.read("abort_connection_option_code"))
+    out = []
+    try:
+        d.write("abort_connection_option_code", 3)
+        for command, back in (("stop", "pre-operational"), ("reset communication", None)):
+            v0 = _spin(d)
+            bound = _stop_time(d, v0)
+            t0 = time.monotonic()
+            if back is None:
+                d.reset(communication_only=True, timeout=bound + 3.0)
+            else:
+                d.nmt(command)
+                d.heartbeat.wait_for(("STOPPED",), 2.0, after=t0)
+                time.sleep(bound)  # no SDO in STOPPED: look once it is PRE-OPERATIONAL again
+                t1 = time.monotonic()
+                d.nmt(back)
+                d.heartbeat.wait_for(("PRE-OPERATIONAL",), 2.0, after=t1)
+            v = _wait_standstill(d, bound)
+            state = d.state
+            _expect(
+                abs(v) <= 15.0,
+                f"NMT {command} at {v0:.0f} rpm: motor still at {v:.0f} rpm after {bound:.1f} s",
+            )
+            _expect(
+                state != cia402.OPERATION_ENABLED,
+                f"NMT {command}: drive still OPERATION ENABLED (0x6007 reaction missing)",
+            )
+            out.append(f"{command}: {v0:.0f} → {v:.0f} rpm, {state}")
+    finally:
+        d.nmt("start")
+        _to_switch_on_disabled(d)
+        d.write("abort_connection_option_code", option0)
+    return "; ".join(out)
+
+
+def item_halt(d: Drive, opts: dict) -> str:
+    """CiA 402 §10.3: in profile velocity controlword bit 8 (halt) brakes the axis (0x605D) and
+    holds it at 0 while OPERATION ENABLED; statusword bit 10 is 0 while the speed is away from
+    the target and 1 once the axis stands (halt) or turns at the target; in QUICK STOP ACTIVE
+    with 0x605A = 6 bit 10 is 1 at standstill."""
+    qs0 = int(d.read("quick_stop_option_code"))
+    out = []
+    try:
+        _to_switch_on_disabled(d)
+        d.nmt("start")
+        d.set_mode("speed")
+        d.set_speed(SPIN_RPM)
+        d.enable(timeout=2.0)
+        sw = d.statusword
+        v = float(d.read("measurements.speed"))
+        if abs(v - SPIN_RPM) > 0.5 * SPIN_RPM:
+            _expect(not sw & TARGET_REACHED, f"bit 10 set at {v:.0f} rpm (target {SPIN_RPM})")
+            out.append(f"bit 10 = 0 at {v:.0f} rpm")
+        v = _spin(d)
+        deadline = time.monotonic() + 5.0
+        while not d.statusword & TARGET_REACHED and time.monotonic() < deadline:
+            time.sleep(0.02)
+        _expect(bool(d.statusword & TARGET_REACHED), f"bit 10 not set at the target ({v:.0f} rpm)")
+        d.write("controlword", cia402.CW_ENABLE_OPERATION | HALT_BIT)
+        sw = d.statusword
+        v = float(d.read("measurements.speed"))
+        if abs(v) > 0.5 * SPIN_RPM:
+            _expect(not sw & TARGET_REACHED, f"halt: bit 10 set while braking at {v:.0f} rpm")
+        v = _wait_standstill(d, _stop_time(d, SPIN_RPM, "profile_deceleration"))
+        _expect(abs(v) <= 15.0, f"halt: motor still at {v:.0f} rpm")
+        time.sleep(0.5)
+        v = float(d.read("measurements.speed"))
+        sw = d.statusword
+        _expect(abs(v) <= 15.0, f"halt: speed not held at 0 ({v:.0f} rpm after 0.5 s)")
+        _expect(d.state == cia402.OPERATION_ENABLED, f"halt left OPERATION ENABLED ({d.state})")
+        _expect(bool(sw & TARGET_REACHED), "halt: bit 10 not set at standstill")
+        out.append(f"halt holds {v:.0f} rpm with bit 10")
+        d.write("controlword", cia402.CW_ENABLE_OPERATION)
+        v = _spin_back(d)
+        out.append(f"resumes to {v:.0f} rpm")
+        d.write("quick_stop_option_code", 6)  # stop on the quick-stop ramp, stay in QUICK STOP
+        d.write("controlword", cia402.CW_QUICK_STOP)
+        v = _wait_standstill(d, _stop_time(d, SPIN_RPM))
+        state = d.state
+        _expect(state == cia402.QUICK_STOP_ACTIVE, f"0x605A = 6: drive in {state}")
+        deadline = time.monotonic() + 2.0
+        while not d.statusword & TARGET_REACHED and time.monotonic() < deadline:
+            time.sleep(0.02)
+        _expect(
+            bool(d.statusword & TARGET_REACHED), "quick stop (0x605A = 6): bit 10 not set at rest"
+        )
+        out.append("quick stop 6: bit 10 at rest")
+    finally:
+        _to_switch_on_disabled(d)
+        d.write("quick_stop_option_code", qs0)
+    return "; ".join(out)
+
+
+def _spin_back(d: Drive) -> float:
+    acc = max(int(d.read("profile_acceleration")), 1)
+    deadline = time.monotonic() + 2.0 * SPIN_RPM / acc + 5.0
+    v = float(d.read("measurements.speed"))
+    while v < 0.8 * SPIN_RPM and time.monotonic() < deadline:
+        time.sleep(0.02)
+        v = float(d.read("measurements.speed"))
+    _expect(v >= 0.8 * SPIN_RPM, f"halt released: motor did not turn again ({v:.0f} rpm)")
+    return v
+
+
+def item_cob_id_validation(d: Drive, opts: dict) -> str:
+    """CiA 301 §7.3.5 / §7.5.2: restricted CAN-IDs (0x000, 0x001–0x07F, 0x101–0x180,
+    0x581–0x5FF, 0x601–0x67F, 0x6E0–0x6FF, 0x701–0x7FF), 29-bit IDs on an 11-bit device and
+    reserved bits are refused by an SDO abort with nothing changed; 0x1016 refuses node-IDs
+    outside 1..127 and accepts a valid entry."""
+    n = d.node_id
+    emcy0 = int(d.read("cob_id_emcy"))
+    cases: list[tuple[str, int, str]] = [
+        ("cob_id_emcy", 0x000, "EMCY on the NMT identifier"),
+        ("cob_id_emcy", 0x601, "EMCY on a default SDO identifier"),
+        ("cob_id_emcy", 0x700 + n, "EMCY on a heartbeat identifier"),
+        ("cob_id_emcy", 0x20000080 + n, "29-bit EMCY identifier"),
+        ("cob_id_emcy", 0xFFFFFFFF, "all bits set"),
+    ]
+    tpdo = "tpdo4_communication.cob_id"
+    has_tpdo = tpdo in d.table
+    out = []
+    cob0 = int(d.read(tpdo)) if has_tpdo else 0
+    consumer0 = int(d.read("consumer_heartbeat_time.consumer_1"))
+    t0 = time.monotonic()
+    d.nmt("pre-operational")  # CiA 301: PDOs are reconfigured in PRE-OPERATIONAL
+    d.heartbeat.wait_for(("PRE-OPERATIONAL",), 2.0, after=t0)
+    try:
+        _raw_write(d, "cob_id_emcy", emcy0 | 0x80000000)  # EMCY invalid: its ID may now change
+        for name, value, what in cases:
+            code = _expect_abort(lambda n_=name, v=value: _raw_write(d, n_, v), _cob_aborts(), what)
+            out.append(f"{what}: 0x{code:08X}")
+        _expect(
+            int(d.read("cob_id_emcy")) == emcy0 | 0x80000000,
+            "EMCY COB-ID changed by a refused write",
+        )
+        if has_tpdo:
+            _raw_write(d, tpdo, cob0 | 0x80000000)  # PDO invalid: its ID may now change
+            for value, what in (
+                (0x585, "TPDO on an SDO response identifier"),
+                (0x77F, "TPDO on a heartbeat identifier"),
+            ):
+                code = _expect_abort(lambda v=value: _raw_write(d, tpdo, v), _cob_aborts(), what)
+                out.append(f"{what}: 0x{code:08X}")
+        for value, what in (
+            ((0x00 << 16) | 500, "0x1016 node-ID 0"),
+            ((0x80 << 16) | 500, "0x1016 node-ID 128"),
+            ((0xFF << 16) | 500, "0x1016 node-ID 255"),
+        ):
+            code = _expect_abort(
+                lambda v=value: _raw_write(d, "consumer_heartbeat_time.consumer_1", v),
+                _cob_aborts(),
+                what,
+            )
+            out.append(f"{what}: 0x{code:08X}")
+        _expect(
+            int(d.read("consumer_heartbeat_time.consumer_1")) == consumer0,
+            "0x1016 changed by a refused write",
+        )
+        good = (0x7E << 16) | 1000
+        d.write("consumer_heartbeat_time.consumer_1", good)
+        _expect(
+            int(d.read("consumer_heartbeat_time.consumer_1")) == good,
+            "valid 0x1016 entry (node 0x7E, 1000 ms) not stored",
+        )
+    finally:
+        d.write("consumer_heartbeat_time.consumer_1", consumer0)
+        if int(d.read("cob_id_emcy")) != emcy0:
+            try:
+                _raw_write(d, "cob_id_emcy", emcy0 | 0x80000000)
+            finally:
+                _raw_write(d, "cob_id_emcy", emcy0)
+        if has_tpdo:
+            try:
+                _raw_write(d, tpdo, cob0 | 0x80000000)
+            finally:
+                _raw_write(d, tpdo, cob0)
+        d.nmt("start")
+    return "; ".join(out) + "; valid 0x1016 entry accepted"
+
+
+def _cob_aborts() -> tuple[int, ...]:
+    return ABORT_REFUSED_VALUE
+
+
+#: Motor parameters (0x2000): configuration, changeable only while the power stage is off.
+CONFIG_ONLY = (
+    "motor.R",
+    "motor.L",
+    "motor.K_rpm",
+    "motor.pole_pairs",
+    "motor.rated_current",
+    "motor.V_dc_nominal",
+)
+
+
+def item_config_only(d: Drive, opts: dict) -> str:
+    """CiA 402 device state rule (abort 0x08000022): motor parameters are refused while
+    OPERATION ENABLED with nothing changed, and accepted again once the power stage is off."""
+    names = [n for n in CONFIG_ONLY if n in d.table]
+    _expect(bool(names), "no motor parameters in the object dictionary")
+    orig = {n: d.read(n) for n in names}
+    changed = {}
+    for n in names:
+        info = d.table[n]
+        v = orig[n]
+        if isinstance(v, float):
+            w = _f32(v * 1.01 if info.high is None or v * 1.01 <= info.high else v * 0.99)
+        else:
+            w = v + 1 if info.high is None or v + 1 <= info.high else v - 1
+        changed[n] = w
+    try:
+        _spin(d)
+        for n in names:
+            _expect_abort(
+                lambda n_=n: _raw_write(d, n_, changed[n_]),
+                (ABORT_STATE,),
+                f"{n} while OPERATION ENABLED",
+            )
+            _expect(d.read(n) == orig[n], f"{n} changed by a refused write")
+        _to_switch_on_disabled(d)
+        for n in names:
+            _raw_write(d, n, changed[n])
+            got = d.read(n)
+            _expect(got == changed[n], f"{n} = {changed[n]!r} refused or changed at rest ({got!r})")
+            _raw_write(d, n, orig[n])
+    finally:
+        _to_switch_on_disabled(d)
+        for n in names:
+            try:
+                if d.read(n) != orig[n]:
+                    _raw_write(d, n, orig[n])
+            except DriveError:
+                pass
+    return f"{len(names)} motor parameters refused (0x08000022) while enabled, accepted at rest"
+
+
+def item_store_status(d: Drive, opts: dict) -> str:
+    """0x2060 store_status (U8 ro: 0 ok, 1 defaults, 2 damaged, 3 unreadable); on 2/3 the drive
+    has sent EMCY 0x6310 and keeps error register bit 0 and the entry in 0x1003."""
+    try:
+        raw = d.sdo.upload(0x2060, 0, "store_status")
+    except SdoAbort as exc:
+        raise CheckFailed(
+            f"0x2060 store_status not readable: abort 0x{exc.code:08X} ({exc.meaning})"
+        ) from None
+    _expect(len(raw) == 1, f"0x2060 is {len(raw)} bytes, expected 1 (U8)")
+    value = raw[0]
+    _expect(value in (0, 1, 2, 3), f"0x2060 = {value}, expected 0..3")
+    name = {0: "ok", 1: "defaults", 2: "damaged", 3: "unreadable"}[value]
+    if value in (2, 3):
+        reg = int(d.read("error_register"))
+        _expect(bool(reg & 0x01), f"store {name} but error register 0x{reg:02X} lacks bit 0")
+        codes = [e.code for e in d.error_history()]
+        _expect(0x6310 in codes, f"store {name} but no 0x6310 in 0x1003 ({codes})")
+    return f"store_status = {value} ({name})"
+
+
 ITEMS: dict[str, Callable[[Drive, dict], str]] = {
     "identity": item_identity,
     "nmt_bootup": item_nmt_bootup,
@@ -418,6 +720,11 @@ ITEMS: dict[str, Callable[[Drive, dict], str]] = {
     "pdo_rates": item_pdo_rates,
     "trace": item_trace,
     "heartbeat_consumer": item_heartbeat_consumer,
+    "nmt_reaction": item_nmt_reaction,
+    "halt": item_halt,
+    "cob_id_validation": item_cob_id_validation,
+    "config_only": item_config_only,
+    "store_status": item_store_status,
 }
 
 

@@ -82,3 +82,66 @@ def test_check_starts_from_an_enabled_drive_in_current_mode(virtual_node, capsys
     rc = cli.main(["check", *bus, "--only", "cia402,modes", "--json"])
     results = json.loads(capsys.readouterr().out)
     assert rc == 0, [r for r in results if not r["ok"]]
+
+
+# ------------------------------------------------------------------ issue 10 items
+ISSUE10_ITEMS = ("nmt_reaction", "halt", "cob_id_validation", "config_only", "store_status")
+
+
+@pytest.mark.parametrize("item", ISSUE10_ITEMS)
+def test_issue10_item_passes_on_the_virtual_drive(virtual_node, capsys, item):
+    """Each safety item of issue 10 against the virtual drive (CiA 301/402 behaviour)."""
+    _, ch = virtual_node
+    argv = ["check", "--interface", "virtual", "--channel", ch, "--node", "4"]
+    rc = cli.main([*argv, "--only", item, "--json"])
+    results = json.loads(capsys.readouterr().out)
+    assert [r["name"] for r in results] == [item]
+    assert rc == 0 and results[0]["ok"], results[0]["detail"]
+
+
+def test_nmt_reaction_fails_on_a_drive_without_the_0x6007_reaction(virtual_node, capsys):
+    """The defect of issue 10: NMT stop / reset communication leave the motor turning."""
+    vd, ch = virtual_node
+    vd.nmt._on_abort = lambda command: None  # the defect, patched in here
+    argv = ["check", "--interface", "virtual", "--channel", ch, "--node", "4"]
+    rc = cli.main([*argv, "--only", "nmt_reaction"])
+    line = capsys.readouterr().out.splitlines()[0]
+    assert rc == 1
+    assert line.startswith("FAIL  nmt_reaction")
+    assert "NMT stop" in line and ("still at" in line or "still OPERATION ENABLED" in line)
+
+
+def test_halt_fails_on_a_drive_that_ignores_bit_8(virtual_node, capsys, monkeypatch):
+    _, ch = virtual_node
+    from virtual_drive.node import drive_node
+
+    real = drive_node.VirtualDrive._before_write
+
+    def no_halt(self, index, sub, obj, data):
+        if index == 0x6040 and len(data) == 2:
+            data = bytes([data[0], data[1] & ~0x01])  # bit 8 never reaches the drive
+        return real(self, index, sub, obj, data)
+
+    monkeypatch.setattr(drive_node.VirtualDrive, "_before_write", no_halt)
+    argv = ["check", "--interface", "virtual", "--channel", ch, "--node", "4"]
+    rc = cli.main([*argv, "--only", "halt"])
+    line = capsys.readouterr().out.splitlines()[0]
+    assert rc == 1 and line.startswith("FAIL  halt") and "halt" in line
+
+
+def test_store_status_fails_on_firmware_without_0x2060(virtual_node, capsys):
+    from canopen.sdo import SdoAbortedError
+
+    vd, ch = virtual_node
+    real = vd.node.get_data
+
+    def old_firmware(index, subindex, check_readable=False):
+        if index == 0x2060:
+            raise SdoAbortedError(0x06020000)
+        return real(index, subindex, check_readable)
+
+    vd.node.get_data = old_firmware
+    argv = ["check", "--interface", "virtual", "--channel", ch, "--node", "4"]
+    rc = cli.main([*argv, "--only", "store_status"])
+    line = capsys.readouterr().out.splitlines()[0]
+    assert rc == 1 and "0x2060 store_status not readable: abort 0x06020000" in line
