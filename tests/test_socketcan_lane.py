@@ -55,3 +55,17 @@ def test_lane_without_uml_says_so_in_one_line(monkeypatch):
     res = uml.run_in_uml(["true"], timeout=5)
     assert res.rc is None and res.problem is not None
     assert "\n" not in res.problem and "apt-get install user-mode-linux" in res.problem
+
+
+def test_ci_runs_the_readme_test_command_which_installs_the_lane():
+    """.ci/run runs the README's test command as written; the "Set up" section has exactly two
+    commands, and the test command installs what the lane and the busy condition need."""
+    readme = (HERE.parent / "README.md").read_text()
+    setup = readme.split("## Set up", 1)[1].split("\n## ", 1)[0]
+    blocks = [b.strip() for b in setup.split("```sh\n")[1:]]
+    commands = [b.split("```", 1)[0].strip() for b in blocks]
+    assert len(commands) == 2 and all("\n" not in c for c in commands), commands
+    ci = (HERE.parent / ".ci" / "run").read_text().strip().splitlines()
+    assert ci[-1] == commands[1]
+    for pkg in ("chromium", "user-mode-linux", "kmod", "iproute2", "stress-ng"):
+        assert f" {pkg}" in commands[1].split("&&")[1], pkg

@@ -53,7 +53,8 @@ ip link add dev vcan0 type vcan && ip link set vcan0 txqueuelen 1000 && ip link 
 ip link add dev vcan1 type vcan && ip link set vcan1 txqueuelen 10 && ip link set up vcan1 \
     && tc qdisc add dev vcan1 root tbf rate 64kbit burst 32 limit 160 \
     || fail "cannot create vcan1 with a 10-frame queue"
-sysctl -q -w net.core.rmem_default=16777216 net.core.rmem_max=16777216 >> "$J/setup.log" 2>&1 \
+# net.core.rmem_max / rmem_default = 16 MiB (written directly: no procps needed)
+echo 16777216 > /proc/sys/net/core/rmem_max && echo 16777216 > /proc/sys/net/core/rmem_default \
     || fail "cannot raise net.core.rmem_default/rmem_max"
 echo "uml-init: SocketCAN ready (kernel $(uname -r))" >> "$J/setup.log"
 

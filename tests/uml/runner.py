@@ -73,9 +73,9 @@ def unavailable() -> str | None:
         return "no User-Mode Linux kernel (linux.uml): apt-get install user-mode-linux"
     if not MODULES.is_dir() or not any(MODULES.iterdir()):
         return f"no UML kernel modules under {MODULES}: apt-get install user-mode-linux"
-    missing = [t for t in ("insmod", "ip", "tc", "sysctl") if shutil.which(t) is None]
+    missing = [t for t in ("insmod", "ip", "tc") if shutil.which(t) is None]
     if missing:
-        return f"missing {', '.join(missing)} (apt-get install kmod iproute2 procps)"
+        return f"missing {', '.join(missing)} (apt-get install kmod iproute2)"
     return None
 
 
