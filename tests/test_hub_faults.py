@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 import socket
 import time
@@ -163,3 +164,87 @@ def test_busy_port_raises_and_stop_releases_it():
             Hub(port=port).start()
     again = Hub(port=port).start()  # freed by stop()
     again.stop()
+
+
+def test_jitter_delay_is_uniform_bounded_and_reproducible():
+    """delay 2 ms ± 1 ms: frames far apart get end + U(1, 3) ms; frames back to back keep
+    their order (never due before the previous one, nor before they complete)."""
+    delay, jitter = 0.002, 0.001
+
+    def dues(seed: int, spacing: float, n: int = 2000) -> list[tuple[float, float]]:
+        hub = Hub(port=0, delay_s=delay, jitter_s=jitter, seed=seed)
+        out, last = [], 0.0
+        for k in range(n):
+            end = 1.0 + k * spacing
+            last = hub._delivery_due(end, last)
+            out.append((end, last))
+        return out
+
+    far = dues(3, 0.01)
+    offsets = [due - end for end, due in far]
+    assert all(delay - jitter <= x <= delay + jitter for x in offsets)
+    mean = sum(offsets) / len(offsets)
+    assert abs(mean - delay) < 0.05e-3  # uniform: mean 2 ms, sd 0.58 ms / sqrt(2000)
+    assert min(offsets) < delay - 0.9 * jitter and max(offsets) > delay + 0.9 * jitter
+    assert dues(3, 0.01) == far  # same seed, same draws
+    assert dues(4, 0.01) != far
+    close = dues(3, 0.0001)  # 0.1 ms apart: the jitter would reorder them
+    assert all(due >= end for end, due in close)
+    assert all(b[1] >= a[1] for a, b in itertools.pairwise(close))
+    with pytest.raises(ValueError):
+        Hub(port=0, jitter_s=-0.001)
+    hub = Hub(port=0, jitter_s=0.001)
+    with pytest.raises(ValueError):
+        hub.set_faults(jitter_s=float("nan"))
+    assert hub.jitter_s == 0.001
+
+
+def test_jitter_keeps_order_and_the_same_frames_are_dropped():
+    """Through a running hub: with 2 ± 1 ms jitter every frame arrives in order, its
+    timestamp (the hub's delivery time) never goes back, and with the same seed the same
+    frames are lost as without jitter (separate RNGs)."""
+    runs = []
+    for jitter in (0.0, 0.001):
+        with Hub(port=0, seed=77) as hub:
+            a, b = _pair(hub)
+            hub.set_faults(drop_rate=0.2, delay_s=0.002, jitter_s=jitter)
+            for i in range(300):
+                data = i.to_bytes(2, "big")
+                a.send(can.Message(arbitration_id=0x200, data=data, is_extended_id=False))
+            got, stamps = [], []
+            while (m := b.recv(0.5)) is not None:
+                got.append(int.from_bytes(m.data, "big"))
+                stamps.append(m.timestamp)
+            a.shutdown()
+            b.shutdown()
+        assert got == sorted(got)
+        assert all(t1 >= t0 for t0, t1 in itertools.pairwise(stamps))
+        runs.append(got)
+    assert runs[0] == runs[1]
+
+
+def test_cli_takes_delay_jitter_drop_and_seed():
+    """`virtual-drive hub --delay-ms 2 --jitter-ms 1 --drop 0.01 --seed 5` serves; a negative
+    jitter is refused with one line and exit 2."""
+    import re
+    import signal
+    import subprocess
+    import sys
+
+    cmd = [sys.executable, "-m", "virtual_drive.cli", "hub", "--port", "0"]
+    proc = subprocess.Popen(
+        [*cmd, "--delay-ms", "2", "--jitter-ms", "1", "--drop", "0.01", "--seed", "5"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        line = proc.stdout.readline()
+        assert re.search(r"port=\d+", line), line
+    finally:
+        proc.send_signal(signal.SIGTERM)
+        proc.wait(10)
+    assert proc.returncode == 0
+    bad = subprocess.run(
+        [*cmd, "--jitter-ms", "-1"], capture_output=True, text=True, timeout=30
+    )
+    assert bad.returncode == 2
+    assert bad.stderr.strip().count("\n") == 0 and "jitter_s" in bad.stderr

@@ -12,7 +12,8 @@ client in one global order. Frames are paced like a real CAN bus: a frame waitin
 competes in arbitration (lowest identifier wins among the oldest pending frame of each client,
 so each sender's order is kept), occupies the bus for ``frame_bits(...) / bitrate`` seconds
 (exact bit stuffing), and is delivered when the bus has finished it (plus an optional injected
-delay). Frames can be dropped with a seeded RNG for fault tests.
+delay with uniform jitter, like a USB adapter: ``delay_s`` ± ``jitter_s``, never reordering
+frames, as CAN never does). Frames can be dropped with a seeded RNG for fault tests.
 
 One background thread runs a ``select`` loop over all sockets; no locks are needed.
 """
@@ -250,7 +251,11 @@ class Hub:
     bitrate: emulated bit rate, bit/s (1 .. 1e9; real classical CAN is at most 1e6).
     drop_rate: probability 0..1 that a frame is lost for all receivers (it still uses bus time).
     delay_s: extra delivery delay, s (≥ 0), added after the frame completed on the bus.
-    seed: seed of the drop RNG (reproducible fault patterns).
+    jitter_s: per-frame jitter of that delay, s (≥ 0): each frame is due at
+        max(previous due time on its bus, end on the bus + delay_s + U(−jitter_s, +jitter_s)),
+        and never before it has completed on the bus; so frames keep their order.
+    seed: seed of the drop and jitter RNGs (reproducible fault patterns; the jitter draws do
+        not change which frames are dropped).
     """
 
     #: After ``< rawmode >`` is acknowledged, frames for that client wait this long (s), so
@@ -272,6 +277,7 @@ class Hub:
         drop_rate: float = 0.0,
         delay_s: float = 0.0,
         seed: int | None = 0,
+        jitter_s: float = 0.0,
     ) -> None:
         if host not in _LOOPBACK_NAMES:
             raise ValueError(f"the hub binds 127.0.0.1 only; refusing host {host!r}")
@@ -281,12 +287,14 @@ class Hub:
             raise ValueError(f"bitrate must be an integer in bit/s, got {bitrate!r}")
         if not 1 <= bitrate <= 1_000_000_000:
             raise ValueError(f"bitrate must be 1 .. 1e9 bit/s, got {bitrate}")
-        self._check_faults(drop_rate, delay_s)
+        self._check_faults(drop_rate, delay_s, jitter_s)
         self._requested_port = port
         self._bitrate = bitrate
         self._drop_rate = float(drop_rate)
         self._delay_s = float(delay_s)
+        self._jitter_s = float(jitter_s)
         self._rng = random.Random(seed)
+        self._jitter_rng = random.Random(None if seed is None else f"jitter-{seed}")
         self._listener: socket.socket | None = None
         self._wake_r: socket.socket | None = None
         self._wake_w: socket.socket | None = None
@@ -338,6 +346,11 @@ class Hub:
         return self._delay_s
 
     @property
+    def jitter_s(self) -> float:
+        """Current ± jitter of the delivery delay, s."""
+        return self._jitter_s
+
+    @property
     def running(self) -> bool:
         """True while the hub thread serves clients."""
         return self._thread is not None and self._thread.is_alive()
@@ -378,17 +391,25 @@ class Hub:
             f'channel="{channel}", tcp_tune=True)'
         )
 
-    def set_faults(self, drop_rate: float | None = None, delay_s: float | None = None) -> None:
+    def set_faults(
+        self,
+        drop_rate: float | None = None,
+        delay_s: float | None = None,
+        jitter_s: float | None = None,
+    ) -> None:
         """Change fault injection at run time; applies to frames not yet on the bus.
 
         drop_rate: probability 0..1 that a frame is lost. delay_s: extra delay, s (≥ 0).
+        jitter_s: ± uniform jitter of the delay per frame, s (≥ 0). None keeps a setting.
         Raises ValueError (and changes nothing) for out-of-range values.
         """
         new_drop = self._drop_rate if drop_rate is None else drop_rate
         new_delay = self._delay_s if delay_s is None else delay_s
-        self._check_faults(new_drop, new_delay)
+        new_jitter = self._jitter_s if jitter_s is None else jitter_s
+        self._check_faults(new_drop, new_delay, new_jitter)
         self._drop_rate = float(new_drop)
         self._delay_s = float(new_delay)
+        self._jitter_s = float(new_jitter)
 
     def start(self) -> Hub:
         """Bind 127.0.0.1:port and start serving in a background thread.
@@ -446,14 +467,25 @@ class Hub:
     # ---------------------------------------------------------------- internals
 
     @staticmethod
-    def _check_faults(drop_rate: float, delay_s: float) -> None:
-        for name, v in (("drop_rate", drop_rate), ("delay_s", delay_s)):
+    def _check_faults(drop_rate: float, delay_s: float, jitter_s: float = 0.0) -> None:
+        for name, v in (("drop_rate", drop_rate), ("delay_s", delay_s), ("jitter_s", jitter_s)):
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
                 raise ValueError(f"{name} must be a finite number, got {v!r}")
         if not 0.0 <= drop_rate <= 1.0:
             raise ValueError(f"drop_rate must be in 0..1, got {drop_rate}")
         if not 0.0 <= delay_s <= 3600.0:
             raise ValueError(f"delay_s must be in 0..3600 s, got {delay_s}")
+        if not 0.0 <= jitter_s <= 3600.0:
+            raise ValueError(f"jitter_s must be in 0..3600 s, got {jitter_s}")
+
+    def _delivery_due(self, end: float, last_due: float) -> float:
+        """Delivery time of a frame that completed on the bus at ``end`` (monotonic s) when the
+        previous frame on its bus is due at ``last_due``: end + delay_s + U(−jitter_s, jitter_s),
+        never before ``end`` nor before ``last_due`` (CAN keeps the order of frames)."""
+        delay = self._delay_s
+        if self._jitter_s > 0.0:
+            delay = max(0.0, delay + self._jitter_rng.uniform(-self._jitter_s, self._jitter_s))
+        return max(end + delay, last_due)
 
     def _wall(self, mono: float) -> float:
         return self._wall0 + (mono - self._mono0)
@@ -672,7 +704,7 @@ class Hub:
             if self._drop_rate > 0.0 and self._rng.random() < self._drop_rate:
                 self._n_dropped += 1
                 continue
-            due = max(end + self._delay_s, bus.last_due)
+            due = self._delivery_due(end, bus.last_due)
             bus.last_due = due
             bus.deliveries.append((due, winner, frame))
         deliveries = bus.deliveries
@@ -710,9 +742,15 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--host", default="127.0.0.1", help="must be 127.0.0.1 or localhost")
     p.add_argument("--port", type=int, default=DEFAULT_PORT, help="TCP port, 0 = any free port")
     p.add_argument("--bitrate", type=int, default=1_000_000, help="emulated bit rate, bit/s")
-    p.add_argument("--drop-rate", type=float, default=0.0, help="probability 0..1 a frame is lost")
+    p.add_argument(
+        "--drop-rate", "--drop", type=float, default=0.0, help="probability 0..1 a frame is lost"
+    )
     p.add_argument("--delay-ms", type=float, default=0.0, help="extra delivery delay, ms")
-    p.add_argument("--seed", type=int, default=0, help="seed of the drop RNG")
+    p.add_argument(
+        "--jitter-ms", type=float, default=0.0,
+        help="± uniform jitter of the delivery delay per frame, ms (frame order is kept)",
+    )  # fmt: skip
+    p.add_argument("--seed", type=int, default=0, help="seed of the drop and jitter RNGs")
     p.add_argument("--channel", default="vcan0", help="channel shown in the join line")
     p.set_defaults(func=run_hub_command)
     return p
@@ -727,6 +765,7 @@ def run_hub_command(args: argparse.Namespace) -> int:
             bitrate=args.bitrate,
             drop_rate=args.drop_rate,
             delay_s=args.delay_ms / 1000.0,
+            jitter_s=args.jitter_ms / 1000.0,
             seed=args.seed,
         )
     except ValueError as exc:
