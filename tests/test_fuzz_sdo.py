@@ -60,6 +60,7 @@ TYPE_RANGE = {
     0x07: (0, 2**32 - 1),
 }
 WRITABLE = ("rw", "wo", "rww", "rwr")
+FLT_MIN = 1.1754943508222875e-38  #: smallest normal float32
 
 #: (index, sub-index or None = every sub-index) never written at random
 EXCLUDED = {
@@ -97,6 +98,7 @@ class Obj:
     low: float | None
     high: float | None
     default: str
+    min_nonzero: float | None = None
 
 
 def _num(text: str) -> float | int:
@@ -139,6 +141,7 @@ def read_eds(path: Path = EDS) -> dict[tuple[int, int], Obj]:
             _num(lo) if lo else None,
             _num(hi) if hi else None,
             body.get("DefaultValue", ""),
+            float(body["MinNonZero"]) if "MinNonZero" in body else None,
         )
     return out
 
@@ -164,6 +167,15 @@ def _restricted(can_id: int) -> bool:
     return any(lo <= can_id <= hi for lo, hi in RESTRICTED)
 
 
+def _limits(obj: Obj) -> tuple[float | None, float | None]:
+    """The EDS limits as the drive can hold them: REAL32 limits rounded to float32 (1e-8 is
+    9.99999994e-09 in a REAL32; a firmware comparing with ``1e-8f`` accepts it)."""
+    if obj.data_type != 0x08:
+        return obj.low, obj.high
+    r = [None if x is None else struct.unpack("<f", _f32(x))[0] for x in (obj.low, obj.high)]
+    return r[0], r[1]
+
+
 def must_refuse(obj: Obj | None, data: bytes) -> str | None:
     """Why the drive must refuse writing ``data`` to ``obj`` (None if it may accept)."""
     if obj is None:
@@ -179,11 +191,16 @@ def must_refuse(obj: Obj | None, data: bytes) -> str | None:
         v = struct.unpack("<f", data)[0]
         if not math.isfinite(v):
             return f"non-finite {v}"
+        if v != 0.0 and abs(v) < FLT_MIN:
+            return f"subnormal {v!r} (OD.md: a nonzero REAL32 must be a normal float32)"
+        if obj.min_nonzero is not None and v != 0.0 and abs(v) < obj.min_nonzero:
+            return f"{v!r} nonzero below MinNonZero {obj.min_nonzero}"
     else:
         v = struct.unpack(FORMATS[obj.data_type], data)[0]
-    if obj.low is not None and v < obj.low:
+    lo, hi = _limits(obj)
+    if lo is not None and v < lo:
         return f"{v!r} below {obj.low}"
-    if obj.high is not None and v > obj.high:
+    if hi is not None and v > hi:
         return f"{v!r} above {obj.high}"
     if _is_cob_id(obj) and v != _default(obj):
         if v & 0x20000000:
@@ -309,7 +326,15 @@ class Fuzzer:
         return None
 
     def tail(self, n: int = 15) -> str:
-        return "\n".join(self.log[-n:])
+        accepted = [ln for ln in self.log if ln.endswith("accepted")]
+        return (
+            "\n".join(self.log[-n:])
+            + f"\nall {len(accepted)} accepted writes (oldest first):\n"
+            + "\n".join(accepted)
+        )
+
+    def error_code(self) -> int:
+        return struct.unpack("<H", self.read(0x603F, 0)[:2])[0]
 
     def statusword(self) -> int:
         return struct.unpack("<H", self.read(0x6041, 0)[:2])[0]
@@ -450,8 +475,8 @@ def test_sdo_fuzz_at_1000_rpm(eds):
                         back = f.read_obj((index, sub))
                         if obj.data_type == 0x08 and not math.isfinite(back):
                             violations.append(f"0x{index:04X}:{sub:02X} reads back {back}")
-                        elif (obj.low is not None and back < obj.low) or (
-                            obj.high is not None and back > obj.high
+                        elif (_limits(obj)[0] is not None and back < _limits(obj)[0]) or (
+                            _limits(obj)[1] is not None and back > _limits(obj)[1]
                         ):
                             violations.append(
                                 f"0x{index:04X}:{sub:02X} reads back {back} outside "
@@ -465,8 +490,8 @@ def test_sdo_fuzz_at_1000_rpm(eds):
                             violations.append(f"after 0x{index:04X}:{sub:02X}: {broken}")
                 sw = f.statusword()
                 assert not sw & 0x08, (
-                    f"drive tripped (statusword 0x{sw:04X}) after write {n}; last writes:\n"
-                    + f.tail()
+                    f"drive tripped (statusword 0x{sw:04X}, error code 0x{f.error_code():04X}) "
+                    f"after write {n}; last writes:\n" + f.tail()
                 )
                 if n % 20 == 0:
                     v = f.speed()
