@@ -241,9 +241,9 @@
 #define OD_CONSUMER_HEARTBEAT_TIME__HIGHEST_SUB_INDEX_CTYPE      uint16_t
 #define OD_CONSUMER_HEARTBEAT_TIME__HIGHEST_SUB_INDEX_ACCESS     OD_ACCESS_CONST
 #define OD_CONSUMER_HEARTBEAT_TIME__HIGHEST_SUB_INDEX_PDO        0u
-#define OD_CONSUMER_HEARTBEAT_TIME__HIGHEST_SUB_INDEX_DEFAULT    1u
+#define OD_CONSUMER_HEARTBEAT_TIME__HIGHEST_SUB_INDEX_DEFAULT    4u
 #define OD_CONSUMER_HEARTBEAT_TIME__HIGHEST_SUB_INDEX_REF        0x10160008UL
-/* 0x1016:01 consumer_heartbeat_time.consumer_1 UNSIGNED32 rw [ms] - node-ID in bits 23..16, heartbeat time in ms in bits 15..0, 0 = off */
+/* 0x1016:01 consumer_heartbeat_time.consumer_1 UNSIGNED32 rw [ms] - node-ID (1..127) in bits 23..16, heartbeat time in ms in bits 15..0, time 0 = entry off; one entry per node (0x06040043) */
 #define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_1_INDEX             0x1016u
 #define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_1_SUB               0x01u
 #define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_1_TYPE              OD_TYPE_U32
@@ -252,6 +252,33 @@
 #define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_1_PDO               0u
 #define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_1_DEFAULT           0x00000000UL /* ms */
 #define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_1_REF               0x10160120UL
+/* 0x1016:02 consumer_heartbeat_time.consumer_2 UNSIGNED32 rw [ms] - node-ID (1..127) in bits 23..16, heartbeat time in ms in bits 15..0, time 0 = entry off; one entry per node (0x06040043) */
+#define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_2_INDEX             0x1016u
+#define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_2_SUB               0x02u
+#define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_2_TYPE              OD_TYPE_U32
+#define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_2_CTYPE             uint32_t
+#define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_2_ACCESS            OD_ACCESS_RW
+#define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_2_PDO               0u
+#define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_2_DEFAULT           0x00000000UL /* ms */
+#define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_2_REF               0x10160220UL
+/* 0x1016:03 consumer_heartbeat_time.consumer_3 UNSIGNED32 rw [ms] - node-ID (1..127) in bits 23..16, heartbeat time in ms in bits 15..0, time 0 = entry off; one entry per node (0x06040043) */
+#define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_3_INDEX             0x1016u
+#define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_3_SUB               0x03u
+#define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_3_TYPE              OD_TYPE_U32
+#define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_3_CTYPE             uint32_t
+#define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_3_ACCESS            OD_ACCESS_RW
+#define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_3_PDO               0u
+#define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_3_DEFAULT           0x00000000UL /* ms */
+#define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_3_REF               0x10160320UL
+/* 0x1016:04 consumer_heartbeat_time.consumer_4 UNSIGNED32 rw [ms] - node-ID (1..127) in bits 23..16, heartbeat time in ms in bits 15..0, time 0 = entry off; one entry per node (0x06040043) */
+#define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_4_INDEX             0x1016u
+#define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_4_SUB               0x04u
+#define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_4_TYPE              OD_TYPE_U32
+#define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_4_CTYPE             uint32_t
+#define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_4_ACCESS            OD_ACCESS_RW
+#define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_4_PDO               0u
+#define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_4_DEFAULT           0x00000000UL /* ms */
+#define OD_CONSUMER_HEARTBEAT_TIME__CONSUMER_4_REF               0x10160420UL
 
 /* ---- 0x1017 producer_heartbeat_time ---- */
 /* 0x1017:00 producer_heartbeat_time UNSIGNED16 rw [ms] - heartbeat period, 0 = off */
@@ -2842,6 +2869,26 @@
 #define OD_SPEED_MODEL_B                                         0.000333715f /* rpm/(A sample), eq. (26) */
 #define OD_LOOP_TS                                               2e-05f /* s */
 #define OD_SPEED_LOOP_TAU_MAX                                    10.0f /* s */
+
+/* ---- Restricted 11-bit CAN-IDs (CiA 301 7.3.5): no valid configurable COB-ID may use
+ *      them; 29-bit COB-IDs (bit 29) and a new CAN-ID while valid are refused ---- */
+#define OD_COB_RESTRICTED_COUNT                                  8u
+#define OD_COB_RESTRICTED_1_LO                                   0x000u
+#define OD_COB_RESTRICTED_1_HI                                   0x000u
+#define OD_COB_RESTRICTED_2_LO                                   0x001u
+#define OD_COB_RESTRICTED_2_HI                                   0x07Fu
+#define OD_COB_RESTRICTED_3_LO                                   0x101u
+#define OD_COB_RESTRICTED_3_HI                                   0x180u
+#define OD_COB_RESTRICTED_4_LO                                   0x581u
+#define OD_COB_RESTRICTED_4_HI                                   0x5FFu
+#define OD_COB_RESTRICTED_5_LO                                   0x601u
+#define OD_COB_RESTRICTED_5_HI                                   0x67Fu
+#define OD_COB_RESTRICTED_6_LO                                   0x6E0u
+#define OD_COB_RESTRICTED_6_HI                                   0x6FFu
+#define OD_COB_RESTRICTED_7_LO                                   0x701u
+#define OD_COB_RESTRICTED_7_HI                                   0x77Fu
+#define OD_COB_RESTRICTED_8_LO                                   0x780u
+#define OD_COB_RESTRICTED_8_HI                                   0x7FFu
 
 /* ---- EMCY error codes the drive sends (see OD.md) ---- */
 #define OD_EMCY_OVERCURRENT                                      0x2310u

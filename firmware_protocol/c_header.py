@@ -10,6 +10,7 @@ from __future__ import annotations
 import re
 
 from . import stability
+from .cob_id import RESTRICTED_CAN_IDS
 from .emcy_codes import EMCY_CODES
 from .entry import Entry
 from .od import ObjectDictionaryView
@@ -205,6 +206,13 @@ def render_header(view: ObjectDictionaryView) -> str:
     define("OD_SPEED_MODEL_B", f"{stability.B_IDENTIFIED!r}f", "rpm/(A sample), eq. (26)")
     define("OD_LOOP_TS", f"{stability.TS!r}f", "s")
     define("OD_SPEED_LOOP_TAU_MAX", f"{stability.TAU_MAX!r}f", "s")
+    add("")
+    add("/* ---- Restricted 11-bit CAN-IDs (CiA 301 7.3.5): no valid configurable COB-ID may use")
+    add(" *      them; 29-bit COB-IDs (bit 29) and a new CAN-ID while valid are refused ---- */")
+    define("OD_COB_RESTRICTED_COUNT", f"{len(RESTRICTED_CAN_IDS)}u")
+    for k, (lo, hi) in enumerate(RESTRICTED_CAN_IDS, start=1):
+        define(f"OD_COB_RESTRICTED_{k}_LO", f"0x{lo:03X}u")
+        define(f"OD_COB_RESTRICTED_{k}_HI", f"0x{hi:03X}u")
     add("")
     add("/* ---- EMCY error codes the drive sends (see OD.md) ---- */")
     for code, (stem, _when) in sorted(EMCY_CODES.items()):

@@ -4,6 +4,7 @@ mapping, enumerations and cross-object constraints."""
 from __future__ import annotations
 
 from . import stability
+from .cob_id import RESTRICTED_CAN_IDS
 from .emcy_codes import EMCY_CODES
 from .entry import Entry
 from .od import ObjectDictionaryView
@@ -135,6 +136,19 @@ def render_markdown(view: ObjectDictionaryView) -> str:
     add("(else 0x06090032). Gains are rounded to float32 first; the poles are computed on")
     add("w = z - 1 without cancellation.")
     add("Python: `firmware_protocol.stability.check_ip_speed_gains`.")
+    add("")
+    add("## COB-ID rules (CiA 301)")
+    add("")
+    add("EMCY 0x1014, SDO server 0x1201:1/2 and PDO 0x1400/0x1800 sub 1 refuse with 0x06090030:")
+    add("bit 29 (29-bit frame, not supported), bits 28..11 set, bit 30 on EMCY/SDO (reserved /")
+    add("dynamic), a new CAN-ID while the object is valid (write it with bit 31 set first), and")
+    add("a valid COB-ID on a restricted CAN-ID: " + ", ".join(
+        f"0x{lo:03X}" if lo == hi else f"0x{lo:03X}-0x{hi:03X}" for lo, hi in RESTRICTED_CAN_IDS
+    ) + ".")
+    add("PDO COB-IDs and mappings change only in PRE-OPERATIONAL (0x08000022 in OPERATIONAL).")
+    add("0x1016 entries: bits 31..24 reserved (0); time 0 = entry off; node-ID 0 with a time,")
+    add("a node-ID above 127 or the drive's own node-ID: 0x06090030; two active entries for the")
+    add("same node: 0x06040043. Python: `firmware_protocol.cob_id`.")
     add("")
     add("## Configuration-only objects (power stage off)")
     add("")

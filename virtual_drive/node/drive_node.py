@@ -34,6 +34,8 @@ from canopen.node.local import LocalNode
 from canopen.sdo import SdoAbortedError
 
 from firmware_protocol.cia402 import CW_HALT, SW_SPEED_ZERO
+from firmware_protocol.cob_id import check_cob_id, check_heartbeat_consumers
+from firmware_protocol.entry import LimitError
 from firmware_protocol.od import load_od
 
 from . import cia402 as sm
@@ -378,10 +380,15 @@ class VirtualDrive:
     def _configure_communication(self) -> None:
         now = time.monotonic()
         self.hb_producer.set_period(self._value(0x1017), now)
-        self.hb_consumer.configure([self._value(0x1016, 1)])
+        self.hb_consumer.configure(self._consumer_entries())
         self.emcy.set_cob_id(self._value(0x1014))
         self._bind_sdo2()
         self.pdo.configure()
+
+    def _consumer_entries(self, sub: int = 0, value: int = 0) -> list[int]:
+        """0x1016 sub 1..N present values (with ``value`` in place of ``sub`` if given)."""
+        count = self._value(0x1016, 0)
+        return [value if s == sub else self._value(0x1016, s) for s in range(1, count + 1)]
 
     def _bind_sdo2(self) -> None:
         rx, tx = self._value(0x1201, 1), self._value(0x1201, 2)
@@ -631,16 +638,20 @@ class VirtualDrive:
             return True, self.pdo.configure
         value = self.checker.check(index, sub, value)
         if index == 0x1016:
-            try:
-                HeartbeatConsumer.validate([value])
-            except ValueError as exc:
-                raise SdoAbortedError(ABORT_PARAM_INCOMPATIBLE) from exc
-            return True, lambda: self.hb_consumer.configure([value])
+            entries = self._consumer_entries(sub, value)
+            try:  # CiA 301: node-ID 1..127, one entry per node, reserved bits 0
+                check_heartbeat_consumers(entries, own_node_id=self.node_id)
+            except LimitError as exc:
+                raise SdoAbortedError(exc.abort_code) from exc
+            return True, lambda: self.hb_consumer.configure(entries)
         if index == 0x1017:
             return True, lambda: self.hb_producer.set_period(value, time.monotonic())
         if index == 0x1014:
+            self._check_cob_id("emcy", value, self._value(0x1014))
             return True, lambda: self.emcy.set_cob_id(value)
         if index == 0x1201:
+            if sub in (1, 2):
+                self._check_cob_id("sdo", value, self._value(0x1201, sub))
             return True, self._bind_sdo2
         if index == 0x6040:
             return True, lambda: self.cia402.write_controlword(value)
@@ -667,6 +678,13 @@ class VirtualDrive:
         if index == 0x5030 and sub == 3:
             return True, self._model_write(value)
         return True, None
+
+    @staticmethod
+    def _check_cob_id(kind: str, new: int, old: int) -> None:
+        try:
+            check_cob_id(kind, new, old)
+        except LimitError as exc:
+            raise SdoAbortedError(exc.abort_code) from exc
 
     def _after_limit_change(self, index: int, sub: int, value: Any) -> Callable[[], None]:
         def after() -> None:

@@ -10,8 +10,9 @@ canopen's LocalNode keeps PDOs apart from its OD; this engine reads the communic
   (sub 3, 100 µs units);
 - only in NMT OPERATIONAL.
 
-Configuration writes are checked as CANopenNode does it (CiA 301 rules): the COB-ID cannot change
-while the PDO is valid (0x06090030); transmission types 241–253 are refused (0x06090030); a
+Configuration writes are checked as CANopenNode does it (CiA 301 rules): the COB-ID follows
+:func:`firmware_protocol.cob_id.check_cob_id` (no restricted CAN-ID, no 29-bit frame, no new
+CAN-ID while the PDO is valid: 0x06090030); transmission types 241–253 are refused (0x06090030); a
 mapping entry can only be written with sub0 = 0 and the PDO invalid (0x06010000); sub0 checks that
 each mapped object exists (0x06020000 / 0x06090011), may be mapped (0x06040041) and that the total
 fits 64 bits (0x06040042). Mapping and COB-IDs may be changed in PRE-OPERATIONAL only
@@ -28,6 +29,9 @@ from dataclasses import dataclass, field
 
 from canopen import objectdictionary as odm
 from canopen.sdo import SdoAbortedError
+
+from firmware_protocol.cob_id import check_cob_id
+from firmware_protocol.entry import LimitError
 
 logger = logging.getLogger(__name__)
 
@@ -200,12 +204,11 @@ class PdoEngine:
                 old = self._u(index, 1)
                 if self._nmt_state() == 0x05 and value != old:
                     raise SdoAbortedError(ABORT_DEVICE_STATE)
-                can_id = value & 0x7FF
-                if not value & PDO_INVALID:
-                    if not old & PDO_INVALID and (old & 0x7FF) != can_id:
-                        raise SdoAbortedError(ABORT_INVALID_VALUE)
-                    if can_id < 0x80 or 0x700 <= can_id or 0x580 <= can_id < 0x700:
-                        raise SdoAbortedError(ABORT_INVALID_VALUE)
+                kind = "tpdo" if index >= TPDO_COMM else "rpdo"
+                try:
+                    check_cob_id(kind, value, old)  # CiA 301 restricted IDs, bits 29..11
+                except LimitError as exc:
+                    raise SdoAbortedError(exc.abort_code) from exc
             elif sub == 2 and 241 <= value <= 253:
                 raise SdoAbortedError(ABORT_INVALID_VALUE)
             return
