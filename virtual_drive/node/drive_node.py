@@ -97,6 +97,15 @@ RESET_BRAKE_LIMIT_S = 5.0  #: a deferred reset node completes after this much br
 CURRENT_WINDOW_A = 1.0  #: target reached window in the current modes (A)
 
 
+class RpdoRefusedError(SdoAbortedError):
+    """A value inside an RPDO was refused: ``index``/``subindex`` and the abort ``code``."""
+
+    def __init__(self, code: int, index: int, subindex: int) -> None:
+        super().__init__(code)
+        self.index = index
+        self.subindex = subindex
+
+
 class DriveLocalNode(LocalNode):
     """canopen LocalNode whose reads and writes go through :class:`VirtualDrive`.
 
@@ -152,6 +161,35 @@ class DriveLocalNode(LocalNode):
             self._drive._pcache.clear()
             if after is not None:
                 after()
+
+    def set_data_all(self, items: list[tuple[int, int, bytes]]) -> None:
+        """Write several objects as one (an RPDO): all checks first, then all stores.
+
+        Every value is checked against the present values of the other objects (as SDO writes
+        just before the PDO would be). One refusal raises :class:`RpdoRefusedError` and nothing of
+        the PDO is applied. The RPDO-mappable objects' checks have no side effects (setpoints,
+        controlword, mode, torque/current limits), so checking all before storing any is exact.
+        """
+        with self._drive._write_lock:
+            plans = []
+            for index, sub, data in items:
+                obj = self._find_object(index, sub)
+                try:
+                    if not obj.writable:
+                        raise SdoAbortedError(ABORT_WRITE_READONLY)
+                    if obj.data_type in odm.NUMBER_TYPES and 8 * len(data) != len(obj):
+                        raise SdoAbortedError(ABORT_LENGTH)
+                    store, after = self._drive._before_write(index, sub, obj, bytes(data))
+                except SdoAbortedError as exc:
+                    raise RpdoRefusedError(exc.code, index, sub) from exc
+                plans.append((index, sub, bytes(data), store, after))
+            for index, sub, data, store, _after in plans:
+                if store:
+                    self.data_store.setdefault(index, {})[sub] = data
+            self._drive._pcache.clear()
+            for *_, after in plans:
+                if after is not None:
+                    after()
 
 
 class VirtualDrive:
@@ -230,6 +268,8 @@ class VirtualDrive:
             self.nmt.pdo_allowed,
             lambda: self.nmt.state,
             lambda i, s: self._live_getters.get((i, s)),
+            report=self.emcy.raise_error,
+            clear=self.emcy.clear_error,
         )
         self.cia402 = Cia402StateMachine(self._options, self._reset_fault)
         self.recorder = TraceRecorder()

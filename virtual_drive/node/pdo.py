@@ -3,8 +3,12 @@
 canopen's LocalNode keeps PDOs apart from its OD; this engine reads the communication
 (0x1400+/0x1800+) and mapping (0x1600+/0x1A00+) parameters from the node and
 
-- RPDO: decodes a received frame by its mapping and writes every mapped object through the node's
-  checked ``set_data`` (a value the checks refuse is dropped, the others apply);
+- RPDO: decodes a received frame by its mapping and writes the mapped objects as one through the
+  node's checked ``set_data_all``: a frame shorter than the mapping is not processed (EMCY 0x8210,
+  data RPDO number, bytes received, bytes mapped); a value the checks refuse drops the WHOLE PDO
+  (none of its objects apply; EMCY 0x8200, data RPDO number, index, sub-index, low byte of the
+  abort code). Extra bytes beyond the mapping are ignored. The next RPDO processed in full
+  clears both errors (error-reset EMCY when none is left);
 - TPDO: encodes the mapped objects' live values and sends them on the event timer (transmission
   type 0xFE/0xFF, sub 5 in ms) or every n-th SYNC (types 1–240), respecting the inhibit time
   (sub 3, 100 µs units);
@@ -31,6 +35,7 @@ from canopen import objectdictionary as odm
 from canopen.sdo import SdoAbortedError
 
 from firmware_protocol.cob_id import check_cob_id
+from firmware_protocol.emcy_codes import RPDO_LENGTH, RPDO_VALUE
 from firmware_protocol.entry import LimitError
 
 logger = logging.getLogger(__name__)
@@ -112,6 +117,8 @@ class PdoEngine:
         allowed: Callable[[], bool],
         nmt_state: Callable[[], int],
         fast_getter: Callable[[int, int], Callable[[], float | int] | None] = lambda i, s: None,
+        report: Callable[[int, bytes], object] = lambda code, data: None,
+        clear: Callable[[int], object] = lambda code: None,
     ) -> None:
         self.node = node
         self._send = send
@@ -120,6 +127,9 @@ class PdoEngine:
         self._allowed = allowed
         self._nmt_state = nmt_state
         self._fast_getter = fast_getter
+        self._report = report
+        self._clear = clear
+        self._rx_error = False
         self.tpdos: list[_Tpdo] = []
         self.rpdos: dict[int, _Rpdo] = {}
         self.sent = 0
@@ -247,21 +257,33 @@ class PdoEngine:
             return
         if len(data) < rpdo.size:
             self.dropped_rx += 1
+            self._rx_error = True
+            self._report(RPDO_LENGTH, bytes([rpdo.number, len(data), rpdo.size]))
             return
-        for index, sub, off, size in rpdo.entries:
-            try:
-                self.node.set_data(index, sub, bytes(data[off : off + size]))
-            except SdoAbortedError as exc:
-                self.refused_rx += 1
-                if self.refused_rx <= 10 or self.refused_rx % 1000 == 0:
-                    logger.warning(
-                        "RPDO%d: 0x%04X:%02X refused (0x%08X), %d refused so far",
-                        rpdo.number,
-                        index,
-                        sub,
-                        exc.code,
-                        self.refused_rx,
-                    )
+        items = [(i, s, bytes(data[off : off + size])) for i, s, off, size in rpdo.entries]
+        try:
+            self.node.set_data_all(items)
+        except SdoAbortedError as exc:
+            index, sub = getattr(exc, "index", 0), getattr(exc, "subindex", 0)
+            self.refused_rx += 1
+            self._rx_error = True
+            self._report(
+                RPDO_VALUE, bytes([rpdo.number]) + struct.pack("<HBB", index, sub, exc.code & 0xFF)
+            )
+            if self.refused_rx <= 10 or self.refused_rx % 1000 == 0:
+                logger.warning(
+                    "RPDO%d dropped: 0x%04X:%02X refused (0x%08X), %d refused so far",
+                    rpdo.number,
+                    index,
+                    sub,
+                    exc.code,
+                    self.refused_rx,
+                )
+            return
+        if self._rx_error:
+            self._rx_error = False
+            self._clear(RPDO_LENGTH)
+            self._clear(RPDO_VALUE)
 
     def tick(self, now: float) -> None:
         """Send the TPDOs whose event timer expired (call every loop period)."""
