@@ -439,8 +439,7 @@ class BenchGui:
             f"<b>bus load</b> {_fmt(load * 100 if load is not None else None, '.1f')} % · {drops}",
             f"<b>faults/EMCY</b> {e(emcy_txt)}",
         ]
-        if extra:
-            lines.append(" · ".join(extra))
+        lines.append(" · ".join(extra) or "&nbsp;")  # always the same number of lines
         return "<div style='font-size:0.85em;line-height:1.35'>" + "<br>".join(lines) + "</div>"
 
 

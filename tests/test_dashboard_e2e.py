@@ -97,12 +97,12 @@ def test_one_controller_and_visible_take_over(page, bench):
     tok = httpx.post(f"{api}/api/control", json={"client": "script", "take_over": True})
     tok = tok.json()["token"]
     wait_text(page, r"In control: script since")  # the browser sees who took over
-    wait_text(page, r"Control taken over")
+    wait_text(page, r"script took control from you")  # shown under the control buttons
     click(page, page.get_by_role("button", name="+ step"))
     wait_text(page, r"script controls the bench")  # watching: the click changed nothing
     assert httpx.get(f"{api}/api/state").json()["speed_setpoint"] == 500
     click(page, page.get_by_role("button", name="Take control"))
-    wait_text(page, r"In control: browser #\d+ since")
+    wait_text(page, r"In control: browser #\d+ \(you\) since")
     r = httpx.post(
         f"{api}/api/command", json={"command": "enable"}, headers={"X-Control-Token": tok}
     )
