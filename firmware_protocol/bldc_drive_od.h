@@ -1808,6 +1808,23 @@
 #define OD_PROTECTION__UNDERVOLTAGE_TRIP_CONFIG_ONLY             1u /* write only with the power stage off, else 0x08000022 */
 #define OD_PROTECTION__UNDERVOLTAGE_TRIP_REF                     0x20500320UL
 
+/* ---- 0x2060 store_status ---- */
+/* 0x2060:00 store_status UNSIGNED8 ro [1] - parameter store at the last boot / reset node: 0 stored parameters loaded, 1 defaults (no store file or restored defaults), 2 damaged file (checksum/parse failed, defaults used), 3 unreadable (I/O error, defaults used); 2/3 also send EMCY 0x6310 after the boot-up */
+#define OD_STORE_STATUS_INDEX                                    0x2060u
+#define OD_STORE_STATUS_SUB                                      0x00u
+#define OD_STORE_STATUS_TYPE                                     OD_TYPE_U8
+#define OD_STORE_STATUS_CTYPE                                    uint16_t
+#define OD_STORE_STATUS_ACCESS                                   OD_ACCESS_RO
+#define OD_STORE_STATUS_PDO                                      0u
+#define OD_STORE_STATUS_DEFAULT                                  1u /* 1 */
+#define OD_STORE_STATUS_MIN                                      0u /* 1 */
+#define OD_STORE_STATUS_MAX                                      3u /* 1 */
+#define OD_STORE_STATUS_REF                                      0x20600008UL
+#define OD_STORE_STATUS_OK                                       0u
+#define OD_STORE_STATUS_DEFAULTS                                 1u
+#define OD_STORE_STATUS_DAMAGED                                  2u
+#define OD_STORE_STATUS_UNREADABLE                               3u
+
 /* ---- 0x20F0 gain_set ---- */
 #define OD_GAIN_SET_INDEX                                        0x20F0u
 /* 0x20F0:00 gain_set.highest_sub_index UNSIGNED8 const */

@@ -14,6 +14,7 @@ __all__ = [
     "ModeOfOperation",
     "SimFault",
     "SimModel",
+    "StoreStatus",
     "TraceCommand",
     "TraceState",
     "TraceTriggerEdge",
@@ -95,6 +96,15 @@ class SimModel(IntEnum):
     AVERAGED = 1
 
 
+class StoreStatus(IntEnum):
+    """0x2060 store_status (read-only): health of the parameter store at the last boot."""
+
+    OK = 0
+    DEFAULTS = 1
+    DAMAGED = 2
+    UNREADABLE = 3
+
+
 #: Enumeration class -> python names of the objects whose values it lists.
 ENUM_OBJECTS: dict[type[IntEnum], tuple[str, ...]] = {
     ControllerType: ("current_controller.type", "gain_set.type"),
@@ -106,4 +116,5 @@ ENUM_OBJECTS: dict[type[IntEnum], tuple[str, ...]] = {
     TraceState: ("trace_config.state",),
     SimFault: ("sim_fault.inject",),
     SimModel: ("sim_info.model",),
+    StoreStatus: ("store_status",),
 }

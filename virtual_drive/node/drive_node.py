@@ -36,12 +36,13 @@ from canopen.sdo import SdoAbortedError
 from firmware_protocol.cia402 import CW_HALT, SW_SPEED_ZERO
 from firmware_protocol.cob_id import check_cob_id, check_heartbeat_consumers
 from firmware_protocol.entry import LimitError
+from firmware_protocol.enums import StoreStatus
 from firmware_protocol.od import load_od
 
 from . import cia402 as sm
 from . import plant, storage
 from .cia402 import Cia402StateMachine
-from .emcy import HEARTBEAT_LOSS, NMT_CONNECTION_LOSS, EmcyManager
+from .emcy import DATA_SET_LOST, HEARTBEAT_LOSS, NMT_CONNECTION_LOSS, EmcyManager
 from .heartbeat import HeartbeatConsumer, HeartbeatProducer
 from .nmt import CMD_RESET_NODE, OPERATIONAL, NmtSlave
 from .params import ParamChecker
@@ -233,6 +234,7 @@ class VirtualDrive:
         self.live: dict[str, float] = {name: 0.0 for name in MEASUREMENTS.values()}
         self.live["hall_sector"] = 1
         self.store_error: str | None = None
+        self.store_status = StoreStatus.DEFAULTS  #: 0x2060, set by every parameter load
         self._pcache: dict[tuple[int, int], Any] = {}
 
         self.network = canopen.Network(bus)
@@ -290,6 +292,8 @@ class VirtualDrive:
         self._last_fault = None
         self._started = False
         self._reset_deferred_at: float | None = None  # sim time of a deferred reset node
+        if self.store_path is not None:
+            storage.remove_stale_temps(self.store_path)  # left by a kill during a store
         self._load_parameters()
         # frames reach these only while start() has a Notifier running
         self.network.subscribe(0x000, self.nmt.on_command)
@@ -371,14 +375,7 @@ class VirtualDrive:
         """Stored parameters (or defaults) into the data store and the simulator."""
         self.node.data_store.clear()
         self._pcache.clear()
-        stored: dict[tuple[int, int], bytes] = {}
-        if self.store_path is not None:
-            try:
-                stored = storage.load(self.store_path)
-            except storage.StoreCorruptError as exc:
-                self.store_error = str(exc)
-                logger.error("parameter file unusable, defaults used: %s", exc)
-                stored = {}
+        stored, self.store_status, self.store_error = self._read_store()
         for (index, sub), raw in stored.items():
             e = self.checker.entry(index, sub)
             try:
@@ -393,6 +390,20 @@ class VirtualDrive:
         self._pcache.clear()
         self._push_plant()
         self._configure_communication()
+
+    def _read_store(self) -> tuple[dict[tuple[int, int], bytes], StoreStatus, str | None]:
+        """The store file's values, its 0x2060 status and the error text (None if fine)."""
+        if self.store_path is None:
+            return {}, StoreStatus.DEFAULTS, None
+        try:
+            stored = storage.load(self.store_path)
+        except storage.StoreCorruptError as exc:
+            logger.error("parameter file damaged, defaults used: %s", exc)
+            return {}, StoreStatus.DAMAGED, str(exc)
+        except OSError as exc:
+            logger.error("parameter file unreadable, defaults used: %s", exc)
+            return {}, StoreStatus.UNREADABLE, str(exc)
+        return stored, (StoreStatus.OK if stored else StoreStatus.DEFAULTS), None
 
     def _push_plant(self) -> None:
         """Every plant/controller object's present value into the simulator."""
@@ -451,12 +462,7 @@ class VirtualDrive:
         """
         keep_1016 = self.cia402.torque_enabled
         kept = dict(self.node.data_store.get(0x1016, {})) if keep_1016 else {}
-        stored = {}
-        if self.store_path is not None:
-            try:
-                stored = storage.load(self.store_path)
-            except storage.StoreCorruptError as exc:
-                logger.error("parameter file unusable: %s", exc)
+        stored, _status, _error = self._read_store()
         for index in [i for i in self.node.data_store if i < 0x2000]:
             del self.node.data_store[index]
         for (index, sub), raw in stored.items():
@@ -528,6 +534,9 @@ class VirtualDrive:
             logger.error("store failed: %s", exc)
             raise SdoAbortedError(ABORT_HARDWARE) from exc
         logger.info("parameters stored to %s", self.store_path)
+        # the store now holds the parameters in use: healthy again
+        self.store_status, self.store_error = StoreStatus.OK, None
+        self.emcy.clear_error(DATA_SET_LOST)
 
     def restore_defaults(self) -> None:
         """0x1011 "load": defaults apply after the next reset node / restart."""
@@ -544,6 +553,7 @@ class VirtualDrive:
         live = self.live
         g: dict[tuple[int, int], Callable[[], Any]] = {
             (0x1001, 0): lambda: self.emcy.error_register,
+            (0x2060, 0): lambda: int(self.store_status),
             (0x1003, 0): lambda: len(self.emcy.history),
             (0x603F, 0): lambda: self.emcy.last_code,
             (0x6041, 0): self.statusword,
@@ -922,7 +932,12 @@ class VirtualDrive:
         self._connection_reaction(option, NMT_CONNECTION_LOSS)
 
     def _on_boot(self) -> None:
-        """After every boot-up message (hook for reports that must follow it)."""
+        """After every boot-up message: a damaged/unreadable store is reported on the bus
+        (EMCY 0x6310 "data set lost", error register bit 0; 0x2060 store_status 2/3)."""
+        if self.store_status in (StoreStatus.DAMAGED, StoreStatus.UNREADABLE):
+            data = bytes([int(self.store_status)])
+            if not self.emcy.raise_error(DATA_SET_LOST, data):
+                self.emcy.announce(DATA_SET_LOST, data)  # still active: say it again
 
     def _on_heartbeat_back(self, node_id: int) -> None:
         if self.cia402.fault_code != HEARTBEAT_LOSS:

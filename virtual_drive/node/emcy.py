@@ -108,6 +108,16 @@ class EmcyManager:
         self._emit(code, reg, data)
         return True
 
+    def announce(self, code: int, data: bytes = b"") -> bool:
+        """Send the EMCY of an error that is already active again (e.g. after a boot-up, for
+        a master that was not listening); no bookkeeping change. False if not active."""
+        with self._lock:
+            if code not in self.active:
+                return False
+            reg = self.error_register
+        self._emit(code, reg, data)
+        return True
+
     def clear_error(self, code: int) -> None:
         """Clear one active error; sends the error-reset EMCY when none remain."""
         with self._lock:

@@ -4,6 +4,8 @@ The file holds raw little-endian OD values keyed ``"IIII:SS"`` (hex index and su
 with a SHA-256 over the canonical parameter text, so a damaged or truncated file is detected.
 Writes are atomic: temporary file in the same directory, ``fsync``, ``os.replace``, ``fsync`` of
 the directory — a kill at any instant leaves either the old or the new file, never a torn one.
+The temporary file has a unique name (``.<name>.<random>.tmp``) and is removed when the write
+fails; one left behind by a kill is removed by :func:`remove_stale_temps` when the drive starts.
 """
 
 from __future__ import annotations
@@ -29,6 +31,43 @@ class StoreCorruptError(ValueError):
     """The parameter file exists but cannot be trusted."""
 
 
+class StoreUnreadableError(OSError):
+    """The parameter file exists (or may) but cannot be read (I/O error, permissions)."""
+
+
+def _temp_prefix(path: Path) -> str:
+    return f".{path.name}."
+
+
+def remove_stale_temps(path: str | os.PathLike) -> int:
+    """Remove temporary files an interrupted :func:`write_atomic` of ``path`` left behind.
+
+    Call it while no other writer of the same store runs (the drive does at start). Returns the
+    number of files removed; errors are logged, not raised.
+    """
+    path = Path(path)
+    directory = path.parent if str(path.parent) else Path(".")
+    removed = 0
+    try:
+        names = os.listdir(directory)
+    except OSError as exc:
+        logger.warning("cannot list %s for stale temporary files: %s", directory, exc)
+        return 0
+    prefix = _temp_prefix(path)
+    for name in names:
+        if name.startswith(prefix) and name.endswith(".tmp"):
+            try:
+                os.unlink(directory / name)
+                removed += 1
+            except FileNotFoundError:
+                pass
+            except OSError as exc:
+                logger.warning("cannot remove stale %s: %s", name, exc)
+    if removed:
+        logger.info("removed %d stale temporary file(s) of %s", removed, path)
+    return removed
+
+
 def _key(index: int, subindex: int) -> str:
     return f"{index:04X}:{subindex:02X}"
 
@@ -42,7 +81,7 @@ def write_atomic(path: str | os.PathLike, data: bytes) -> None:
     """Replace ``path`` by ``data`` atomically and durably."""
     path = Path(path)
     directory = path.parent if str(path.parent) else Path(".")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
+    fd, tmp = tempfile.mkstemp(prefix=_temp_prefix(path), suffix=".tmp", dir=directory)
     try:
         with os.fdopen(fd, "wb") as f:
             f.write(data)
@@ -73,12 +112,15 @@ def load(path: str | os.PathLike) -> dict[tuple[int, int], bytes]:
     """Stored raw values; ``{}`` if the file does not exist.
 
     :raises StoreCorruptError: unreadable JSON, wrong format or a checksum mismatch.
+    :raises StoreUnreadableError: the file cannot be read (I/O error, permissions, a directory).
     """
     path = Path(path)
     try:
         text = path.read_bytes()
     except FileNotFoundError:
         return {}
+    except OSError as exc:
+        raise StoreUnreadableError(exc.errno, f"{path}: {exc.strerror or exc}") from exc
     try:
         doc = json.loads(text)
         if doc.get("format") != FORMAT or doc.get("version") != VERSION:
