@@ -8,6 +8,18 @@ Three processes, as on a bench: the hub (``virtual-drive hub``), the drive
 
 Physical limit of CAN 2.0A at 1 Mbit/s for block transfer: 51–63 kB/s (111–135 bits per
 8-byte frame, 7 data bytes each). Goal: block upload >= 45 kB/s. kB = 1000 bytes.
+
+Reliability mode (``--tries N``): N uploads through a hub with frame loss and latency jitter,
+printing successes / tries, kB/s (median, p10, p90), restarts, and the load average before and
+after, e.g.
+
+    python benchmarks/bench_trace_upload.py --drop 0.01 --delay-ms 2 --jitter-ms 1 --tries 100
+    python benchmarks/bench_trace_upload.py --client canopen --tries 20
+
+``--client drive_link`` (default) uploads with ``Drive.sdo_trace.upload_block`` (resends,
+restarts); ``--client canopen`` with canopen 2.4.1's stock block client
+(``node.sdo.open(..., block_transfer=True)``, RESPONSE_TIMEOUT 2 s). Every upload is compared
+byte for byte with a reference read first by segmented upload (another code path).
 """
 
 from __future__ import annotations
@@ -21,9 +33,11 @@ import struct
 import subprocess
 import sys
 import time
+from collections.abc import Sequence
 
 import can
 import canopen
+from canopen.sdo.exceptions import SdoError
 
 from firmware_protocol import load_od
 from virtual_drive.node import spawn_virtual_drive
@@ -31,10 +45,10 @@ from virtual_drive.node import spawn_virtual_drive
 SIZE = 65536
 
 
-def start_hub(bitrate: int) -> tuple[subprocess.Popen, int]:
+def start_hub(bitrate: int, faults: Sequence[str] = ()) -> tuple[subprocess.Popen, int]:
     proc = subprocess.Popen(
         [sys.executable, "-m", "virtual_drive.cli", "hub", "--port", "0",
-         "--bitrate", str(bitrate)],
+         "--bitrate", str(bitrate), *faults],
         stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
     )  # fmt: skip
     line = proc.stdout.readline()
@@ -115,12 +129,112 @@ def lean_block_upload(net: canopen.Network, node_id: int = 1) -> tuple[bytes, fl
             net.subscribe(tx, node_sdo.sdo.on_response)
 
 
+def loadavg() -> str:
+    """The 1-minute load average of this machine (text)."""
+    try:
+        return open("/proc/loadavg").read().split()[0]
+    except OSError:
+        return "?"
+
+
+def _pct(values: list[float], q: float) -> float:
+    v = sorted(values)
+    return v[min(len(v) - 1, int(q * len(v)))]
+
+
+def reliability(args: argparse.Namespace) -> int:
+    """``--tries`` uploads through a lossy, jittery hub; prints one line per try and a summary."""
+    from drive_link import Drive, DriveError
+    from drive_link.sdo_block import last_stats
+
+    faults = ["--drop", str(args.drop), "--delay-ms", str(args.delay_ms),
+              "--jitter-ms", str(args.jitter_ms), "--seed", str(args.seed)]  # fmt: skip
+    load0 = loadavg()
+    hub, port = start_hub(args.bitrate, faults)
+    drive = None
+    d = None
+    try:
+        drive = spawn_virtual_drive(port=port, timeout=60.0)
+        d = Drive.connect(host="127.0.0.1", port=port, node_id=1, heartbeat_ms=None)
+        d.trace.configure(["i_p", "i_p_ref", "speed", "v_L"], length=4096, trigger="immediate")
+        d.trace.arm()
+        d.trace.wait(60.0)
+        ref = d.sdo_trace.upload(0x2102, 0, name="trace_data")  # segmented: the reference
+        assert len(ref) == SIZE, len(ref)
+        node = None
+        if args.client == "canopen":
+            node = canopen.RemoteNode(1, load_od().canopen_od(1))
+            node.sdo.RESPONSE_TIMEOUT = 2.0
+            d._conn.network.add_node(node)
+        print(
+            f"{args.client}: {SIZE} bytes of trace_data, hub {args.bitrate / 1e6:g} Mbit/s, "
+            f"drop {args.drop:g}, delay {args.delay_ms:g} ± {args.jitter_ms:g} ms, "
+            f"load {load0}",
+            flush=True,
+        )
+        ok, rates, failures = 0, [], {}
+        restarts0 = d.sdo_trace.restarted
+        for k in range(args.tries):
+            t0 = time.perf_counter()
+            try:
+                if node is not None:
+                    with node.sdo.open(0x2102, 0, "rb", block_transfer=True) as f:
+                        data = f.read()
+                else:
+                    data = d.sdo_trace.upload_block(0x2102, 0, name="trace_data")
+                dt = time.perf_counter() - t0
+                if data != ref:
+                    raise AssertionError("WRONG DATA accepted")  # must never happen
+                ok += 1
+                rates.append(SIZE / dt / 1000)
+                note = "" if node is not None else f" {dict(last_stats)}"
+                print(f"try {k + 1}: ok {dt:.2f} s {SIZE / dt / 1000:.1f} kB/s{note}", flush=True)
+            except (DriveError, SdoError, AttributeError) as exc:
+                dt = time.perf_counter() - t0
+                reason = str(exc).splitlines()[0][:120]
+                failures[reason] = failures.get(reason, 0) + 1
+                print(f"try {k + 1}: FAILED after {dt:.2f} s: {reason}", flush=True)
+        restarts = d.sdo_trace.restarted - restarts0
+        rate = (
+            f"median {_pct(rates, 0.5):.1f} kB/s, p10 {_pct(rates, 0.1):.1f}, "
+            f"p90 {_pct(rates, 0.9):.1f}"
+            if rates
+            else "no upload completed"
+        )
+        print(
+            f"RESULT {args.client} drop={args.drop:g} jitter={args.delay_ms:g}±"
+            f"{args.jitter_ms:g}ms: {ok}/{args.tries} complete, {rate}, "
+            f"{restarts} restarts, load {load0} -> {loadavg()}"
+        )
+        for reason, n in failures.items():
+            print(f"  {n} x {reason}")
+        return 0 if ok == args.tries else 1
+    finally:
+        if d is not None:
+            d.close()
+        if drive is not None:
+            drive.stop()
+        hub.send_signal(signal.SIGTERM)
+        hub.wait(10)
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3, help="block uploads to time")
     ap.add_argument("--bitrate", type=int, default=1_000_000, help="emulated bit rate (bit/s)")
     ap.add_argument("--no-segmented", action="store_true", help="skip the slow segmented run")
+    ap.add_argument("--tries", type=int, default=0, help="reliability mode: uploads to try")
+    ap.add_argument("--drop", type=float, default=0.0, help="hub frame-loss probability 0..1")
+    ap.add_argument("--delay-ms", type=float, default=0.0, help="hub delivery delay, ms")
+    ap.add_argument("--jitter-ms", type=float, default=0.0, help="± jitter of that delay, ms")
+    ap.add_argument("--seed", type=int, default=1, help="seed of the hub's loss and jitter")
+    ap.add_argument(
+        "--client", choices=("drive_link", "canopen"), default="drive_link",
+        help="block upload client for --tries",
+    )  # fmt: skip
     args = ap.parse_args()
+    if args.tries:
+        return reliability(args)
 
     hub, port = start_hub(args.bitrate)
     drive = None
