@@ -80,11 +80,10 @@ def test_scan(bench):
 
 
 def test_nmt_start_and_402_enable(bench):
-    _cli_ok(bench, "nmt", "start")
-    _cli_ok(bench, "mode", "speed")
-    _cli_ok(bench, "set-speed", "0")
-    _cli_ok(bench, "enable")
     with bench.connect() as d:
+        _at_rest(d)  # setpoints 0 (whatever mode the drive is in)
+        _cli_ok(bench, "nmt", "start")
+        _cli_ok(bench, "enable")
         st = wait_until(lambda: d.nmt_state == "OPERATIONAL", 2.0 * bench.cond.slow)
         assert st, f"{_tag(bench)} heartbeats say {d.nmt_state}, expected OPERATIONAL"
         sw = d.statusword
