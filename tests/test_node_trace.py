@@ -72,11 +72,18 @@ def as_samples(data: bytes, n_channels: int) -> np.ndarray:
     return np.frombuffer(data, dtype="<f4").reshape(-1, n_channels)
 
 
+
+def wait_samples(bench, n: int) -> None:
+    """Wait until the drive's loop has run ``n`` more samples (e.g. a pre-trigger part), however
+    long a busy host keeps it from running (a fixed sleep assumed an idle machine)."""
+    s0 = bench.drive.runner.stats.samples
+    assert bench.wait(lambda: bench.drive.runner.stats.samples - s0 >= n, 10.0), "loop stalled"
+
 def test_step_capture_equals_the_core_record(bench):
     configure(bench, [REF_I_P, REF_I_P_REF], length=2000, pre=200, mode=2)
     bench.write("trace_config.command", 1)
     assert bench.read("trace_config.state") == 1
-    time.sleep(0.03)  # let the pre-trigger part fill (200 samples = 4 ms)
+    wait_samples(bench, 2 * 200)  # let the pre-trigger part fill (200 samples = 4 ms)
     bench.write("setpoints.i_p_ref", 20.0)
     assert bench.wait(lambda: bench.read("trace_config.state") == 3, 2.0)
     data = block_upload(bench)
@@ -100,9 +107,9 @@ def test_step_capture_equals_the_core_record(bench):
 def test_crossing_trigger_with_divider(bench):
     configure(bench, [REF_I_P], length=400, pre=100, divider=5, mode=1, level=17.5)
     bench.write("setpoints.i_p_ref", 15.0)
-    time.sleep(0.02)
+    wait_samples(bench, 1000)
     bench.write("trace_config.command", 1)
-    time.sleep(0.03)
+    wait_samples(bench, 2 * 100 * 5)  # pre-trigger: 100 samples at divider 5
     bench.write("setpoints.i_p_ref", 20.0)
     assert bench.wait(lambda: bench.read("trace_config.state") == 3, 2.0)
     trace = as_samples(block_upload(bench), 1)[:, 0]
@@ -170,7 +177,7 @@ def test_fault_trigger_captures_the_trip(bench):
     """Trigger mode 3: the trigger sample is the first sample at or after the trip instant."""
     configure(bench, [REF_I_P, REF_I_P_REF], length=500, pre=100, mode=3)
     bench.write("trace_config.command", 1)
-    time.sleep(0.03)
+    wait_samples(bench, 2 * 100)
     bench.write("sim_fault.inject", 2)  # DC-link overvoltage trip
     assert bench.wait(lambda: bench.read("statusword") & 0x4F == 0x08)
     assert bench.wait(lambda: bench.read("trace_config.state") == 3, 2.0)
