@@ -48,20 +48,25 @@ class DriveProcess:
         return "".join(self._stderr[-40:])
 
     def stop(self, timeout: float = 10.0) -> int:
-        """SIGTERM and wait; returns the exit status."""
+        """SIGTERM and wait (SIGKILL after ``timeout`` s); returns the exit status. Its
+        stderr is read to the end before this returns (:attr:`stderr_tail` is complete)."""
         if self.proc.poll() is None:
             self.proc.send_signal(signal.SIGTERM)
         try:
-            return self.proc.wait(timeout)
+            rc = self.proc.wait(timeout)
         except subprocess.TimeoutExpired:
             self.proc.kill()
-            return self.proc.wait(timeout)
+            rc = self.proc.wait(timeout)
+        self._reader.join(5.0)
+        return rc
 
     def kill(self) -> int:
         """SIGKILL (no clean-up at all) and wait."""
         if self.proc.poll() is None:
             self.proc.send_signal(signal.SIGKILL)
-        return self.proc.wait(10)
+        rc = self.proc.wait(10)
+        self._reader.join(5.0)
+        return rc
 
     def __enter__(self) -> DriveProcess:
         return self
@@ -80,12 +85,14 @@ def spawn_virtual_drive(
     node_id: int = 1,
     store: str | Path | None = None,
     speed: float = 1.0,
-    timeout: float = 20.0,
+    timeout: float = 60.0,
     env: dict | None = None,
 ) -> DriveProcess:
     """Start ``python -m virtual_drive run ...`` and wait for its ready line.
 
     :param port: socketcand port of the loopback hub (required for socketcand).
+    :param timeout: s to wait for the ready line; the interpreter start and imports took up
+        to 40 s on this 2-core machine at load average 20 (about 1 s idle).
     :raises RuntimeError: the child exited or stayed silent for ``timeout`` s (its stderr is
         in the message).
     """
