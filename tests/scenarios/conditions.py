@@ -200,7 +200,7 @@ class Bench:
     def _spawn(self) -> None:
         from virtual_drive.node.process import spawn_virtual_drive
 
-        timeout = 20.0 * self.cond.slow
+        timeout = max(60.0, 20.0 * self.cond.slow)
         if self.hub is not None:
             self.proc = spawn_virtual_drive(
                 port=self.hub.port, node_id=self.node_id, store=self.store, timeout=timeout
@@ -213,6 +213,7 @@ class Bench:
                 store=self.store,
                 timeout=timeout,
             )
+        apply_tpdo_event_timers(self)
 
     def restart(self) -> None:
         """Stop the drive process (SIGTERM) and start it again on the same store file."""
@@ -281,6 +282,26 @@ class Bench:
             timeout=timeout * self.cond.slow,
             stdin=subprocess.DEVNULL,
         )
+
+
+#: Environment variable with TPDO1..n event timers in ms, e.g. "100,50,50,100" (SocketCAN lane).
+TPDO_TIMERS_ENV = "BENCH_TPDO_EVENT_TIMERS_MS"
+
+
+def apply_tpdo_event_timers(b: Bench) -> None:
+    """Set the drive's TPDO event timers (0x1800.. sub 5) by SDO from
+    ``BENCH_TPDO_EVENT_TIMERS_MS`` when it is set. The SocketCAN lane sets it
+    (tests/uml/runner.py): User-Mode Linux moves about 800 frames/s, the default streams are
+    2,200 frames/s. No-op when unset."""
+    spec = os.environ.get(TPDO_TIMERS_ENV, "").strip()
+    if not spec:
+        return
+    from drive_link import Drive
+
+    kw = b.bus_kwargs()
+    with Drive.connect(node_id=b.node_id, heartbeat_ms=None, sdo_timeout=2.0, **kw) as d:
+        for k, ms in enumerate(spec.split(","), start=1):
+            d.write(f"tpdo{k}_communication.event_timer", int(ms))
 
 
 @contextlib.contextmanager
