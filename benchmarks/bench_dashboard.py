@@ -115,6 +115,24 @@ def shows_setpoint(messages: list[dict], target: float) -> bool:
     return False
 
 
+class _Sink:
+    data: tuple = ((), (), ())
+    content = ""
+    visible = False
+
+
+class _SimulatedViewer:
+    """Stands in for a browser's panel: plot handles that keep what is assigned."""
+
+    def __init__(self) -> None:
+        self.speed_plot, self.current_plot = _Sink(), _Sink()
+        self.controller_md = _Sink()
+        self.cid, self.token = -1, None
+
+    def __getattr__(self, name: str):  # show_status, show_legends ...: nothing to show
+        return lambda *a, **k: None
+
+
 def server_side_latency(hub_port: int, steps: int) -> list[float]:
     """In this process: setpoint command → the speed plot's data ends at the new setpoint (ms).
 
@@ -130,7 +148,7 @@ def server_side_latency(hub_port: int, steps: int) -> list[float]:
     cfg = BenchConfig(join_hub=hub_port, gui_port=0, api_port=free_port(), scene_3d=False)
     with TestClient(create_app(cfg)) as client:
         gui, bench = client.app.state.gui, client.app.state.bench
-        gui.server.get_clients = lambda: {0: None}  # one (simulated) viewer
+        gui.panels[-1] = _SimulatedViewer()  # one (simulated) viewer: plots are pushed
         bench.drive.enable(timeout=2.0)
         time.sleep(1.0)
         for k in range(steps):
@@ -138,7 +156,7 @@ def server_side_latency(hub_port: int, steps: int) -> list[float]:
             t0 = time.monotonic()
             bench.set_speed(target)
             while time.monotonic() - t0 < 1.0:
-                d = gui.speed_plot.data
+                d = gui.panels[-1].speed_plot.data
                 if len(d[2]) and abs(d[2][-1] - target) < 0.5:
                     break
                 time.sleep(0.0005)

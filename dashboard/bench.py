@@ -87,7 +87,8 @@ STATUS_FIELDS = (
     "supervision_rearmed_at",
 )
 SEQUENCE_SLACK_S = 5.0  #: a sequence step later than this (busy host) stops the sequence, s
-STATUS_PERIOD_S = 1.0  #: Drive.status() (a dozen SDO reads) at most this often
+STATUS_PERIOD_S = 2.0  #: Drive.status() (a dozen SDO reads) at most this often (s)
+STORE_PERIOD_S = 10.0  #: the parameter store's health (one SDO read) at most this often (s)
 
 #: EMCY error codes the drive sends (CiA 301 / CiA 402 meanings), for display.
 EMCY_TEXT = {
@@ -169,29 +170,55 @@ class Bench:
 
     # ---------------------------------------------------------------- state
     def _drive_reads(self) -> dict[str, Any]:
-        """The drive values of :meth:`state` that need SDO: read under the bench lock only (a
-        status read never crosses an action's SDO exchange); while a long action holds the
-        lock, the last values read are returned (``"cached": True``)."""
+        """The drive values of :meth:`state` that need SDO, read under the bench lock only (a
+        status read never crosses an action's SDO exchange) and one SDO at a time (a command
+        waits for at most one status read). While a long action holds the lock, the last
+        values read are returned (``"cached": True``)."""
         d = self.drive
+        cache = self._drive_cache
         if not self.lock.acquire(timeout=0.05):
-            return {**self._drive_cache, "cached": True}
+            return {**cache, "cached": True}
         try:
             vals: dict[str, Any] = {
                 "nmt_state": _safe(lambda: d.nmt_state),
                 "state": _safe(lambda: d.state),
                 "mode": _safe(lambda: d.mode),
             }
-            now = time.monotonic()
-            if now - self._status_t >= STATUS_PERIOD_S or "status" not in self._drive_cache:
-                self._status_t = now
-                st = _safe(lambda: dict(d.status()), {}) or {}
-                vals["status"] = {k: st.get(k) for k in STATUS_FIELDS}
-            else:
-                vals["status"] = self._drive_cache["status"]
         finally:
             self.lock.release()
+        vals["status"] = self._status_fields(cache.get("status"))
         self._drive_cache = vals
         return {**vals, "cached": False}
+
+    def _status_fields(self, old: dict[str, Any] | None) -> dict[str, Any]:
+        """STATUS_FIELDS from drive_link: bus health and restart supervision (no SDO) at every
+        call, the parameter store (one SDO read) every STORE_PERIOD_S; with an older
+        drive_link, Drive.status() as a whole every STATUS_PERIOD_S (under the lock)."""
+        d = self.drive
+        now = time.monotonic()
+        out = dict(old or dict.fromkeys(STATUS_FIELDS))
+        if hasattr(d, "bus_health") and hasattr(d, "supervisor"):
+            out.update(_safe(lambda: dict(d.bus_health()), {}) or {})
+            sup = _safe(lambda: dict(d.supervisor.status()), {}) or {}
+            for k in ("boots_seen", "supervision_rearmed_at"):
+                if k in sup:
+                    out[k] = sup[k]
+            if hasattr(d, "store_status") and now - self._status_t >= STORE_PERIOD_S:
+                if self.lock.acquire(timeout=0.05):
+                    try:
+                        self._status_t = now
+                        out["store_status"] = _safe(d.store_status)
+                    finally:
+                        self.lock.release()
+            return {k: out.get(k) for k in STATUS_FIELDS}
+        if now - self._status_t >= STATUS_PERIOD_S and self.lock.acquire(timeout=0.05):
+            try:
+                self._status_t = now
+                st = _safe(lambda: dict(d.status()), {}) or {}
+                out.update({k: st.get(k) for k in STATUS_FIELDS if k in st})
+            finally:
+                self.lock.release()
+        return {k: out.get(k) for k in STATUS_FIELDS}
 
     def state(self) -> dict[str, Any]:
         """Connection and drive state for display (values as the drive reports them).

@@ -177,6 +177,42 @@ def _same(a: Any, b: Any) -> bool:
     return a == b
 
 
+def _radius(r: float) -> str:
+    """A pole radius with enough digits to tell it from 1 (0.99995, not 1.0000)."""
+    if not math.isfinite(r):
+        return "–"
+    if abs(1.0 - r) < 1e-3:
+        return f"{r:.6f}".rstrip("0") if r != 1.0 else "1 (on the unit circle)"
+    return f"{r:.4f}"
+
+
+#: gain-set entries in display units: name → (label, factor, unit, format)
+DISPLAY = {
+    "L_c": ("L_c", 1e6, "µH", ".4g"),
+    "R_c": ("R_c", 1e3, "mΩ", ".4g"),
+    "k_p": ("PI k_p", 1.0, "V/A", ".4g"),
+    "k_i": ("PI k_i", 1.0, "V/A", ".4g"),
+    "speed_k_p": ("IP k_p", 1.0, "A/rpm", ".4g"),
+    "speed_k_i": ("IP k_i", 1.0, "1/sample", ".5g"),
+    "motor_L": ("motor L", 1e6, "µH", ".4g"),
+    "motor_R": ("motor R", 1e3, "mΩ", ".4g"),
+    "L_c_over_L": ("L_c/L", 1.0, "", ".4f"),
+    "T_BT": ("T_BT", 1e6, "µs", ".4g"),
+    "T_DD": ("T_DD", 1e6, "µs", ".4g"),
+    "T_SD": ("T_SD", 1e6, "µs", ".4g"),
+    "V_G": ("V_G", 1.0, "V", ".4g"),
+    "speed_current_limit": ("speed current limit", 1.0, "A", ".4g"),
+}
+
+
+def display(name: str, value: Any) -> str:
+    """A gain-set value in the OD's display unit (``L_c 14.8 µH``)."""
+    _label, factor, unit, fmt = DISPLAY.get(name, (name, 1.0, "", ".6g"))
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return f"{format(float(value) * factor, fmt)} {unit}".strip()
+    return str(value)
+
+
 def _db(x: float) -> str:
     return "∞" if not math.isfinite(x) else f"{x:.2f}"
 
@@ -186,12 +222,13 @@ def preview_markdown(p: dict[str, Any]) -> str:
     c, s = p["current"], p["speed"]
 
     def line(name: str, m: dict[str, Any]) -> str:
-        ok = "**stable**" if m["stable"] else "**UNSTABLE**"
+        if not m["stable"]:  # margins and ‖S‖∞ of an unstable loop mean nothing
+            return f"{name}: **UNSTABLE** · max|pole| {_radius(m['max_pole_radius'])}"
         pm = m["phase_margin_deg"]
         return (
-            f"{name}: {ok} · GM {_db(m['gain_margin_dB'])} dB · "
+            f"{name}: **stable** · GM {_db(m['gain_margin_dB'])} dB · "
             f"PM {'–' if not math.isfinite(pm) else f'{pm:.1f}'}° · "
-            f"‖S‖∞ {m['S_inf']:.3f} · max|pole| {m['max_pole_radius']:.4f}"
+            f"‖S‖∞ {m['S_inf']:.3f} · max|pole| {_radius(m['max_pole_radius'])}"
         )
 
     return (
@@ -222,6 +259,8 @@ def diff_markdown(d: dict[str, Any]) -> str:
     if not d["differs"]:
         return "**Stored:** live values equal the stored ones"
     rows = ", ".join(
-        f"{k}: live {d['live'][k]!r} / stored {d['stored'][k]!r}" for k in d["differs"]
+        f"{DISPLAY.get(k, (k,))[0]}: live {display(k, d['live'][k])} / "
+        f"stored {display(k, d['stored'][k])}"
+        for k in d["differs"]
     )
     return f"**Live ≠ stored:** {rows}"

@@ -1,0 +1,84 @@
+"""Pure parts of the bench GUI: strict parsing of typed numbers, plot decimation, freshness text
+and display units. Truths: the typed text itself (no value may differ from what was typed),
+numpy's own min/max of the full series, and the SI prefixes (1 µH = 1e-6 H, 1 mΩ = 1e-3 Ω).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from dashboard.fields import FieldError, NumberSpec, show
+from dashboard.gui_panel import parse_sequence
+from dashboard.live_plot import decimate, freshness_text
+from dashboard.tuning import display, preview_markdown
+
+RATIO = NumberSpec("L_c / L", 0.0, 3.0, lo_open=True)
+LC_UH = NumberSpec("L_c (µH)", 0.0, 2000.0, lo_open=True)
+
+
+@pytest.mark.parametrize("text", ["-0.5", "−0.5", "0", "3.5", "abc", "", "nan", "inf", "1e400",
+                                  "1_0", "1,5", "0x10", "1 2", "--1"])
+def test_refused_never_changed(text):
+    with pytest.raises(FieldError) as exc:
+        RATIO.parse(text)
+    assert "L_c / L" in str(exc.value)
+
+
+def test_negative_inductance_is_refused_not_moved():
+    with pytest.raises(FieldError, match="-5 is outside"):
+        LC_UH.parse("-5")
+
+
+@pytest.mark.parametrize("text,value", [("0.5", 0.5), (" 1.5 ", 1.5), ("+2", 2.0), ("1e-3", 1e-3),
+                                        (".25", 0.25), ("3", 3.0)])
+def test_accepted_exactly_as_typed(text, value):
+    assert RATIO.parse(text) == value
+
+
+def test_integer_fields_and_show():
+    n = NumberSpec("Length (samples)", 2, 8192, integer=True)
+    assert n.parse("1000") == 1000
+    with pytest.raises(FieldError):
+        n.parse("10.5")
+    assert show(2.9994e-5) == "2.9994e-05" and show(14.8) == "14.8" and show(-0.5) == "-0.5"
+    assert float(show(0.9999785)) == 0.9999785
+
+
+def test_sequence_is_strict():
+    assert parse_sequence("0:1000, 3:1500") == [(0.0, 1000.0), (3.0, 1500.0)]
+    for bad in ("0:1000, 3", "3:10, 1:20", "0:5000", "x:1", ""):
+        with pytest.raises(FieldError):
+            parse_sequence(bad)
+
+
+def test_decimate_keeps_extremes_and_newest():
+    rng = np.random.default_rng(1)
+    t = np.linspace(0.0, 4.0, 4000)
+    a = np.cumsum(rng.normal(size=t.size))
+    b = np.where(t > 3.99, 500.0, 0.0)  # a setpoint step in the very last samples
+    td, (ad, bd) = decimate(t, [a, b], buckets=100)
+    assert len(td) <= 3 * 100 + 2 + 2 * 100  # at most min, max, last per bucket (+ ends)
+    assert ad.max() == a.max() and ad.min() == a.min()
+    assert td[-1] == t[-1] and bd[-1] == 500.0 and ad[-1] == a[-1]
+    assert np.all(np.diff(td) > 0)
+
+
+def test_freshness_text():
+    assert freshness_text(0.04) == (False, "live · data 40 ms old")
+    stale, txt = freshness_text(3.2)
+    assert stale and "3.2 s" in txt
+    assert freshness_text(None)[0] is True
+    assert freshness_text(0.01, push_age_s=2.0)[0] is True
+
+
+def test_display_units_and_unstable_preview():
+    assert display("L_c", 14.8e-6) == "14.8 µH"
+    assert display("R_c", 6.2e-3) == "6.2 mΩ"
+    m = {"stable": False, "gain_margin_dB": 3.0, "phase_margin_deg": 20.0, "S_inf": 4.0,
+         "max_pole_radius": 1.2}
+    s = {**m, "stable": True, "max_pole_radius": 0.99995, "a": 0.99, "b": 1e-4}
+    md = preview_markdown({"current": {**m, "controller": "pi", "L_c_over_L": 1.9}, "speed": s})
+    first, second = md.split("  \n")[1:3]
+    assert "UNSTABLE" in first and "‖S‖∞" not in first  # no margins for an unstable loop
+    assert "0.99995" in second
