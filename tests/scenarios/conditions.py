@@ -100,6 +100,17 @@ _BUSY_PY = (
 )
 
 
+# Runs a command in this (new) session and ends the whole session when its parent is gone, so
+# a SIGKILLed test run never leaves stress-ng behind.
+_WATCH = (
+    "import os, signal, subprocess, sys, time\n"
+    "p = subprocess.Popen(sys.argv[2:])\n"
+    "while p.poll() is None and os.getppid() == int(sys.argv[1]):\n"
+    "    time.sleep(0.5)\n"
+    "os.killpg(0, signal.SIGTERM)\n"
+)
+
+
 class CpuHog:
     """Keeps the host CPU busy: ``per_core`` CPU-bound processes per core (``stress-ng --cpu``
     if installed, else busy Python processes). Each process is in its own session and stops by
@@ -116,7 +127,8 @@ class CpuHog:
         stress = shutil.which("stress-ng")
         if stress:
             self.tool = f"stress-ng --cpu {self.n}"
-            cmds = [[stress, "--cpu", str(self.n), "--timeout", f"{int(self.guard_s)}s", "-q"]]
+            cmd = [stress, "--cpu", str(self.n), "--timeout", f"{int(self.guard_s)}s", "-q"]
+            cmds = [[sys.executable, "-c", _WATCH, str(os.getpid()), *cmd]]
         else:
             self.tool = f"{self.n} busy Python processes"
             code = _BUSY_PY.format(guard=self.guard_s)
