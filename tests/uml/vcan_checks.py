@@ -14,8 +14,9 @@ block upload.
 TPDO rates: UML spends about 38 µs per system call, so the whole kernel moves about 800 frames/s;
 the drive's default streams (2,200 frames/s) would starve every process in it. Before a drive
 goes OPERATIONAL here, its event timers (0x1800..0x1803 sub 5) are set by SDO to
-:data:`LANE_EVENT_TIMERS_MS` (60 frames/s in all). Rates are not asserted: UML says nothing about
-speed on a real machine.
+:data:`LANE_EVENT_TIMERS_MS` (``BENCH_TPDO_EVENT_TIMERS_MS`` from tests/uml/runner.py, 60
+frames/s in all; the scenario bench applies the same). Rates are not asserted: UML says nothing
+about speed on a real machine.
 
 Truths: the frames an independent raw socket receives, the kernel's ENOBUFS (errno 105), the
 heartbeat byte on the bus (CiA 301), CiA 402 statusword bits, linux/can/error.h classes.
@@ -42,7 +43,12 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 README = ROOT / "README.md"
 #: TPDO1..4 event timers (ms) used inside UML (defaults 10, 1, 1, 10 ms).
-LANE_EVENT_TIMERS_MS = {1: 100, 2: 50, 3: 50, 4: 100}
+LANE_EVENT_TIMERS_MS = {
+    k: int(ms)
+    for k, ms in enumerate(
+        os.environ.get("BENCH_TPDO_EVENT_TIMERS_MS", "100,50,50,100").split(","), start=1
+    )
+}
 #: Start-up of a Python program inside UML on a busy host takes 5-15 s.
 SLOW = 60.0
 
