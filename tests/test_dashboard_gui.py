@@ -85,3 +85,35 @@ def test_viser_sends_go_through_one_lock(app_client):
         gui.server.gui.add_markdown("x")  # re-entrant on the same thread
         time.sleep(0.3)
     assert gui.frames_sent >= before
+
+
+class _FakeClient:
+    """A browser's handle stand-in: the panel's GUI goes to the server-wide GUI."""
+
+    def __init__(self, gui, client_id: int) -> None:
+        self.gui, self.client_id = gui, client_id
+
+
+def test_with_a_token_the_gui_must_sign_in_before_it_changes_anything(app_client):
+    from dashboard.gui_panel import Panel
+
+    gui = app_client.app.state.gui
+    bench = app_client.app.state.bench
+    cfg = gui.config
+    cfg.token = "secret-token-1234"  # as with --allow-remote --token
+    try:
+        p = Panel(gui, _FakeClient(gui.server.gui, 990))
+        assert not p._control(p.control_md)
+        assert "access token" in p.control_md.content
+        assert bench.lease.holder is None or not p.holds_control()
+        p.token_in.value = "wrong-token-0000"
+        p._sign_in()
+        assert not p.authenticated and not p._control(p.control_md)
+        p.token_in.value = "secret-token-1234"
+        p._sign_in()
+        assert p.authenticated and p.token_in.value == ""  # the token is not kept on the page
+        if bench.lease.holder is not None:
+            p._take_control(None)
+        assert p._control(p.control_md) and p.holds_control()
+    finally:
+        cfg.token = None

@@ -133,3 +133,19 @@ def test_cancelled_identification_puts_the_drive_back(client, hdr):
     assert state0 != "OPERATION ENABLED"
     assert d.mode == mode0 and d.state != "OPERATION ENABLED"  # as found: speed, power off
     assert float(d.read("setpoints.i_p_ref")) == pytest.approx(i0, abs=1e-6)  # i_p* as found
+
+
+def test_action_past_its_deadline_restores_and_frees_the_bench(client, hdr):
+    from dashboard.actions import ActionTimeoutError
+
+    bench = client.app.state.bench
+    d = bench.drive
+    client.put("/api/mode", json={"mode": "speed"}, headers=hdr)
+    mode0 = d.mode
+    with pytest.raises(ActionTimeoutError, match="put back"):
+        with bench.long_action("test action", deadline_s=0.3) as act:
+            bench.set_current(12.0)  # switches to current mode, like a step test
+            act.sleep(5.0)  # a stuck action: the deadline ends it
+    assert d.mode == mode0
+    assert bench.action is None and bench.busy is None
+    assert client.get("/api/state").json()["action"] is None
