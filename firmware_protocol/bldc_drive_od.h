@@ -1825,6 +1825,54 @@
 #define OD_STORE_STATUS_DAMAGED                                  2u
 #define OD_STORE_STATUS_UNREADABLE                               3u
 
+/* ---- 0x2070 tpdo_missed_events ---- */
+#define OD_TPDO_MISSED_EVENTS_INDEX                              0x2070u
+/* 0x2070:00 tpdo_missed_events.highest_sub_index UNSIGNED8 const */
+#define OD_TPDO_MISSED_EVENTS__HIGHEST_SUB_INDEX_INDEX           0x2070u
+#define OD_TPDO_MISSED_EVENTS__HIGHEST_SUB_INDEX_SUB             0x00u
+#define OD_TPDO_MISSED_EVENTS__HIGHEST_SUB_INDEX_TYPE            OD_TYPE_U8
+#define OD_TPDO_MISSED_EVENTS__HIGHEST_SUB_INDEX_CTYPE           uint16_t
+#define OD_TPDO_MISSED_EVENTS__HIGHEST_SUB_INDEX_ACCESS          OD_ACCESS_CONST
+#define OD_TPDO_MISSED_EVENTS__HIGHEST_SUB_INDEX_PDO             0u
+#define OD_TPDO_MISSED_EVENTS__HIGHEST_SUB_INDEX_DEFAULT         4u
+#define OD_TPDO_MISSED_EVENTS__HIGHEST_SUB_INDEX_REF             0x20700008UL
+/* 0x2070:01 tpdo_missed_events.tpdo1 UNSIGNED32 ro [1] - event-timer periods of TPDO1 that passed without a frame (the drive was late or stalled; no burst is sent to catch up), since power-on or reset communication, wraps at 2^32 */
+#define OD_TPDO_MISSED_EVENTS__TPDO1_INDEX                       0x2070u
+#define OD_TPDO_MISSED_EVENTS__TPDO1_SUB                         0x01u
+#define OD_TPDO_MISSED_EVENTS__TPDO1_TYPE                        OD_TYPE_U32
+#define OD_TPDO_MISSED_EVENTS__TPDO1_CTYPE                       uint32_t
+#define OD_TPDO_MISSED_EVENTS__TPDO1_ACCESS                      OD_ACCESS_RO
+#define OD_TPDO_MISSED_EVENTS__TPDO1_PDO                         0u
+#define OD_TPDO_MISSED_EVENTS__TPDO1_DEFAULT                     0x00000000UL /* 1 */
+#define OD_TPDO_MISSED_EVENTS__TPDO1_REF                         0x20700120UL
+/* 0x2070:02 tpdo_missed_events.tpdo2 UNSIGNED32 ro [1] - event-timer periods of TPDO2 that passed without a frame (the drive was late or stalled; no burst is sent to catch up), since power-on or reset communication, wraps at 2^32 */
+#define OD_TPDO_MISSED_EVENTS__TPDO2_INDEX                       0x2070u
+#define OD_TPDO_MISSED_EVENTS__TPDO2_SUB                         0x02u
+#define OD_TPDO_MISSED_EVENTS__TPDO2_TYPE                        OD_TYPE_U32
+#define OD_TPDO_MISSED_EVENTS__TPDO2_CTYPE                       uint32_t
+#define OD_TPDO_MISSED_EVENTS__TPDO2_ACCESS                      OD_ACCESS_RO
+#define OD_TPDO_MISSED_EVENTS__TPDO2_PDO                         0u
+#define OD_TPDO_MISSED_EVENTS__TPDO2_DEFAULT                     0x00000000UL /* 1 */
+#define OD_TPDO_MISSED_EVENTS__TPDO2_REF                         0x20700220UL
+/* 0x2070:03 tpdo_missed_events.tpdo3 UNSIGNED32 ro [1] - event-timer periods of TPDO3 that passed without a frame (the drive was late or stalled; no burst is sent to catch up), since power-on or reset communication, wraps at 2^32 */
+#define OD_TPDO_MISSED_EVENTS__TPDO3_INDEX                       0x2070u
+#define OD_TPDO_MISSED_EVENTS__TPDO3_SUB                         0x03u
+#define OD_TPDO_MISSED_EVENTS__TPDO3_TYPE                        OD_TYPE_U32
+#define OD_TPDO_MISSED_EVENTS__TPDO3_CTYPE                       uint32_t
+#define OD_TPDO_MISSED_EVENTS__TPDO3_ACCESS                      OD_ACCESS_RO
+#define OD_TPDO_MISSED_EVENTS__TPDO3_PDO                         0u
+#define OD_TPDO_MISSED_EVENTS__TPDO3_DEFAULT                     0x00000000UL /* 1 */
+#define OD_TPDO_MISSED_EVENTS__TPDO3_REF                         0x20700320UL
+/* 0x2070:04 tpdo_missed_events.tpdo4 UNSIGNED32 ro [1] - event-timer periods of TPDO4 that passed without a frame (the drive was late or stalled; no burst is sent to catch up), since power-on or reset communication, wraps at 2^32 */
+#define OD_TPDO_MISSED_EVENTS__TPDO4_INDEX                       0x2070u
+#define OD_TPDO_MISSED_EVENTS__TPDO4_SUB                         0x04u
+#define OD_TPDO_MISSED_EVENTS__TPDO4_TYPE                        OD_TYPE_U32
+#define OD_TPDO_MISSED_EVENTS__TPDO4_CTYPE                       uint32_t
+#define OD_TPDO_MISSED_EVENTS__TPDO4_ACCESS                      OD_ACCESS_RO
+#define OD_TPDO_MISSED_EVENTS__TPDO4_PDO                         0u
+#define OD_TPDO_MISSED_EVENTS__TPDO4_DEFAULT                     0x00000000UL /* 1 */
+#define OD_TPDO_MISSED_EVENTS__TPDO4_REF                         0x20700420UL
+
 /* ---- 0x20F0 gain_set ---- */
 #define OD_GAIN_SET_INDEX                                        0x20F0u
 /* 0x20F0:00 gain_set.highest_sub_index UNSIGNED8 const */

@@ -308,6 +308,7 @@ class VirtualDrive:
         self._started = True
         self.network.notifier = can.Notifier(self.bus, self.network.listeners, 0.2)
         self.nmt.boot()
+        self.pdo.start()
         self.runner.start()
         logger.info(
             "virtual drive node %d up (speed x%g, store %s)",
@@ -323,6 +324,7 @@ class VirtualDrive:
             return
         self._started = False
         self.runner.stop()
+        self.pdo.stop()
         if self.network.notifier is not None:
             self.network.notifier.stop(2.0)
             self.network.notifier = None
@@ -473,6 +475,7 @@ class VirtualDrive:
             if kept:
                 self.node.data_store[0x1016] = kept
         self._pcache.clear()
+        self.pdo.reset_counters()
         self._configure_communication()
 
     def _reset_application(self) -> bool:
@@ -554,6 +557,10 @@ class VirtualDrive:
         g: dict[tuple[int, int], Callable[[], Any]] = {
             (0x1001, 0): lambda: self.emcy.error_register,
             (0x2060, 0): lambda: int(self.store_status),
+            (0x2070, 1): lambda: self.pdo.missed[0],
+            (0x2070, 2): lambda: self.pdo.missed[1],
+            (0x2070, 3): lambda: self.pdo.missed[2],
+            (0x2070, 4): lambda: self.pdo.missed[3],
             (0x1003, 0): lambda: len(self.emcy.history),
             (0x603F, 0): lambda: self.emcy.last_code,
             (0x6041, 0): self.statusword,
@@ -1062,7 +1069,6 @@ class VirtualDrive:
             self._finish_deferred_reset()
         self.hb_consumer.tick(now)
         self.hb_producer.tick(now)
-        self.pdo.tick(now)
 
 
 def _ramp_towards(x: float, target: float, accel: float, decel: float, dt: float) -> float:

@@ -10,13 +10,18 @@ canopen's LocalNode keeps PDOs apart from its OD; this engine reads the communic
   abort code). Extra bytes beyond the mapping are ignored. The next RPDO processed in full
   clears both errors (error-reset EMCY when none is left);
 - TPDO: encodes the mapped objects' live values and sends them on the event timer (transmission
-  type 0xFE/0xFF, sub 5 in ms) or every n-th SYNC (types 1–240), respecting the inhibit time
-  (sub 3, 100 µs units);
+  type 0xFE/0xFF, sub 5 in ms) or every n-th SYNC (types 1–240). Event-driven TPDOs run on
+  their own timer thread that sleeps until the exact due time (not on the 1 ms pacing tick), so
+  an inhibit time (sub 3, 100 µs units) of 2 ms gives 500 Hz, not the next tick: a frame is
+  never sent before ``last transmission + inhibit`` nor before its event-timer grid point. A
+  frame that is late by whole event periods is sent once (no burst); the periods passed
+  without a frame are counted in 0x2070 tpdo_missed_events (frames + missed = elapsed/period);
 - only in NMT OPERATIONAL.
 
 Configuration writes are checked as CANopenNode does it (CiA 301 rules): the COB-ID follows
 :func:`firmware_protocol.cob_id.check_cob_id` (no restricted CAN-ID, no 29-bit frame, no new
 CAN-ID while the PDO is valid: 0x06090030); transmission types 241–253 are refused (0x06090030); a
+inhibit time (sub 3) cannot change while the PDO is valid (CiA 301 §7.5.2.35/37: 0x06090030); a
 mapping entry can only be written with sub0 = 0 and the PDO invalid (0x06010000); sub0 checks that
 each mapped object exists (0x06020000 / 0x06090011), may be mapped (0x06040041) and that the total
 fits 64 bits (0x06040042). Mapping and COB-IDs may be changed in PRE-OPERATIONAL only
@@ -27,6 +32,7 @@ from __future__ import annotations
 
 import logging
 import struct
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -83,7 +89,7 @@ class _Tpdo:
     inhibit_s: float
     pack: Callable[..., bytes]
     getters: list[Callable[[], float | int]]
-    next_due: float = 0.0
+    next_due: float = 0.0  # monotonic time of the next transmission (event-driven types)
     last_sent: float = -1e9
     sync_count: int = 0
 
@@ -132,6 +138,10 @@ class PdoEngine:
         self._rx_error = False
         self.tpdos: list[_Tpdo] = []
         self.rpdos: dict[int, _Rpdo] = {}
+        self.missed = [0] * N_TPDO  #: 0x2070: event periods without a frame, per TPDO
+        self._wake = threading.Event()
+        self._stopping = threading.Event()
+        self._thread: threading.Thread | None = None
         self.sent = 0
         self.dropped_rx = 0  # RPDOs shorter than their mapping
         self.refused_rx = 0  # mapped values the write checks refused
@@ -194,6 +204,7 @@ class PdoEngine:
                 )
             )
         self.tpdos = tpdos
+        self._wake.set()  # the timer thread recomputes its next wake-up
 
     def _getter(self, index: int, sub: int, obj) -> Callable[[], float | int]:
         fast = self._fast_getter(index, sub)
@@ -221,6 +232,8 @@ class PdoEngine:
                     raise SdoAbortedError(exc.abort_code) from exc
             elif sub == 2 and 241 <= value <= 253:
                 raise SdoAbortedError(ABORT_INVALID_VALUE)
+            elif sub == 3 and value != self._u(index, 3) and not self._u(index, 1) & PDO_INVALID:
+                raise SdoAbortedError(ABORT_INVALID_VALUE)  # inhibit time of a valid PDO
             return
         # mapping objects
         if self._nmt_state() == 0x05:
@@ -285,20 +298,63 @@ class PdoEngine:
             self._clear(RPDO_LENGTH)
             self._clear(RPDO_VALUE)
 
-    def tick(self, now: float) -> None:
-        """Send the TPDOs whose event timer expired (call every loop period)."""
-        if not self._allowed():
+    # -- event timer thread ---------------------------------------------------------------
+    def start(self) -> None:
+        """Start the event-timer thread (sleeps until the earliest due TPDO)."""
+        if self._thread is not None:
             return
+        self._stopping.clear()
+        self._thread = threading.Thread(target=self._timer_loop, name="tpdo-timer", daemon=True)
+        self._thread.start()
+
+    def stop(self) -> None:
+        thread, self._thread = self._thread, None
+        if thread is None:
+            return
+        self._stopping.set()
+        self._wake.set()
+        thread.join(2.0)
+
+    def reset_counters(self) -> None:
+        """0x2070 back to 0 (reset communication)."""
+        self.missed = [0] * N_TPDO
+
+    def _timer_loop(self) -> None:
+        while not self._stopping.is_set():
+            try:
+                delay = self.tick(time.monotonic())
+            except Exception:  # never let the timer die: log and go on
+                logger.exception("TPDO timer")
+                delay = 0.01
+            if self._wake.wait(delay):
+                self._wake.clear()
+
+    def tick(self, now: float) -> float:
+        """Send the event-driven TPDOs due at ``now``; return the seconds until the next one.
+
+        A TPDO is due at its event-timer grid point, but never before its last transmission
+        plus the inhibit time (CiA 301: minimum spacing). Lateness by whole event periods is
+        counted in :attr:`missed` and the grid is kept (one frame, no burst).
+        """
+        idle = 0.05
+        if not self._allowed():
+            return idle
+        earliest = now + idle
         for t in self.tpdos:
             if t.event_s <= 0 or t.trans_type < 0xFE:
                 continue
-            # Due within half a loop period counts as due: the loop wakes with jitter around
-            # its 1 ms grid, and a 1 ms timer must not lose a frame to a tick a hair early.
-            if now >= t.next_due - 0.5e-3 and now - t.last_sent >= t.inhibit_s:
+            if now >= t.next_due:
+                periods = int((now - t.next_due) // t.event_s)
+                if periods:
+                    self.missed[t.number - 1] = (self.missed[t.number - 1] + periods) & 0xFFFFFFFF
                 self._send_tpdo(t, now)
-                t.next_due += t.event_s
-                if t.next_due < now - 5 * t.event_s:  # stalled: resynchronise, no burst
-                    t.next_due = now + t.event_s
+                grid = t.next_due + (periods + 1) * t.event_s
+                # the inhibit time counts from the end of this send: on a busy host the send
+                # itself may be delayed, and the next frame must still be inhibit_s later
+                done = time.monotonic() if t.inhibit_s > 0 else now
+                t.next_due = max(grid, done + t.inhibit_s)
+            earliest = min(earliest, t.next_due)
+        return max(0.0, earliest - time.monotonic())
 
     def on_sync(self, can_id: int, data: bytes, timestamp: float) -> None:
         """SYNC (0x080): synchronous TPDOs of type 1–240 go out every n-th SYNC."""
