@@ -22,11 +22,12 @@ re-arm user commands raise :class:`SupervisionError` until :meth:`Supervisor.rea
 
 from __future__ import annotations
 
+import contextlib
 import datetime as _dt
 import struct
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -105,21 +106,38 @@ class SupervisedSdoChannel(SdoChannel):
 
     supervisor: Supervisor | None = None
 
-    def upload(self, index: int, subindex: int, name: str = "") -> bytes:
-        if self.supervisor is not None:
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self._held = threading.local()  # depth > 0 while this thread holds it via patience()
+
+    def _gate(self) -> None:
+        # a thread already holding the channel lock (patience) must not wait: the re-arm
+        # needs that lock too
+        if self.supervisor is not None and not getattr(self._held, "depth", 0):
             self.supervisor.wait_ready()
+
+    @contextlib.contextmanager
+    def patience(self, timeout: float) -> Iterator[None]:
+        self._gate()
+        with super().patience(timeout):
+            self._held.depth = getattr(self._held, "depth", 0) + 1
+            try:
+                yield
+            finally:
+                self._held.depth -= 1
+
+    def upload(self, index: int, subindex: int, name: str = "") -> bytes:
+        self._gate()
         return super().upload(index, subindex, name)
 
     def download(self, index: int, subindex: int, data: bytes, name: str = "") -> None:
-        if self.supervisor is not None:
-            self.supervisor.wait_ready()
+        self._gate()
         super().download(index, subindex, data, name)
         if self.supervisor is not None:
             self.supervisor.record(index, subindex, bytes(data))
 
     def upload_block(self, index: int, subindex: int, name: str = "", progress=None) -> bytes:
-        if self.supervisor is not None:
-            self.supervisor.wait_ready()
+        self._gate()
         return super().upload_block(index, subindex, name, progress)
 
 

@@ -307,3 +307,17 @@ def test_pdo_settings_the_session_changed_come_back(rig):
     assert int(d.read("tpdo1_communication.event_timer")) == 20
     assert int(d.read("consumer_heartbeat_time.consumer_1")) == _consumer_value()
     assert not d.supervisor.last_report.failed
+
+
+def test_a_restart_during_a_store_does_not_deadlock(rig):
+    """store() holds the SDO channel (patience) while the re-arm needs it: the store goes on,
+    the re-arm follows, nothing waits for a timeout."""
+    d = rig.drive
+    d.configure_heartbeat_consumer(CONSUMER_MS)
+    with d.sdo.patience(1.0):
+        d.supervisor._on_heartbeat(0x700 + NODE, bytearray(b"\x00"), 0.0)  # boot-up arrives
+        t0 = time.monotonic()
+        d.read("statusword")  # inside patience: goes out at once
+        assert time.monotonic() - t0 < 2.0
+    d.supervisor.wait_ready(timeout=10.0)
+    assert d.supervisor.last_report is not None and not d.supervisor.last_report.failed
