@@ -645,11 +645,26 @@ CONFIG_ONLY = (
 )
 
 
+def _config_only_names(d: Drive) -> list[str]:
+    """Objects the EDS marks ``ConfigOnly=1`` (simulation objects 0x5000–0x5FFF left out: the
+    DSP has none), else the motor parameters."""
+    marked = [
+        o.name
+        for o in d.table
+        if getattr(o.entry, "config_only", False)
+        and not 0x5000 <= o.index <= 0x5FFF
+        and o.writable
+        and o.fmt
+    ]
+    return marked or [n for n in CONFIG_ONLY if n in d.table]
+
+
 def item_config_only(d: Drive, opts: dict) -> str:
-    """CiA 402 device state rule (abort 0x08000022): motor parameters are refused while
-    OPERATION ENABLED with nothing changed, and accepted again once the power stage is off."""
-    names = [n for n in CONFIG_ONLY if n in d.table]
-    _expect(bool(names), "no motor parameters in the object dictionary")
+    """CiA 402 device state rule (abort 0x08000022): configuration objects (EDS ConfigOnly=1:
+    motor parameters, protection thresholds, rated current/torque) are refused while OPERATION
+    ENABLED with nothing changed, and accepted again once the power stage is off."""
+    names = _config_only_names(d)
+    _expect(bool(names), "no configuration-only objects in the object dictionary")
     orig = {n: d.read(n) for n in names}
     changed = {}
     for n in names:
@@ -683,7 +698,10 @@ def item_config_only(d: Drive, opts: dict) -> str:
                     _raw_write(d, n, orig[n])
             except DriveError:
                 pass
-    return f"{len(names)} motor parameters refused (0x08000022) while enabled, accepted at rest"
+    return (
+        f"{len(names)} configuration objects refused (0x08000022) while enabled, accepted at "
+        f"rest: {', '.join(names)}"
+    )
 
 
 def item_store_status(d: Drive, opts: dict) -> str:
