@@ -140,3 +140,34 @@ def test_reset_communication_at_rest_restores_stored_values(tmp_path):
         assert b.read("consumer_heartbeat_time.consumer_1") == stored
     finally:
         b.close()
+
+
+def test_canopen_basenode402_nmt_stop_quick_stops(bench):
+    """The same through canopen's own CiA 402 master (BaseNode402: PDO-based state walk)."""
+    import can
+    import canopen
+    from canopen.profiles.p402 import BaseNode402
+
+    bench.write("quick_stop_deceleration", 20000)
+    bus = can.Bus(interface="virtual", channel=bench.channel)
+    net = canopen.Network(bus)
+    net.connect()
+    try:
+        node = BaseNode402(1, bench.view.canopen_od(1))
+        net.add_node(node)
+        node.sdo.RESPONSE_TIMEOUT = 2.0
+        node.nmt.wait_for_heartbeat(2.0)
+        node.setup_402_state_machine()
+        node.nmt.state = "OPERATIONAL"
+        node.op_mode = "PROFILED TORQUE"
+        node.sdo["target_torque"].raw = 500  # 50 A
+        node.state = "OPERATION ENABLED"
+        assert bench.wait(lambda: node.sdo["measurements"]["speed"].raw > 400, 15.0)
+        node.nmt.state = "STOPPED"
+        time.sleep(COAST_AFTER_S)
+        node.nmt.state = "PRE-OPERATIONAL"
+        assert bench.wait(lambda: bench.drive.nmt.state == 0x7F)
+        assert abs(node.sdo["measurements"]["speed"].raw) < 15.0
+        assert state_of(node.sdo["statusword"].raw) == "SWITCH ON DISABLED"
+    finally:
+        net.disconnect()
