@@ -106,3 +106,12 @@ def dismiss_notifications(page: Any) -> None:
         if not page.evaluate(f"() => document.querySelectorAll('{sel}').length"):
             return
         time.sleep(0.3)  # the close animation
+
+
+def text_input(page: Any, label: str) -> Any:
+    """The input of a viser text field by its label. viser 1.1's text input carries no id for
+    its label's ``for`` (number inputs do), so ``get_by_label`` cannot find it: take the input
+    in the row of the label whose text is exactly ``label``."""
+    return page.locator(
+        f"xpath=//label[normalize-space()='{label}']/ancestor::div[.//input][1]//input"
+    ).first

@@ -9,7 +9,15 @@ handles may be written from any thread. This module:
 - replaces viser's share-URL handlers with refusals;
 - serialises every message viser queues (``queue_message``) under one process-wide lock, so
   that the plot thread, the status thread, viser's callbacks and the REST threads never push
-  into viser's buffers at the same time.
+  into viser's buffers at the same time;
+- fixes the race that froze the live plots ("RuntimeError: deque mutated during iteration"):
+  viser's ``AsyncMessageBuffer.push()`` calls ``message_event.set()`` on an ``asyncio.Event``
+  directly from the calling thread; ``Event.set()`` iterates the event's waiter deque while the
+  event loop's thread appends/removes waiters (every window generator does ``wait()`` →
+  ``clear()`` → ``wait()``), so a push from a plain thread can raise in the pusher. The
+  buffers' events are replaced by :class:`LoopSafeEvent`, whose ``set()`` off the loop's
+  thread is handed to the loop (viser already schedules the same ``set`` thread-safely right
+  after; nothing in viser reads ``is_set()`` synchronously).
 
 Private viser/websockets API used (checked against viser 1.1.1, websockets 16): the asyncio
 ``Server`` object of the running server (found by its bound port), its ``process_request``
@@ -19,6 +27,8 @@ attribute, ``WebsockServer.register_handler/unregister_handler`` and
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
 import gc
 import threading
 from collections.abc import Callable
@@ -30,9 +40,49 @@ from dashboard.security import host_ok, origin_ok
 SEND_LOCK = threading.RLock()
 
 
+class LoopSafeEvent(asyncio.Event):
+    """An asyncio.Event that may be set from any thread: off its loop's thread, ``set()`` is
+    scheduled on the loop (``call_soon_threadsafe``) instead of touching the waiters."""
+
+    def __init__(self, loop: asyncio.AbstractEventLoop) -> None:
+        super().__init__()
+        self._home = loop
+
+    def set(self) -> None:
+        try:
+            here = asyncio.get_running_loop()
+        except RuntimeError:
+            here = None
+        if here is self._home:
+            super().set()
+            return
+        with contextlib.suppress(RuntimeError):  # loop closed: nobody waits any more
+            self._home.call_soon_threadsafe(super().set)
+
+
+def install_loop_safe_events() -> None:
+    """Give every viser message buffer created from now on :class:`LoopSafeEvent` s (once)."""
+    from viser.infra._async_message_buffer import AsyncMessageBuffer
+
+    if getattr(AsyncMessageBuffer.__init__, "_dashboard_safe", False):
+        return
+    original = AsyncMessageBuffer.__init__
+
+    def init_with_safe_events(self: Any, *args: Any, **kwargs: Any) -> None:
+        original(self, *args, **kwargs)
+        self.message_event = LoopSafeEvent(self.event_loop)
+        self.flush_event = LoopSafeEvent(self.event_loop)
+
+    init_with_safe_events._dashboard_safe = True  # type: ignore[attr-defined]
+    AsyncMessageBuffer.__init__ = init_with_safe_events  # type: ignore[method-assign]
+
+
 def install_send_lock() -> None:
-    """Wrap viser's ``WebsockMessageHandler.queue_message`` in :data:`SEND_LOCK` (once)."""
+    """Wrap viser's ``WebsockMessageHandler.queue_message`` in :data:`SEND_LOCK` and make its
+    buffers' events thread-safe (:func:`install_loop_safe_events`); idempotent."""
     from viser.infra import _infra
+
+    install_loop_safe_events()
 
     cls = _infra.WebsockMessageHandler
     if getattr(cls.queue_message, "_dashboard_locked", False):

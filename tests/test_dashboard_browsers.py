@@ -23,7 +23,7 @@ import pytest
 from fastapi.testclient import TestClient
 
 from dashboard.app import create_app
-from dashboard.browser import CHROMIUM, launch
+from dashboard.browser import CHROMIUM, launch, text_input
 from dashboard.config import BenchConfig
 from dashboard.gui import LEASE_GRACE_S
 
@@ -81,14 +81,6 @@ def wait_until(cond, timeout: float = 30.0, what: str = "condition") -> None:
             return
         time.sleep(0.1)
     raise AssertionError(f"{what} not met within {timeout} s")
-
-
-def text_input(page, label: str):
-    """viser's text input carries no id for its label's ``for`` (viser 1.1): find the input in
-    the row of the label with exactly this text."""
-    return page.locator(
-        f"xpath=//label[normalize-space()='{label}']/ancestor::div[.//input][1]//input"
-    ).first
 
 
 def click(page, locator) -> None:

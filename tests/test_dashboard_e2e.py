@@ -19,7 +19,14 @@ import control as ct
 import httpx
 import pytest
 
-from dashboard.browser import CHROMIUM, click, dismiss_notifications, launch, run_dashboard
+from dashboard.browser import (
+    CHROMIUM,
+    click,
+    dismiss_notifications,
+    launch,
+    run_dashboard,
+    text_input,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEED_FACTOR = 1.0
@@ -128,7 +135,7 @@ def test_change_L_c_and_see_readback_and_margins(page, bench):
     m0 = wait_text(page, pattern)
     assert float(m0.group(1)) == pytest.approx(1.0, abs=1e-3)
     assert float(m0.group(3)) == pytest.approx(60.0, abs=0.2)
-    box = page.get_by_label("L_c (µH)", exact=True)
+    box = text_input(page, "L_c (µH)")
     click(page, box)
     page.keyboard.press("Control+A")
     page.keyboard.type("22.2")
