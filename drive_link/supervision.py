@@ -396,6 +396,8 @@ class Supervisor:
             return report
         if stale_first or stale_plain or stale_groups:
             report.reboot = True
+        if (PRODUCER_HEARTBEAT, 0) not in journal:
+            self._refresh_producer_time(sdo)  # another master may have changed it
         if report.reboot and not boot:
             with self._lock:
                 self.boots_seen += 1
@@ -418,6 +420,14 @@ class Supervisor:
                 self.rearmed_at = report.at
         self.last_report = report
         return report
+
+    def _refresh_producer_time(self, sdo: SdoChannel) -> None:
+        try:
+            raw = SdoChannel.upload(sdo, PRODUCER_HEARTBEAT, 0)
+        except DriveError:
+            return
+        with self._lock:
+            self._producer_ms = int.from_bytes(raw[:2], "little")
 
     @staticmethod
     def _differs(sdo: SdoChannel, key: tuple[int, int], data: bytes) -> bool:

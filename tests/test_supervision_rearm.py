@@ -321,3 +321,16 @@ def test_a_restart_during_a_store_does_not_deadlock(rig):
         assert time.monotonic() - t0 < 2.0
     d.supervisor.wait_ready(timeout=10.0)
     assert d.supervisor.last_report is not None and not d.supervisor.last_report.failed
+
+
+def test_producer_time_changed_by_another_master_is_learned(rig):
+    """Another master slows the drive's heartbeat to 1 s: after one check the gap rule uses the
+    new period (no re-arm on every heartbeat, no boot counted)."""
+    d = rig.drive
+    d.configure_heartbeat_consumer(CONSUMER_MS)
+    SdoChannel.download(d.sdo, 0x1017, 0, struct.pack("<H", 1000))  # not journalled
+    time.sleep(3.5)
+    checks = [e for e in rig.events if e["event"] in ("verified", "rearmed")]
+    assert len(checks) <= 1, checks
+    assert d.boots_seen == 0
+    SdoChannel.download(d.sdo, 0x1017, 0, struct.pack("<H", 100))
