@@ -163,6 +163,12 @@ def _status_text(st: dict) -> str:
             v = f"{v} ({_STORE_STATUS_TEXT.get(str(v), 'unexpected value')})"
         elif k == "supervision_rearmed_at" and v is None:
             v = "never (no restart seen)"
+        elif k == "error_code" and isinstance(v, int):
+            from .emcy import describe
+
+            v = f"0x{v:04X} ({describe(v)})" if v else "0x0000"
+        elif k in ("statusword", "error_register") and isinstance(v, int):
+            v = f"0x{v:04X}" if k == "statusword" else f"0x{v:02X}"
         lines.append(f"{k:>22}: {v}")
     return "\n".join(lines)
 
