@@ -109,6 +109,18 @@ def test_reset_node_with_option_none_still_stops_the_motor(bench):
     assert bench.read("abort_connection_option_code") == 3  # default again after the reset
 
 
+def test_reset_communication_with_option_none_still_stops_the_motor(bench):
+    bench.write("abort_connection_option_code", 0)
+    spin(bench)
+    t0 = time.monotonic()
+    bench.nmt(0x82)
+    assert boot_after(bench, t0) is not None
+    assert bench.wait(lambda: bench.drive.nmt.state == 0x7F)
+    # the ramp ends below 10 rpm, then SWITCH ON DISABLED (0x605A = 2)
+    assert bench.wait(lambda: state_of(bench.read("statusword")) == "SWITCH ON DISABLED", 3.0)
+    assert abs(bench.read("measurements.speed")) < 15.0
+
+
 def test_reset_communication_while_enabled_quick_stops_and_keeps_supervision(bench):
     host = 0x7E
     entry = (host << 16) | 500
@@ -120,8 +132,9 @@ def test_reset_communication_while_enabled_quick_stops_and_keeps_supervision(ben
     assert bench.wait(lambda: bench.drive.nmt.state == 0x7F)
     # the power stage was still braking at the reset: supervision kept
     assert bench.read("consumer_heartbeat_time.consumer_1") == entry
-    assert bench.wait(lambda: abs(bench.read("measurements.speed")) < 15.0, 3.0)
-    assert state_of(bench.read("statusword")) == "SWITCH ON DISABLED"
+    # the ramp ends below 10 rpm, then SWITCH ON DISABLED (0x605A = 2)
+    assert bench.wait(lambda: state_of(bench.read("statusword")) == "SWITCH ON DISABLED", 3.0)
+    assert abs(bench.read("measurements.speed")) < 15.0
 
 
 def test_reset_communication_at_rest_restores_stored_values(tmp_path):

@@ -44,7 +44,7 @@ from . import plant, storage
 from .cia402 import Cia402StateMachine
 from .emcy import DATA_SET_LOST, HEARTBEAT_LOSS, NMT_CONNECTION_LOSS, EmcyManager
 from .heartbeat import HeartbeatConsumer, HeartbeatProducer
-from .nmt import CMD_RESET_NODE, OPERATIONAL, NmtSlave
+from .nmt import CMD_RESET_COMMUNICATION, CMD_RESET_NODE, OPERATIONAL, NmtSlave
 from .params import ParamChecker
 from .pdo import PdoEngine, is_pdo_config
 from .recorder import (
@@ -458,9 +458,9 @@ class VirtualDrive:
     def _reset_communication(self) -> None:
         """NMT reset communication: 0x1000–0x1FFF back to stored values or defaults (CiA 301).
 
-        Exception: while the power stage is still on after the 0x6007 reaction (0x6007 = 0, or
-        a stop ramp still braking) the consumer heartbeat 0x1016 keeps its present value, so the
-        master's supervision is never dropped while the motor can turn.
+        Exception: while the power stage is still on after the 0x6007 reaction (a stop ramp
+        still braking) the consumer heartbeat 0x1016 keeps its present value, so the master's
+        supervision is never dropped while the motor can turn.
         """
         keep_1016 = self.cia402.torque_enabled
         kept = dict(self.node.data_store.get(0x1016, {})) if keep_1016 else {}
@@ -925,13 +925,15 @@ class VirtualDrive:
         """NMT stop / reset communication / reset node: the 0x6007 reaction (CiA 402 §6.3.3).
 
         Leaving the NMT state in which the master commands the drive while the power stage is
-        on is a loss of the connection. Reset node resets the application, which cannot keep
-        the motor running: there 0x6007 = 0 (no action) acts as 3 (quick stop).
+        on is a loss of the connection. Both resets reload the communication objects (RPDO
+        mappings and COB-IDs the master commands through may be gone) and reset node resets
+        the application: neither may leave the motor turning, so there 0x6007 = 0 (no action)
+        acts as 3 (quick stop). NMT stop honours 0.
         """
         if not self.cia402.operation_enabled:
             return
         option = self._value(0x6007)
-        if command == CMD_RESET_NODE and option == 0:
+        if command in (CMD_RESET_NODE, CMD_RESET_COMMUNICATION) and option == 0:
             option = 3
         logger.warning("NMT command 0x%02X while OPERATION ENABLED: 0x6007 = %d", command, option)
         if option == 1:
