@@ -162,8 +162,11 @@ def test_failed_store_leaves_no_temporary(tmp_path, monkeypatch):
 
 
 _WRITER = """
-import sys
-from virtual_drive.node import storage
+import importlib.util, sys
+# storage.py alone (stdlib only): the package would import canopen and numpy on every round
+spec = importlib.util.spec_from_file_location("storage", sys.argv[3])
+storage = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(storage)
 path, k = sys.argv[1], 0
 print("ready", flush=True)
 while True:
@@ -175,10 +178,10 @@ while True:
 def test_kill_9_during_stores_never_tears_and_temps_are_cleaned(tmp_path):
     path = tmp_path / "params.json"
     storage.save(path, {(0x2010, 4): b"\x00\x00\x00\x3f"})
-    rounds = 12
+    rounds = 10
     for r in range(rounds):
         proc = subprocess.Popen(
-            [sys.executable, "-c", _WRITER, str(path), str(r)],
+            [sys.executable, "-c", _WRITER, str(path), str(r), storage.__file__],
             stdout=subprocess.PIPE,
             cwd=Path(__file__).resolve().parents[1],
         )
