@@ -47,7 +47,7 @@ def _hub_faults(hub, **faults: float) -> None:
 def measure(cond: Condition, uploads: int, reads: int) -> dict:
     """Run one condition; returns the row's figures."""
     row: dict = {"condition": cond.name}
-    with bench(cond) as b:
+    with bench(cond, hub_in_process=True) as b:  # in-process: faults off for the reference
         row["cpu"] = b.hog.tool if b.hog else ""
         d = b.connect()
         try:

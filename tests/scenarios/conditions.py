@@ -13,12 +13,14 @@ from __future__ import annotations
 import contextlib
 import inspect
 import os
+import re
 import shutil
 import signal
 import socket
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
@@ -165,6 +167,48 @@ class CpuHog:
 # --------------------------------------------------------------------------------------------
 
 
+class HubProcess:
+    """``virtual-drive hub`` in its own process (under the watcher: it ends with this process),
+    so the emulated bus keeps its timing whatever the test process does with its GIL."""
+
+    def __init__(self, faults: dict, timeout: float = 60.0) -> None:
+        cmd = [sys.executable, "-m", "virtual_drive.cli", "hub", "--port", "0"]
+        cmd += ["--drop-rate", repr(faults.get("drop_rate", 0.0))]
+        cmd += ["--delay-ms", repr(1e3 * faults.get("delay_s", 0.0))]
+        if faults.get("jitter_s"):
+            cmd += ["--jitter-ms", repr(1e3 * faults["jitter_s"])]
+        cmd += ["--seed", str(faults.get("seed", 0))]
+        self._proc = subprocess.Popen(
+            [sys.executable, "-c", _WATCH, str(os.getpid()), *cmd],
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.PIPE,
+            text=True,
+            start_new_session=True,
+        )
+        assert self._proc.stdout is not None
+        box: list[str] = []
+        reader = threading.Thread(target=lambda: box.append(self._proc.stdout.readline()))
+        reader.daemon = True
+        reader.start()
+        reader.join(timeout)
+        m = re.search(r"port=(\d+)", box[0] if box else "")
+        if not m:
+            self.stop()
+            raise RuntimeError(f"virtual-drive hub did not come up: {box!r}")
+        self.port = int(m.group(1))
+
+    def stop(self) -> None:
+        """SIGTERM its session (SIGKILL after 5 s)."""
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(self._proc.pid, signal.SIGTERM)
+        try:
+            self._proc.wait(5)
+        except subprocess.TimeoutExpired:
+            with contextlib.suppress(ProcessLookupError, PermissionError):
+                os.killpg(self._proc.pid, signal.SIGKILL)
+            self._proc.wait(5)
+
+
 def _hub_kwargs(cond: Condition) -> dict:
     """Hub fault settings for ``cond``; jitter only if this hub version has it (else delay)."""
     from virtual_drive.hub import Hub
@@ -184,9 +228,12 @@ class Bench:
 
     node_id = 1
 
-    def __init__(self, cond: Condition) -> None:
+    def __init__(self, cond: Condition, hub_in_process: bool = False) -> None:
         self.cond = cond
-        self.hub = None
+        self.hub_in_process = hub_in_process
+        self.hub = None  #: the in-process :class:`~virtual_drive.hub.Hub` (hub_in_process)
+        self.hub_proc: HubProcess | None = None
+        self.hub_port: int | None = None
         self.hog: CpuHog | None = None
         self.proc = None
         self._tmp = tempfile.TemporaryDirectory(prefix=f"bench-{cond.name}-")
@@ -202,7 +249,12 @@ class Bench:
                 from virtual_drive.hub import Hub
 
                 self.hub_faults = _hub_kwargs(self.cond)
-                self.hub = Hub(port=0, **self.hub_faults).start()
+                if self.hub_in_process:
+                    self.hub = Hub(port=0, **self.hub_faults).start()
+                    self.hub_port = self.hub.port
+                else:
+                    self.hub_proc = HubProcess(self.hub_faults)
+                    self.hub_port = self.hub_proc.port
             self._spawn()
         except BaseException:
             self.stop()
@@ -213,9 +265,9 @@ class Bench:
         from virtual_drive.node.process import spawn_virtual_drive
 
         timeout = max(60.0, 20.0 * self.cond.slow)
-        if self.hub is not None:
+        if self.hub_port is not None:
             self.proc = spawn_virtual_drive(
-                port=self.hub.port, node_id=self.node_id, store=self.store, timeout=timeout
+                port=self.hub_port, node_id=self.node_id, store=self.store, timeout=timeout
             )
         else:
             self.proc = spawn_virtual_drive(
@@ -242,6 +294,8 @@ class Bench:
             try:
                 if self.hub is not None:
                     self.hub.stop()
+                if self.hub_proc is not None:
+                    self.hub_proc.stop()
             finally:
                 try:
                     if self.hog is not None:
@@ -262,14 +316,14 @@ class Bench:
 
     def bus_args(self) -> list[str]:
         """``drive-link`` bus options for this bench."""
-        if self.hub is not None:
-            return ["--host", "127.0.0.1", "--port", str(self.hub.port)]
+        if self.hub_port is not None:
+            return ["--host", "127.0.0.1", "--port", str(self.hub_port)]
         return ["--interface", "socketcan", "--channel", str(self.cond.channel)]
 
     def bus_kwargs(self) -> dict:
         """:meth:`drive_link.Drive.connect` bus keywords for this bench."""
-        if self.hub is not None:
-            return {"host": "127.0.0.1", "port": self.hub.port}
+        if self.hub_port is not None:
+            return {"host": "127.0.0.1", "port": self.hub_port}
         return {"interface": "socketcan", "channel": self.cond.channel}
 
     def connect(self, **kw):
@@ -317,9 +371,9 @@ def apply_tpdo_event_timers(b: Bench) -> None:
 
 
 @contextlib.contextmanager
-def bench(cond: Condition) -> Iterator[Bench]:
+def bench(cond: Condition, hub_in_process: bool = False) -> Iterator[Bench]:
     """A started :class:`Bench` for ``cond``, stopped on exit."""
-    b = Bench(cond).start()
+    b = Bench(cond, hub_in_process=hub_in_process).start()
     try:
         yield b
     finally:
