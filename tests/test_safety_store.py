@@ -21,6 +21,7 @@ import pytest
 from canopen.sdo import SdoAbortedError
 from test_node_support import Bench, emcy_frames
 
+from firmware_protocol import load_od
 from virtual_drive.node import storage
 
 pytestmark = pytest.mark.timeout(90)
@@ -197,3 +198,18 @@ def test_kill_9_during_stores_never_tears_and_temps_are_cleaned(tmp_path):
         assert temps(path) == []
     value = struct.unpack("<f", storage.load(path)[(0x2010, 4)])[0]
     assert value > 0
+
+
+def test_stored_set_that_breaks_a_rule_is_not_applied(tmp_path):
+    """A store written before a rule existed (R_c = 1 Ohm > 2 motor.R, inside the old static
+    limits) passes its checksum but is not applied: defaults, status 2, EMCY 0x6310."""
+    path = tmp_path / "params.json"
+    e = load_od().entry("current_controller.R_c")
+    storage.save(path, {(e.index, e.subindex): struct.pack("<f", 1.0)})
+    b = Bench(store_path=path)
+    try:
+        assert b.read("store_status") == 2
+        assert b.read("current_controller.R_c") == pytest.approx(0.0062)
+        assert b.log.wait_for(0x81, 2.0, pred=lambda d: d[:2] == b"\x10\x63") is not None
+    finally:
+        b.close()

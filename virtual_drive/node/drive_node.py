@@ -38,6 +38,7 @@ from firmware_protocol.cob_id import check_cob_id, check_heartbeat_consumers
 from firmware_protocol.entry import LimitError
 from firmware_protocol.enums import StoreStatus
 from firmware_protocol.od import load_od
+from firmware_protocol.stability import check_ip_speed_gains
 
 from . import cia402 as sm
 from . import plant, storage
@@ -390,8 +391,28 @@ class VirtualDrive:
                 continue
             self.node.data_store.setdefault(index, {})[sub] = raw
         self._pcache.clear()
+        problem = self._rules_broken()
+        if problem is not None:  # e.g. a store from before a rule existed: not applied at all
+            logger.error("stored parameters break a rule, defaults used: %s", problem)
+            self.node.data_store.clear()
+            self._pcache.clear()
+            self.store_status, self.store_error = StoreStatus.DAMAGED, problem
         self._push_plant()
         self._configure_communication()
+
+    def _rules_broken(self) -> str | None:
+        """Why the present parameter set breaks a cross-object or stability rule, or None."""
+        values = {
+            e.name: self.node.stored(e.index, e.subindex)
+            for e in self.view
+            if e.data_type in odm.NUMBER_TYPES and e.bit_length
+        }
+        try:
+            self.view.check_constraints(values)
+            check_ip_speed_gains(values["speed_controller.k_p"], values["speed_controller.k_i"])
+        except LimitError as exc:
+            return str(exc)
+        return None
 
     def _read_store(self) -> tuple[dict[tuple[int, int], bytes], StoreStatus, str | None]:
         """The store file's values, its 0x2060 status and the error text (None if fine)."""
