@@ -300,30 +300,103 @@ def item_gain_set(d: Drive, opts: dict) -> str:
     return f"invalid set refused {how} with nothing changed; valid set applied and read back"
 
 
+def _persistent_snapshot(d: Drive) -> dict[str, bytes]:
+    """Raw present value of every stored (persistent, writable, numeric) object."""
+    out = {}
+    for o in d.table:
+        if getattr(o.entry, "persistent", False) and o.writable and o.readable and o.fmt:
+            try:
+                out[o.name] = d.sdo.upload(o.index, o.subindex, o.name)
+            except SdoAbort:
+                continue
+    return out
+
+
+def _put_back(d: Drive, snapshot: dict[str, bytes]) -> list[str]:
+    """Write back what differs from ``snapshot`` (the drive at rest): configuration objects
+    first (the L_c/R_c rules read motor.L/R), gains as whole sets through gain_set (the speed-gain
+    rule judges the pair), PDOs by the CiA 301 procedure, then the rest. Returns failures."""
+    from .drive import _GAIN_OBJECTS
+    from .supervision import RearmReport, pdo_group, write_pdo_group
+
+    now = {n: d.sdo.upload(d.table[n].index, d.table[n].subindex, n) for n in snapshot}
+    differ = [n for n in snapshot if now[n] != snapshot[n]]
+    failed: list[str] = []
+    gain_names = {v[1]: k for k, v in _GAIN_OBJECTS.items()}
+
+    def raw_write(n: str) -> None:
+        o = d.table[n]
+        try:
+            d.sdo.download(o.index, o.subindex, snapshot[n], n)
+        except DriveError as exc:
+            failed.append(f"{n}: {exc}")
+
+    for n in differ:
+        if getattr(d.table[n].entry, "config_only", False):
+            raw_write(n)
+    gains = {gain_names[n]: d.table[n].decode(snapshot[n]) for n in differ if n in gain_names}
+    if gains:
+        try:
+            d.apply_gains(**gains)
+        except DriveError as exc:
+            failed.append(f"gains: {exc}")
+    groups: dict[tuple[str, int], list[tuple[int, int]]] = {}
+    values: dict[tuple[int, int], bytes] = {}
+    for n in differ:
+        o = d.table[n]
+        g = pdo_group(o.index)
+        if g is not None:
+            groups.setdefault(g, []).append((o.index, o.subindex))
+            values[(o.index, o.subindex)] = snapshot[n]
+        elif n not in gain_names and not getattr(o.entry, "config_only", False):
+            raw_write(n)
+    for g, keys in groups.items():
+        # the whole group as found, so the procedure rebuilds a complete mapping
+        for o in d.table:
+            if pdo_group(o.index) == g and o.name in snapshot:
+                values[(o.index, o.subindex)] = snapshot[o.name]
+                if (o.index, o.subindex) not in keys:
+                    keys.append((o.index, o.subindex))
+        report = RearmReport("store_restore put back")
+        write_pdo_group(d.sdo, g, keys, values, report)
+        failed += [f"{k}: {v}" for k, v in report.failed.items()]
+    return failed
+
+
 def item_store_restore(d: Drive, opts: dict) -> str:
+    """0x1010 save survives reset node; 0x1011 restore applies defaults after reset node.
+    The drive is then put back as found (every stored object rewritten as it was, stored
+    again), so a tuned drive keeps its gains and PDO settings."""
     name = "current_controller.R_c"
     orig = float(d.read(name))
     default = float(d.table[name].default or 0)
     v2 = _f32(orig * 0.9 + 1e-4)
     v3 = _f32(orig * 0.8 + 2e-4)
+    _to_switch_on_disabled(d)
+    snapshot = _persistent_snapshot(d)
+    failed: list[str] = []
     try:
         d.write(name, v2)
         d.store()
         d.write(name, v3)
-        d.reset(timeout=3.0)
+        d.reset(timeout=8.0)
         got = float(d.read(name))
         _expect(got == v2, f"after store + reset node R_c = {got}, expected stored {v2}")
-        d.restore_defaults(reset=True)
+        d.restore_defaults(reset=True, timeout=8.0)
         got = float(d.read(name))
         _expect(
             got == _f32(default),
             f"after restore + reset node R_c = {got}, expected default {default}",
         )
     finally:
-        d.write(name, orig)
+        failed = _put_back(d, snapshot)
         d.store()
         d.nmt("start")
-    return "stored value survives reset node; restore defaults applies after reset node"
+    _expect(not failed, "drive not put back as found: " + "; ".join(failed[:3]))
+    return (
+        "stored value survives reset node; restore defaults applies after reset node; "
+        f"{len(snapshot)} stored objects put back and stored"
+    )
 
 
 def _missed_events(d: Drive) -> dict[str, int] | None:

@@ -412,7 +412,7 @@ class Supervisor:
         for k in stale_first + stale_plain:
             self._write(sdo, k, journal[k], report)
         for g in stale_groups:
-            self._write_pdo(sdo, g, groups[g], journal, report)
+            write_pdo_group(sdo, g, groups[g], journal, report)
         report.seconds = time.monotonic() - t0
         if report.reboot:
             report.at = _now_iso()
@@ -441,45 +441,7 @@ class Supervisor:
 
     @staticmethod
     def _write(sdo: SdoChannel, key: tuple[int, int], data: bytes, report: RearmReport) -> None:
-        where = f"0x{key[0]:04X}:{key[1]:02X}"
-        try:
-            SdoChannel.download(sdo, key[0], key[1], data)
-            report.written.append(where)
-        except DriveError as exc:
-            report.failed[where] = str(exc)
-
-    def _write_pdo(
-        self,
-        sdo: SdoChannel,
-        group: tuple[str, int],
-        keys: list[tuple[int, int]],
-        journal: dict[tuple[int, int], bytes],
-        report: RearmReport,
-    ) -> None:
-        """CiA 301 §7.2.2: invalidate the PDO, clear its mapping, write the entries, the count,
-        the other communication parameters and finally the (valid) COB-ID."""
-        kind, k = group
-        comm = (0x1400 if kind == "rpdo" else 0x1800) + k
-        mapping = (0x1600 if kind == "rpdo" else 0x1A00) + k
-        cob_key = (comm, 1)
-        try:
-            cob = journal.get(cob_key) or SdoChannel.upload(sdo, comm, 1)[:4]
-        except DriveError as exc:
-            report.failed[f"0x{comm:04X}:01"] = str(exc)
-            return
-        cob_value = struct.unpack("<I", cob.ljust(4, b"\0"))[0]
-        self._write(sdo, cob_key, struct.pack("<I", cob_value | 0x80000000), report)
-        map_keys = [kk for kk in keys if kk[0] == mapping and kk[1] != 0]
-        if map_keys or (mapping, 0) in journal:
-            self._write(sdo, (mapping, 0), b"\x00", report)
-            for kk in sorted(map_keys):
-                self._write(sdo, kk, journal[kk], report)
-            if (mapping, 0) in journal:
-                self._write(sdo, (mapping, 0), journal[(mapping, 0)], report)
-        for kk in keys:
-            if kk[0] == comm and kk[1] != 1:
-                self._write(sdo, kk, journal[kk], report)
-        self._write(sdo, cob_key, struct.pack("<I", cob_value), report)
+        _write(sdo, key, data, report)
 
     # ------------------------------------------------------------------ summary
     def status(self) -> dict[str, Any]:
@@ -491,3 +453,51 @@ class Supervisor:
                 "supervision_ready": self._ready and self._error is None,
                 "supervision_error": self._error,
             }
+
+
+def _write(sdo: SdoChannel, key: tuple[int, int], data: bytes, report: RearmReport) -> None:
+    where = f"0x{key[0]:04X}:{key[1]:02X}"
+    try:
+        SdoChannel.download(sdo, key[0], key[1], data)
+        report.written.append(where)
+    except DriveError as exc:
+        report.failed[where] = str(exc)
+
+
+def pdo_group(index: int) -> tuple[str, int] | None:
+    """("rpdo"|"tpdo", k) if ``index`` is a PDO communication or mapping object, else None."""
+    return _pdo_group(index)
+
+
+def write_pdo_group(
+    sdo: SdoChannel,
+    group: tuple[str, int],
+    keys: list[tuple[int, int]],
+    values: dict[tuple[int, int], bytes],
+    report: RearmReport,
+) -> None:
+    """Give PDO ``group`` the ``values`` of ``keys`` by the CiA 301 §7.2.2 procedure:
+    invalidate the PDO, clear its mapping, write the entries, the count, the other
+    communication parameters and finally the COB-ID (unsupervised transfers)."""
+    kind, k = group
+    comm = (0x1400 if kind == "rpdo" else 0x1800) + k
+    mapping = (0x1600 if kind == "rpdo" else 0x1A00) + k
+    cob_key = (comm, 1)
+    try:
+        cob = values.get(cob_key) or SdoChannel.upload(sdo, comm, 1)[:4]
+    except DriveError as exc:
+        report.failed[f"0x{comm:04X}:01"] = str(exc)
+        return
+    cob_value = struct.unpack("<I", cob.ljust(4, b"\0"))[0]
+    _write(sdo, cob_key, struct.pack("<I", cob_value | 0x80000000), report)
+    map_keys = [kk for kk in keys if kk[0] == mapping and kk[1] != 0]
+    if map_keys or (mapping, 0) in values:
+        _write(sdo, (mapping, 0), b"\x00", report)
+        for kk in sorted(map_keys):
+            _write(sdo, kk, values[kk], report)
+        if (mapping, 0) in values:
+            _write(sdo, (mapping, 0), values[(mapping, 0)], report)
+    for kk in keys:
+        if kk[0] == comm and kk[1] != 1:
+            _write(sdo, kk, values[kk], report)
+    _write(sdo, cob_key, struct.pack("<I", cob_value), report)

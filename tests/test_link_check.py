@@ -157,3 +157,35 @@ def test_store_status_fails_on_firmware_without_0x2060(virtual_node, capsys):
     rc = cli.main([*argv, "--only", "store_status"])
     line = capsys.readouterr().out.splitlines()[0]
     assert rc == 1 and "0x2060 store_status not readable: abort 0x06020000" in line
+
+
+def test_store_restore_puts_a_tuned_drive_back(virtual_node, capsys):
+    """A tuned drive (stored speed gains, slower TPDO1, remapped TPDO4) keeps its settings
+    after store_restore, also after the next reset node (they are stored again)."""
+    from drive_link import Drive
+
+    _, ch = virtual_node
+    with Drive.connect(interface="virtual", channel=ch, node_id=4, heartbeat_ms=None) as d:
+        d.apply_gains(speed_k_p=0.3, speed_k_i=4e-5)
+        d.write("tpdo1_communication.event_timer", 20)
+        cob = int(d.read("tpdo4_communication.cob_id"))
+        d.write("tpdo4_communication.cob_id", cob | 0x80000000)
+        d.write("tpdo4_mapping.number_of_mapped_objects", 0)
+        d.write("tpdo4_mapping.mapped_object_1", (0x2040 << 16) | (11 << 8) | 32)
+        d.write("tpdo4_mapping.number_of_mapped_objects", 1)
+        d.write("tpdo4_communication.cob_id", cob)
+        d.store()
+    # this session is closed: only the check itself can put the settings back
+    argv = ["check", "--interface", "virtual", "--channel", ch, "--node", "4"]
+    rc = cli.main([*argv, "--only", "store_restore", "--json"])
+    r = json.loads(capsys.readouterr().out)[0]
+    assert rc == 0 and r["ok"], r["detail"]
+    with Drive.connect(interface="virtual", channel=ch, node_id=4, heartbeat_ms=None) as d:
+        d.reset(timeout=8.0)
+        g = d.read_gains()
+        assert g.speed_k_p == pytest.approx(0.3, rel=1e-6)
+        assert g.speed_k_i == pytest.approx(4e-5, rel=1e-6)
+        assert int(d.read("tpdo1_communication.event_timer")) == 20
+        assert int(d.read("tpdo4_mapping.number_of_mapped_objects")) == 1
+        assert int(d.read("tpdo4_mapping.mapped_object_1")) == (0x2040 << 16) | (11 << 8) | 32
+        assert int(d.read("tpdo4_communication.cob_id")) == cob

@@ -154,8 +154,11 @@ def test_restart_rearms_the_consumer_before_the_first_user_command(rig):
     assert st["supervision_rearmed_at"] is not None and st["supervision_rearmed_at"].endswith(
         "+00:00"
     )
-    assert [e["event"] for e in rig.events][:2] == ["reboot_detected", "rearmed"]
-    assert "0x1016:01" in rig.events[1]["written"]
+    # (a busy host may first have produced a heartbeat-gap check: "restart_suspected"/"verified")
+    names = [e["event"] for e in rig.events]
+    k = names.index("reboot_detected")
+    assert names[k : k + 2] == ["reboot_detected", "rearmed"], names
+    assert "0x1016:01" in rig.events[k + 1]["written"]
 
 
 def test_user_commands_in_flight_wait_for_the_rearm(rig):
