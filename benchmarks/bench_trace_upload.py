@@ -154,6 +154,7 @@ def reliability(args: argparse.Namespace) -> int:
     hub, port = start_hub(args.bitrate, faults)
     drive = None
     d = None
+    node = None
     try:
         drive = spawn_virtual_drive(port=port, timeout=60.0)
         d = Drive.connect(host="127.0.0.1", port=port, node_id=1, heartbeat_ms=None)
@@ -165,10 +166,20 @@ def reliability(args: argparse.Namespace) -> int:
         ref = d.sdo_trace.upload_block(0x2102, 0, name="trace_data")
         assert len(ref) == SIZE, len(ref)
         node = None
+        restarts0 = d.sdo_trace.restarted
         if args.client == "canopen":
+            # the stock client alone on its own connection: drive_link's session (its
+            # supervisor reads the drive over SDO now and then) would share the SDO channel
+            d.close()
+            d = None
+            net = canopen.Network(
+                can.Bus(interface="socketcand", host="127.0.0.1", port=port, channel="vcan0",
+                        tcp_tune=True)
+            )  # fmt: skip
+            net.connect()
             node = canopen.RemoteNode(1, load_od().canopen_od(1))
             node.sdo.RESPONSE_TIMEOUT = 2.0
-            d._conn.network.add_node(node)
+            net.add_node(node)
         print(
             f"{args.client}: {SIZE} bytes of trace_data, hub {args.bitrate / 1e6:g} Mbit/s, "
             f"drop {args.drop:g}, delay {args.delay_ms:g} ± {args.jitter_ms:g} ms, "
@@ -176,7 +187,6 @@ def reliability(args: argparse.Namespace) -> int:
             flush=True,
         )
         ok, rates, failures = 0, [], {}
-        restarts0 = d.sdo_trace.restarted
         for k in range(args.tries):
             t0 = time.perf_counter()
             try:
@@ -197,7 +207,7 @@ def reliability(args: argparse.Namespace) -> int:
                 reason = str(exc).splitlines()[0][:120]
                 failures[reason] = failures.get(reason, 0) + 1
                 print(f"try {k + 1}: FAILED after {dt:.2f} s: {reason}", flush=True)
-        restarts = d.sdo_trace.restarted - restarts0
+        restarts = d.sdo_trace.restarted - restarts0 if d is not None else 0
         rate = (
             f"median {_pct(rates, 0.5):.1f} kB/s, p10 {_pct(rates, 0.1):.1f}, "
             f"p90 {_pct(rates, 0.9):.1f}"
@@ -215,6 +225,8 @@ def reliability(args: argparse.Namespace) -> int:
     finally:
         if d is not None:
             d.close()
+        if node is not None:
+            node.network.disconnect()
         if drive is not None:
             drive.stop()
         hub.send_signal(signal.SIGTERM)
