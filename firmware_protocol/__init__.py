@@ -3,7 +3,11 @@
 Workflow: edit ``bldc_drive.eds`` (CiA 306; units in ``Unit=``, enumerations in ``Enum=``),
 run ``python -m firmware_protocol.generate`` to rewrite ``bldc_drive_od.h`` (DSP firmware) and
 ``OD.md`` (reference), commit all three. ``--check`` fails when they drift; the tests run it.
-Cross-object rules the EDS cannot express live in :mod:`firmware_protocol.constraints`.
+Cross-object rules the EDS cannot express live in :mod:`firmware_protocol.constraints`; the IP
+speed-loop stability rule in :mod:`firmware_protocol.stability`, COB-ID / heartbeat-consumer
+rules in :mod:`firmware_protocol.cob_id`, the EMCY codes in :mod:`firmware_protocol.emcy_codes`
+(all rendered into ``OD.md`` and the header). Custom EDS keys: ``ConfigOnly=1`` (write only
+with the power stage off, abort 0x08000022), ``MinNonZero=`` (0 or at least this).
 
 >>> from firmware_protocol import load_od
 >>> od = load_od()
