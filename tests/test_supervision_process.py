@@ -15,7 +15,7 @@ pytestmark = pytest.mark.timeout(120)
 
 NODE = 3
 HOST = 0x7F
-CONSUMER_MS = 400
+CONSUMER_MS = 1000  # a busy host stalls the producer thread for 300 ms and more
 
 
 def test_killed_and_restarted_drive_process_is_rearmed(tmp_path):
