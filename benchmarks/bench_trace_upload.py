@@ -188,6 +188,12 @@ def reliability(args: argparse.Namespace) -> int:
         )
         ok, rates, failures = 0, [], {}
         for k in range(args.tries):
+            r0 = d.sdo_trace.restarted if d is not None else 0
+
+            def restarted(r0: int = r0) -> str:
+                n = d.sdo_trace.restarted - r0 if d is not None else 0
+                return f" restarted {n}x: {d.sdo_trace.restart_reasons[-n:]}" if n else ""
+
             t0 = time.perf_counter()
             try:
                 if node is not None:
@@ -200,13 +206,13 @@ def reliability(args: argparse.Namespace) -> int:
                     raise AssertionError("WRONG DATA accepted")  # must never happen
                 ok += 1
                 rates.append(SIZE / dt / 1000)
-                note = "" if node is not None else f" {dict(last_stats)}"
+                note = "" if node is not None else f" {dict(last_stats)}{restarted()}"
                 print(f"try {k + 1}: ok {dt:.2f} s {SIZE / dt / 1000:.1f} kB/s{note}", flush=True)
             except (DriveError, SdoError, AttributeError) as exc:
                 dt = time.perf_counter() - t0
                 reason = str(exc).splitlines()[0][:120]
                 failures[reason] = failures.get(reason, 0) + 1
-                print(f"try {k + 1}: FAILED after {dt:.2f} s: {reason}", flush=True)
+                print(f"try {k + 1}: FAILED after {dt:.2f} s: {reason}{restarted()}", flush=True)
         restarts = d.sdo_trace.restarted - restarts0 if d is not None else 0
         rate = (
             f"median {_pct(rates, 0.5):.1f} kB/s, p10 {_pct(rates, 0.1):.1f}, "

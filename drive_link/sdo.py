@@ -81,7 +81,7 @@ class SdoChannel:
         timeout: float = 0.3,
         retries: int = 2,
         restarts: int = 3,
-        deadline_s: float = 60.0,
+        deadline_s: float = 180.0,
     ):
         self.node_id = node_id
         self.rx_cobid = rx_cobid
@@ -97,6 +97,8 @@ class SdoChannel:
         self.client.MAX_RETRIES = 1
         #: transfers started again after a break, since this channel was made (benchmarks)
         self.restarted = 0
+        #: why (one line each), the last 20
+        self.restart_reasons: list[str] = []
         network.subscribe(tx_cobid, self.client.on_response)
 
     def close(self) -> None:
@@ -117,12 +119,12 @@ class SdoChannel:
                     return fn(deadline)
             except SdoAbortedError as exc:
                 if exc.code in PROTOCOL_ABORTS and more:
-                    self.restarted += 1
+                    self._restart(f"abort 0x{exc.code:08X}")
                     continue  # the transfer lost sync (lost frames): start it again
                 raise SdoAbort(exc.code, index, subindex, name, what) from None
             except NoAnswer as exc:
                 if not exc.initial and more:
-                    self.restarted += 1
+                    self._restart(str(exc))
                     continue
                 raise DriveTimeout(
                     f"node {self.node_id} did not answer SDO {what} of {where} "
@@ -130,7 +132,7 @@ class SdoChannel:
                 ) from None
             except SdoCommunicationError as exc:
                 if more:
-                    self.restarted += 1
+                    self._restart(str(exc))
                     continue
                 raise DriveTimeout(
                     f"SDO {what} of {where} on node {self.node_id} failed after {attempt} "
@@ -141,6 +143,10 @@ class SdoChannel:
             except RuntimeError as exc:  # canopen: "Not connected to CAN bus"
                 raise BusError(f"CAN bus not usable: {exc}") from None
         raise AssertionError("unreachable")
+
+    def _restart(self, reason: str) -> None:
+        self.restarted += 1
+        self.restart_reasons = [*self.restart_reasons[-19:], reason]
 
     @contextlib.contextmanager
     def patience(self, timeout: float) -> Iterator[None]:

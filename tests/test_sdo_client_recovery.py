@@ -22,7 +22,7 @@ import can
 import canopen
 import pytest
 from can.interfaces.virtual import VirtualBus
-from canopen.sdo import SdoAbortedError, SdoCommunicationError
+from canopen.sdo import SdoAbortedError, SdoClient, SdoCommunicationError
 
 from drive_link import Drive, DriveTimeout, sdo_block
 from drive_link.sdo import SdoChannel
@@ -276,13 +276,17 @@ def test_canopen_stock_block_client(rig):
     loss; under 1 % loss each upload is complete and exact or fails with an SDO error, within
     a bounded time."""
     d, vd, bus, truth = rig  # noqa: RUF059
-    net = d._conn.network
-    node = canopen.RemoteNode(1, load_od().canopen_od(1))
-    node.sdo.network = net
-    node.sdo.RESPONSE_TIMEOUT = 1.0
-    net.subscribe(0x581, node.sdo.on_response)
+    # its own connection, on the second server channel (0x1201): drive_link's session reads
+    # the drive over the first one now and then, and two clients on one channel break each
+    # other's transfers (CiA 301: one client per server channel)
+    net = canopen.Network(can.Bus(interface="virtual", channel=bus.channel_id))
+    net.connect()
+    sdo = SdoClient(d.sdo_trace.rx_cobid, d.sdo_trace.tx_cobid, load_od().canopen_od(1))
+    sdo.network = net
+    sdo.RESPONSE_TIMEOUT = 1.0
+    net.subscribe(sdo.tx_cobid, sdo.on_response)
     try:
-        with node.sdo.open(0x2102, 0, "rb", block_transfer=True) as f:
+        with sdo.open(0x2102, 0, "rb", block_transfer=True) as f:
             assert f.read() == truth
         rng = random.Random(11)
         bus.set_rule(lambda direction, msg, n: "drop" if rng.random() < 0.01 else None)
@@ -290,7 +294,7 @@ def test_canopen_stock_block_client(rig):
         for _ in range(4):
             t0 = time.monotonic()
             try:
-                with node.sdo.open(0x2102, 0, "rb", block_transfer=True) as f:
+                with sdo.open(0x2102, 0, "rb", block_transfer=True) as f:
                     data = f.read()
                 assert data == truth  # never wrong data
                 outcomes["complete"] += 1
@@ -304,7 +308,7 @@ def test_canopen_stock_block_client(rig):
             assert time.monotonic() - t0 < 30
         assert sum(outcomes.values()) == 4
     finally:
-        net.unsubscribe(0x581, node.sdo.on_response)
+        net.disconnect()
 
 
 def test_block_upload_falls_back_to_segmented_on_a_server_without_block_transfer():
