@@ -158,7 +158,8 @@ def reliability(args: argparse.Namespace) -> int:
     try:
         drive = spawn_virtual_drive(port=port, timeout=60.0)
         d = Drive.connect(host="127.0.0.1", port=port, node_id=1, heartbeat_ms=None)
-        d.trace.configure(["i_p", "i_p_ref", "speed", "v_L"], length=4096, trigger="immediate")
+        # V_dc: non-zero data (CRC-16 of zero bytes is 0 at any length)
+        d.trace.configure(["V_dc", "i_p", "speed", "theta_e"], length=4096, trigger="immediate")
         d.trace.arm()
         d.trace.wait(60.0)
         # the reference: one block upload whose CRC-16 the drive computed and the client

@@ -54,7 +54,7 @@ def test_trace_uploads_complete_and_exact_under_loss_and_jitter(drop, uploads):
     d = None
     try:
         d = Drive.connect(host="127.0.0.1", port=hub.port, node_id=1, heartbeat_ms=None)
-        channels = ["i_p", "i_p_ref", "speed", "v_L"]
+        channels = ["V_dc", "i_p", "speed", "theta_e"]  # V_dc: non-zero data
         trace = d.trace.capture(channels, length=4096, trigger="immediate", timeout=60.0)
         truth = vd.recorder.data_bytes()
         assert len(truth) == 65536
