@@ -87,11 +87,12 @@ def run_dashboard(args: Sequence[str], timeout: float = 60.0) -> Iterator[Dashbo
 
 
 def click(page: Any, locator: Any) -> None:
-    """A real mouse click in the middle of the element (viser re-renders the panel at 4 Hz,
-    which keeps Playwright's own click waiting for a stable hit target)."""
-    locator.scroll_into_view_if_needed()
-    box = locator.bounding_box()
-    page.mouse.click(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+    """A real mouse click on the element, without Playwright's wait for a "stable" element:
+    viser re-renders the panel several times a second, and on a busy host that wait can time
+    out. The element is scrolled to the middle of the view first."""
+    locator.first.wait_for(state="attached", timeout=60_000)
+    locator.first.evaluate("e => e.scrollIntoView({block: 'center'})")
+    locator.first.click(force=True, timeout=60_000)
     time.sleep(0.1)  # viser batches GUI messages in 50 ms windows
 
 

@@ -393,6 +393,10 @@ class BenchGui:
         )
         hb = s.get("heartbeat_age_s")
         rate = self._drop_rate(live.get("dropped"))
+        expected = sum(
+            float(t.get("expected_hz") or 0.0) for t in (live.get("tpdo") or {}).values()
+        )
+        share = f" ({100 * rate / expected:.1f} %)" if rate is not None and expected else ""
         e = html.escape
         fresh = (
             f"<b style='color:#b03a2e'>⚠ {e(fresh_txt)}</b>"
@@ -415,8 +419,8 @@ class BenchGui:
         ):
             v = s.get(key)
             if v is not None:
-                warn = (key == "bus_state" and v != "ERROR_ACTIVE") or (
-                    key == "store_status" and v != "ok"
+                warn = (key == "bus_state" and v in ("ERROR_PASSIVE", "BUS_OFF")) or (
+                    key == "store_status" and v in ("damaged", "unreadable")
                 )
                 txt = f"<b>{label}</b> {e(str(v))}"
                 extra.append(f"<span style='color:#b03a2e'>{txt}</span>" if warn else txt)
@@ -424,7 +428,7 @@ class BenchGui:
             f"<span title='TPDO frames that the drive&#39;s event timer promised but that did "
             f"not arrive, per second over the last {DROP_WINDOW_S:g} s (total since start: "
             f"{e(str(live.get('dropped', '–')))})'><b>dropped</b> "
-            f"{_fmt(rate, '.1f')} frames/s</span>"
+            f"{_fmt(rate, '.1f')} frames/s{share}</span>"
         )
         lines = [
             fresh,

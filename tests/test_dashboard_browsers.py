@@ -23,16 +23,18 @@ import pytest
 from fastapi.testclient import TestClient
 
 from dashboard.app import create_app
-from dashboard.browser import CHROMIUM, launch, text_input
+from dashboard.browser import CHROMIUM, click, launch, text_input
 from dashboard.config import BenchConfig
 from dashboard.gui import LEASE_GRACE_S
 
 pytestmark = [
-    pytest.mark.timeout(300),
+    pytest.mark.timeout(600),  # two Chromium start-ups take minutes at load 20-30
     pytest.mark.skipif(not os.path.exists(CHROMIUM), reason="needs Debian's chromium"),
 ]
 
 L = 14.8e-6
+VIEWPORT = {"width": 1400, "height": 900}  # the README screenshot's size
+SCROLL_TOP = "() => document.querySelectorAll('*').forEach(e => { e.scrollTop = 0; })"
 
 
 @pytest.fixture(scope="module")
@@ -51,7 +53,7 @@ def pages(api):
         browsers = [launch(p), launch(p)]  # two Chromium processes: two real browsers
         out = []
         for b in browsers:
-            pg = b.new_page(viewport={"width": 1400, "height": 1000})
+            pg = b.new_page(viewport=VIEWPORT)
             pg.goto(url)
             pg.get_by_role("button", name="Enable").wait_for(timeout=60_000)
             out.append(pg)
@@ -81,15 +83,6 @@ def wait_until(cond, timeout: float = 30.0, what: str = "condition") -> None:
             return
         time.sleep(0.1)
     raise AssertionError(f"{what} not met within {timeout} s")
-
-
-def click(page, locator) -> None:
-    """A DOM click (the panel re-renders several times a second, so Playwright's actionability
-    wait for a 'stable' element can time out on a busy host)."""
-    locator.first.wait_for(state="attached", timeout=60_000)
-    locator.first.evaluate("e => e.scrollIntoView({block: 'center'})")
-    locator.first.click(force=True, timeout=60_000)  # a real mouse click, no stability wait
-    time.sleep(0.15)  # viser batches GUI messages in 50 ms windows
 
 
 def type_into(page, label: str, value: str) -> None:
@@ -133,6 +126,12 @@ def test_inputs_are_per_browser_and_only_the_controller_applies(api, pages):
 def test_typed_values_are_strict_and_nothing_is_sent(api, pages):
     a, _ = pages
     click(a, a.get_by_role("tab", name="Tuning"))
+    a.evaluate(SCROLL_TOP)  # the panel from its top: preview and Apply without scrolling
+    time.sleep(0.3)
+    for name in ("Apply gains", "Read back"):
+        box = a.get_by_role("button", name=name).bounding_box()
+        assert box is not None and box["y"] + box["height"] <= VIEWPORT["height"], (name, box)
+    assert a.get_by_text("Before applying").bounding_box()["y"] < VIEWPORT["height"]
     before = api.get("/api/gains").json()["L_c"]
     type_into(a, "L_c / L", "-0.5")
     wait_text(a, r"L_c / L: -0\.5 is outside the range .* nothing sent")

@@ -80,7 +80,7 @@ def test_speed_step_in_the_browser(page):
     click(page, page.get_by_role("button", name="Enable"))
     wait_text(page, r"OPERATION ENABLED")
     plot = page.locator(".uplot").first
-    before = plot.screenshot()
+    before = plot.screenshot(timeout=60_000)
     click(page, page.get_by_role("button", name="+ step"))
     seen: list[float] = []
     deadline = time.monotonic() + 30
@@ -93,10 +93,10 @@ def test_speed_step_in_the_browser(page):
         time.sleep(0.1)
     assert seen and abs(seen[-1] - 500.0) < 5.0, f"speed never reached 500 rpm: {seen[-5:]}"
     assert any(20.0 < s < 480.0 for s in seen), f"no intermediate speed seen: {seen}"
-    after = plot.screenshot()
+    after = plot.screenshot(timeout=60_000)
     assert after != before  # the speed plot moved
     time.sleep(0.5)
-    assert plot.screenshot() != after  # and keeps scrolling (live)
+    assert plot.screenshot(timeout=60_000) != after  # and keeps scrolling (live)
 
 
 def test_one_controller_and_visible_take_over(page, bench):
