@@ -39,12 +39,13 @@ def decimate(
 
 
 def _argext(v: np.ndarray, starts: np.ndarray, ends: np.ndarray, ufunc) -> np.ndarray:
-    """Per segment [starts[i], ends[i]) the offset of its min (ufunc=np.minimum) or max."""
+    """Per segment [starts[i], ends[i]) the index of its first min (ufunc=np.minimum) or max,
+    relative to its start (vectorised: no Python loop over the segments)."""
     ext = ufunc.reduceat(v, starts)
-    out = np.empty(len(starts), dtype=np.int64)
-    for i, (s, e) in enumerate(zip(starts, ends, strict=True)):
-        out[i] = int(np.argmax(v[s:e] == ext[i]))
-    return out
+    seg = np.repeat(np.arange(len(starts)), ends - starts)
+    hits = np.flatnonzero(v == ext[seg])
+    _, first = np.unique(seg[hits], return_index=True)
+    return hits[first] - starts
 
 
 def min_span_envelope(n: int, *series: np.ndarray, min_span: float) -> np.ndarray:
