@@ -90,9 +90,10 @@ def test_two_ms_inhibit_gives_500_hz_not_the_next_tick(bench):
     # even the bus's own send stamps are at least 2 ms apart
     assert rate <= 500 * 1.01 + 1, rate
     assert min(gaps) >= 2.0e-3 - 1e-6, min(gaps)
-    # and not snapped to the 1 ms pacing tick (that gave 331-336 Hz, i.e. 3 ms gaps)
-    assert rate >= min_rate(500, probe.wait), (rate, probe)
-    assert statistics.median(gaps) < 2.5e-3, statistics.median(gaps)
+    # and not snapped to the 1 ms pacing tick (that gave 331-336 Hz, i.e. 3 ms gaps); the
+    # thread's wake-up lateness (GIL hand-over included) adds to each 2 ms gap on a busy host
+    assert rate >= min_rate(500, probe.wait, margin=0.75), (rate, probe)
+    assert statistics.median(gaps) < 2.7e-3, statistics.median(gaps)
 
 
 def test_stalled_periods_are_counted_not_burst(bench):
