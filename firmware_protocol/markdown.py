@@ -145,7 +145,10 @@ def render_markdown(view: ObjectDictionaryView) -> str:
     add("a valid COB-ID on a restricted CAN-ID: " + ", ".join(
         f"0x{lo:03X}" if lo == hi else f"0x{lo:03X}-0x{hi:03X}" for lo, hi in RESTRICTED_CAN_IDS
     ) + ".")
-    add("PDO COB-IDs and mappings change only in PRE-OPERATIONAL (0x08000022 in OPERATIONAL).")
+    add("PDO COB-IDs and mappings change only in PRE-OPERATIONAL (0x08000022 in OPERATIONAL);")
+    add("the inhibit time (sub 3) of a valid PDO cannot change (0x06090030). Event-driven TPDOs")
+    add("are sent at their event-timer grid point, never before the previous transmission plus")
+    add("the inhibit time; periods missed by a late drive are counted in `tpdo_missed_events`.")
     add("0x1016 entries: bits 31..24 reserved (0); time 0 = entry off; node-ID 0 with a time,")
     add("a node-ID above 127 or the drive's own node-ID: 0x06090030; two active entries for the")
     add("same node: 0x06040043. Python: `firmware_protocol.cob_id`.")
