@@ -115,6 +115,7 @@ class Drive:
         net = conn.network
         #: re-applies this session's supervision when the drive restarts (see supervision.py)
         self.supervisor = Supervisor(net, node_id, restart_producer=self._restart_producer)
+        self.supervisor.send_heartbeat = self._send_host_heartbeat
         self.sdo = SupervisedSdoChannel(
             net, node_id, 0x600 + node_id, 0x580 + node_id, sdo_timeout, retries
         )
@@ -336,6 +337,12 @@ class Drive:
         """Re-apply the session's heartbeat consumer, 0x6007 and PDO settings now."""
         return self.supervisor.rearm()
 
+    def _send_host_heartbeat(self) -> None:
+        """One host heartbeat now (besides the periodic ones), if this host produces one."""
+        if self._producer is None or self.host_id is None:
+            return
+        self._conn.network.send_message(0x700 + self.host_id, bytes([0x05]))
+
     def _restart_producer(self) -> None:
         """Start the host heartbeat again (its periodic task may have died with a bus error)."""
         if self._producer is None or self.host_id is None:
@@ -360,6 +367,8 @@ class Drive:
             raise InvalidValue(f"heartbeat consumer time {t} ms outside 1..65535")
         self.write("consumer_heartbeat_time.consumer_1", (self.host_id << 16) | t)
         self._consumer_configured = True
+        # CiA 301: the consumer starts watching at the first heartbeat after its configuration
+        self._send_host_heartbeat()
 
     def stop_host_heartbeat(self) -> None:
         """Stop sending the host heartbeat (e.g. to test the drive's consumer reaction)."""

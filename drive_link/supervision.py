@@ -164,6 +164,8 @@ class Supervisor:
         self.cob_id = 0x700 + node_id
         self._network = network
         self.restart_producer = restart_producer
+        #: sends one host heartbeat now (None: no producer)
+        self.send_heartbeat: Callable[[], None] | None = None
         self.wait_timeout = wait_timeout
         self.gap_factor = gap_factor
         #: how long (s) a re-arm keeps retrying a node that does not answer yet
@@ -178,6 +180,7 @@ class Supervisor:
         self._closed = False
         self._last_state: int | None = None
         self._last_hb: float | None = None
+        self._last_stamp = 0.0
         self._producer_ms = 0
         self._expect_preop_until = 0.0
         self.boots_seen = 0
@@ -284,16 +287,20 @@ class Supervisor:
             return
         state = data[0] & 0x7F
         now = time.monotonic()
+        stamp = float(timestamp or 0.0)
         reason = None
         boot = False
         with self._lock:
             last_hb, last_state = self._last_hb, self._last_state
-            self._last_hb, self._last_state = now, state
+            last_stamp = self._last_stamp
+            self._last_hb, self._last_state, self._last_stamp = now, state, stamp
             if state == BOOT_UP:
                 boot = True
                 reason = "boot-up message"
             elif last_hb is not None and self._producer_ms > 0:
-                gap = now - last_hb
+                # the frames' interface timestamps when the bus gives them: a busy host's late
+                # notifier thread then does not look like a silent drive
+                gap = stamp - last_stamp if stamp > 0 and last_stamp > 0 else now - last_hb
                 limit = max(self.gap_factor * self._producer_ms / 1000.0, 0.15)
                 if gap > limit and state != STOPPED:
                     reason = f"heartbeat resumed after {gap * 1e3:.0f} ms"
@@ -396,7 +403,7 @@ class Supervisor:
             return report
         if stale_first or stale_plain or stale_groups:
             report.reboot = True
-        if (PRODUCER_HEARTBEAT, 0) not in journal:
+        if journal and (PRODUCER_HEARTBEAT, 0) not in journal:
             self._refresh_producer_time(sdo)  # another master may have changed it
         if report.reboot and not boot:
             with self._lock:
@@ -411,6 +418,13 @@ class Supervisor:
         # 2. the supervision objects, then the rest, PDOs last
         for k in stale_first + stale_plain:
             self._write(sdo, k, journal[k], report)
+            if k[0] == CONSUMER_HEARTBEAT and self.send_heartbeat is not None:
+                # CiA 301: the consumer starts watching at the first heartbeat it receives
+                # after being configured; one now means a host that dies this instant is caught
+                try:
+                    self.send_heartbeat()
+                except Exception as exc:
+                    report.failed["host heartbeat"] = str(exc)
         for g in stale_groups:
             write_pdo_group(sdo, g, groups[g], journal, report)
         report.seconds = time.monotonic() - t0

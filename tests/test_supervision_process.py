@@ -30,6 +30,8 @@ def test_killed_and_restarted_drive_process_is_rearmed(tmp_path):
                               host_id=HOST, sdo_timeout=0.5)
             try:
                 detected = threading.Event()
+                events: list[dict] = []
+                d.on_supervision(events.append)
                 d.on_supervision(
                     lambda e: detected.set() if e["event"] == "reboot_detected" else None
                 )
@@ -48,7 +50,13 @@ def test_killed_and_restarted_drive_process_is_rearmed(tmp_path):
                     if any(e.code == 0x8130 for e in d.emcy_history[n:]):
                         break
                     time.sleep(0.05)
-                assert any(e.code == 0x8130 for e in d.emcy_history[n:]), "consumer not armed"
+                assert any(e.code == 0x8130 for e in d.emcy_history[n:]), (
+                    "consumer not armed",
+                    hex(int(d.read("consumer_heartbeat_time.consumer_1"))),
+                    d.state,
+                    [e.code for e in d.emcy_history],
+                    [(e["event"], e.get("reason"), e.get("written")) for e in events],
+                )
             finally:
                 d.close()
         finally:
