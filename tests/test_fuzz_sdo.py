@@ -538,3 +538,22 @@ def test_sdo_fuzz_at_1000_rpm(eds):
     assert accepted + refused >= N_DOWNLOADS
     assert accepted > 100 and refused > 100  # both paths exercised
     assert not violations, f"{len(violations)} violations:\n" + "\n".join(violations[:30])
+
+
+def test_oracle_flags_what_the_issue_found(eds):
+    """The rules the fuzz judges by refuse what issue 10 reported as accepted, and allow
+    ordinary values (so an accepting drive cannot pass by luck)."""
+    R_c, emcy, consumer = eds[(0x2010, 3)], eds[(0x1014, 0)], eds[(0x1016, 1)]
+    assert must_refuse(R_c, _f32(1.4e-45))  # subnormal R_c
+    assert must_refuse(R_c, _f32(math.nan)) and must_refuse(R_c, _f32(math.inf))
+    assert must_refuse(R_c, _f32(5e-5))  # below MinNonZero
+    assert must_refuse(R_c, _f32(1.0001)) and must_refuse(R_c, b"\0\0")
+    assert must_refuse(R_c, _f32(0.0)) is None and must_refuse(R_c, _f32(0.0062)) is None
+    for cob in (0x000, 0x601, 0x20000089, 0xFFFFFFFF, 0x705):
+        assert must_refuse(emcy, struct.pack("<I", cob)), hex(cob)
+    assert must_refuse(emcy, struct.pack("<I", 0x80 + NODE)) is None  # its default
+    assert must_refuse(emcy, struct.pack("<I", 0x0A0)) is None
+    assert must_refuse(consumer, struct.pack("<I", (0xFF << 16) | 500))
+    assert must_refuse(consumer, struct.pack("<I", (0x7F << 16) | 500)) is None
+    assert must_refuse(None, b"\0")  # a sub-index that does not exist
+    assert must_refuse(eds[(0x6041, 0)], b"\0\0")  # read-only
