@@ -114,8 +114,7 @@ def test_stalled_periods_are_counted_not_burst(bench):
     t_read = time.time()
     # at least the held 50 ms; more only if the machine stalled the process as well
     assert 40 <= missed <= (t_read - t_stall) * 1000 + 2, missed
-    after = stamps.between(t_stall, t_stall + 0.1)
-    assert len(after) >= 20  # frames flow again after the stall
+    assert len(stamps.between(t_release, t_read)) >= 3  # frames flow again after the stall
     # no catch-up burst of the ~50 missed frames: the frame held in the send path, the late
     # one, then the 1 ms grid again (a few frames in the first 5 ms, not dozens)
     first = stamps.between(t_release, t_release + 0.005)
