@@ -209,6 +209,9 @@ def test_store_is_atomic_under_kill9(tmp_path):
             text=True,
         )
         assert proc.stdout.readline().strip() == "go"
+        deadline = time.monotonic() + 30  # a busy host may not have run the first save yet
+        while not path.exists() and time.monotonic() < deadline:
+            time.sleep(0.01)
         time.sleep(rng.uniform(0.02, 0.2))
         os.kill(proc.pid, signal.SIGKILL)
         proc.wait()
