@@ -269,7 +269,7 @@ def test_a_stalled_client_overruns_without_blocking_the_hub():
         assert stalled.recv(6) == b"< ok >"  # ... and then never reads again
         tx = RawClient(hub.port)
         tx.send(b"".join(b"< send 181 2 %x %x >" % (i >> 8, i & 255) for i in range(count)))
-        deadline = time.monotonic() + 10
+        deadline = time.monotonic() + 60  # ~3 s idle; a busy host runs the hub far slower
         while time.monotonic() < deadline:
             st = hub.stats
             if st.frames_received == count and st.frames_pending == 0:
@@ -284,7 +284,7 @@ def test_a_stalled_client_overruns_without_blocking_the_hub():
         a.send(can.Message(arbitration_id=0x100, data=[1], is_extended_id=False))
         m = b.recv(2.0)
         assert m is not None and m.arbitration_id == 0x100
-        assert time.monotonic() - t0 < 0.2
+        assert time.monotonic() - t0 < 1.0  # not held behind the stalled client (~1 ms idle)
         a.shutdown()
         b.shutdown()
         tx.close()
