@@ -49,7 +49,7 @@ class BenchConfig:
     allow_remote: bool = False
     token: str | None = None
     live_window_s: float = 4.0
-    gui_rate_hz: float = 30.0
+    gui_rate_hz: float = 24.0  # plot refreshes/s (≤ 0.5 MB/s per tab); a step pushes at once
     scene_3d: bool = True
     stream_rate_hz: float = 20.0
     extra_origins: list[str] = field(default_factory=list)

@@ -45,7 +45,7 @@ MIN_SPAN_SPEED_RPM = 50.0  #: the speed plot's y axis spans at least this (rpm)
 MIN_SPAN_I_P_A = 5.0  #: the i_p plot's y axis spans at least this (A)
 BRAND_COLOR = (31, 97, 141)  #: steel blue: buttons, tabs, sliders
 LEASE_GRACE_S = 10.0  #: a browser whose WebSocket closed loses control after this (s)
-PLOT_BUCKETS = 100  #: time buckets per live plot (≤ 3 points each sent: min, max, last)
+PLOT_BUCKETS = 80  #: time buckets per live plot (≤ 3 points each sent: min, max, last)
 WATCHDOG_S = 3.0  #: a plot thread silent for this long is replaced (s)
 DROP_WINDOW_S = 5.0  #: dropped-frame rate over this window (s)
 
@@ -230,9 +230,12 @@ class BenchGui:
         streams it back within a few ms), at most WAKE_TIMEOUT_S after the setpoint change."""
         target = self._wake_target
         deadline = time.monotonic() + WAKE_TIMEOUT_S
+        live = self.bench.drive.live
         while target is not None and time.monotonic() < deadline and not self._stop.is_set():
-            if self.push_plots(require=target):
-                return
+            # the newest value first (cheap), the whole window only once it is there
+            if abs(live.latest().get(target[0], float("nan")) - target[1]) <= 1e-3:
+                if self.push_plots(require=target):
+                    return
             time.sleep(0.001)
         self.push_plots()
 
