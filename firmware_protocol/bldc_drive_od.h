@@ -2934,6 +2934,14 @@
 #define OD_SPEED_MODEL_B                                         0.000333715f /* rpm/(A sample), eq. (26) */
 #define OD_LOOP_TS                                               2e-05f /* s */
 #define OD_SPEED_LOOP_TAU_MAX                                    10.0f /* s */
+#define OD_SPEED_LOOP_ZETA_MIN                                   0.3f /* least damping of a pair */
+
+/* ---- Current loop admissibility (see OD.md): closed-loop poles inside rho, a law
+ *      without integral action only with the back-EMF feed-forward, predictive
+ *      compensation error <= share of rated current, cascade poles stable ---- */
+#define OD_CURRENT_LOOP_TAU_MAX                                  0.005f /* s */
+#define OD_CURRENT_COMP_MAX_SHARE                                0.1f /* 1 */
+#define OD_CURRENT_NO_INTEGRAL_MIN_L_RATIO                       0.5f /* L_c/L, predictive or R_c = 0 */
 
 /* ---- Restricted 11-bit CAN-IDs (CiA 301 7.3.5): no valid configurable COB-ID may use
  *      them; 29-bit COB-IDs (bit 29) and a new CAN-ID while valid are refused ---- */

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import re
 
-from . import stability
+from . import current_stability, stability
 from .cob_id import RESTRICTED_CAN_IDS
 from .emcy_codes import EMCY_CODES
 from .entry import Entry
@@ -206,6 +206,18 @@ def render_header(view: ObjectDictionaryView) -> str:
     define("OD_SPEED_MODEL_B", f"{stability.B_IDENTIFIED!r}f", "rpm/(A sample), eq. (26)")
     define("OD_LOOP_TS", f"{stability.TS!r}f", "s")
     define("OD_SPEED_LOOP_TAU_MAX", f"{stability.TAU_MAX!r}f", "s")
+    define("OD_SPEED_LOOP_ZETA_MIN", f"{stability.ZETA_MIN!r}f", "least damping of a pair")
+    add("")
+    add("/* ---- Current loop admissibility (see OD.md): closed-loop poles inside rho, a law")
+    add(" *      without integral action only with the back-EMF feed-forward, predictive")
+    add(" *      compensation error <= share of rated current, cascade poles stable ---- */")
+    define("OD_CURRENT_LOOP_TAU_MAX", f"{current_stability.TAU_MAX_CURRENT!r}f", "s")
+    define("OD_CURRENT_COMP_MAX_SHARE", f"{current_stability.COMP_MAX_SHARE!r}f", "1")
+    define(
+        "OD_CURRENT_NO_INTEGRAL_MIN_L_RATIO",
+        f"{current_stability.NO_INTEGRAL_MIN_RATIO!r}f",
+        "L_c/L, predictive or R_c = 0",
+    )
     add("")
     add("/* ---- Restricted 11-bit CAN-IDs (CiA 301 7.3.5): no valid configurable COB-ID may use")
     add(" *      them; 29-bit COB-IDs (bit 29) and a new CAN-ID while valid are refused ---- */")

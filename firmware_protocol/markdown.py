@@ -3,7 +3,7 @@ mapping, enumerations and cross-object constraints."""
 
 from __future__ import annotations
 
-from . import stability
+from . import current_stability, stability
 from .cob_id import RESTRICTED_CAN_IDS
 from .emcy_codes import EMCY_CODES
 from .entry import Entry
@@ -134,8 +134,38 @@ def render_markdown(view: ObjectDictionaryView) -> str:
     add("both poles strictly inside the unit circle; else 0x06090031), and the slowest pole")
     add(f"no slower than {stability.TAU_MAX:g} s: |p| <= exp(-Ts / {stability.TAU_MAX:g} s)")
     add("(else 0x06090032). Gains are rounded to float32 first; the poles are computed on")
-    add("w = z - 1 without cancellation.")
+    add("w = z - 1 without cancellation. A complex pole pair must be damped at least")
+    add(f"zeta = -ln|p| / |ln p| >= {stability.ZETA_MIN:g} (else 0x06090031).")
     add("Python: `firmware_protocol.stability.check_ip_speed_gains`.")
+    add("")
+    cs = current_stability
+    add("## Admissibility rule of the current loop and of the cascade")
+    add("")
+    add("Checked on the whole active set (0x2010:1..10 with motor.R/L/rated_current/")
+    add("V_dc_nominal and speed k_p/k_i) at every write of any of them, with the new value in")
+    add("place, and on the staged set as a whole when `gain_set_apply` applies it (staging")
+    add("0x20F0 is scratch space: any order). On P(z) = Gamma/(z (z - Phi)) (eqs. 4, 5, 8 with")
+    add("motor.R, motor.L):")
+    add("")
+    add(f"1. every closed-loop pole of the current loop inside |z| < rho, rho = max(exp(-Ts / "
+        f"{cs.TAU_MAX_CURRENT * 1e3:g} ms),")
+    add("   exp(-R Ts / (2 L)), and for deadbeat with R_c > 0 exp(-R_c Ts / (2 L_c))): stable")
+    add("   and not slower than 5 ms or than twice a time constant the law itself contains")
+    add("   (0x06090031 unstable, 0x06090032 too slow). Deadbeat/predictive: about")
+    add("   0.008 < L_c/L < 1.992 (eq. 17: 0 < L_c < 2 L); PI: bounds k_p, k_i;")
+    add("2. a law without integral action (predictive, type 2; deadbeat with R_c = 0) needs")
+    add("   `emf_feedforward` = 1 (paper: the predictive controller cannot be implemented")
+    add("   without feed-forward), else 0x06090030, and L_c >= "
+        f"{cs.NO_INTEGRAL_MIN_RATIO:g} L (an unmodelled")
+    add("   voltage dV leaves dV / (L_c f_s + 2 R) of current error), else 0x06090032;")
+    add("3. predictive: the eq. (25) compensation, if the estimates were entirely wrong,")
+    add("   (2 T_BT f_s V_dc + 2 V_G + (T_DD + T_SD) f_s V_dc / 2) / (L_c f_s + 2 R), with")
+    add(f"   V_dc = motor.V_dc_nominal, at most {cs.COMP_MAX_SHARE:.0%} of motor.rated_current")
+    add("   (else 0x06090031);")
+    add("4. the IP speed loop around this current loop (eq. 27 on b/(z - a) times the closed")
+    add("   current loop) has every pole inside |z| <= exp(-Ts / 10 s) (else 0x06090031).")
+    add("")
+    add("Python: `firmware_protocol.current_stability.check_current_gains`, `check_cascade`.")
     add("")
     add("## COB-ID rules (CiA 301)")
     add("")

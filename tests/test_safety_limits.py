@@ -25,6 +25,7 @@ from firmware_protocol.stability import (
     A_IDENTIFIED,
     B_IDENTIFIED,
     TAU_MAX,
+    ZETA_MIN,
     check_ip_speed_gains,
 )
 
@@ -96,6 +97,9 @@ def test_R_c_zero_or_at_least_1e4_and_at_most_2R(bench):
     assert abort(bench, "current_controller.R_c", 2.01 * R) == TOO_HIGH
     assert abort(bench, "current_controller.R_c", 1.0) == TOO_HIGH  # inside the old [0, 1]
     assert abort(bench, "gain_set.R_c", 1.0) == TOO_HIGH
+    # R_c = 0 removes the deadbeat law's integral action: only with the back-EMF feed-forward
+    assert abort(bench, "current_controller.R_c", 0.0) == INVALID
+    bench.write("current_controller.emf_feedforward", 1)
     for ok in (0.0, 1e-4, R, 2 * R):
         assert abort(bench, "current_controller.R_c", ok) is None
         assert bench.read("current_controller.R_c") == pytest.approx(ok, rel=1e-6)
@@ -241,18 +245,24 @@ def ip_closed_loop_poles(k_p: float, k_i: float) -> np.ndarray:
 
 @pytest.mark.filterwarnings("ignore")  # scipy warns on the tiny-gain pairs' coefficients
 def test_ip_rule_matches_the_closed_loop_poles():
-    """Accepted iff every pole is inside the unit circle and the slowest is not slower than
-    TAU_MAX; pairs whose slowest pole lies within 1e-8 of that bound are skipped (float64 root
+    """Accepted iff every pole is inside the unit circle, the slowest is not slower than
+    TAU_MAX and a complex pair is damped at least ZETA_MIN (zeta = -ln|p| / |ln p|); pairs
+    whose slowest pole lies within 1e-8 of that bound are skipped (float64 root
     finding of a near-double root at z = 1 is only that accurate)."""
     bound = math.exp(-TS / TAU_MAX)
     rng = random.Random(7)
     pairs = [(0.2113, 2.9994e-5), (100.0, 1.0), (5000.0, 0.01), (6000.0, 0.5), (1e-6, 1e-9)]
     pairs += [(10 ** rng.uniform(-4, 4), 10 ** rng.uniform(-8, 1)) for _ in range(80)]
     pairs += [(10 ** rng.uniform(3.5, 5), 10 ** rng.uniform(-3, 1)) for _ in range(20)]
-    seen = {"ok": 0, "unstable": 0, "slow": 0}
+    seen = {"ok": 0, "unstable": 0, "slow": 0, "lightly damped": 0}
     for k_p, k_i in pairs:
-        slowest = float(np.max(np.abs(ip_closed_loop_poles(np.float32(k_p), np.float32(k_i)))))
+        poles = ip_closed_loop_poles(np.float32(k_p), np.float32(k_i))
+        slowest = float(np.max(np.abs(poles)))
         if abs(slowest - bound) < 1e-8:
+            continue
+        pairs_ = [np.log(complex(p)) for p in poles if abs(complex(p).imag) > 1e-12]
+        zeta = min((-z.real / abs(z) for z in pairs_), default=1.0)  # complex pairs only
+        if abs(zeta - ZETA_MIN) < 1e-3:
             continue
         try:
             check_ip_speed_gains(k_p, k_i)
@@ -265,6 +275,9 @@ def test_ip_rule_matches_the_closed_loop_poles():
         elif slowest > bound:
             assert code in (TOO_LOW, TOO_HIGH), (k_p, k_i, slowest)
             seen["slow"] += 1
+        elif zeta < ZETA_MIN:
+            assert code == TOO_HIGH, (k_p, k_i, zeta)
+            seen["lightly damped"] += 1
         else:
             assert code is None, (k_p, k_i, slowest)
             seen["ok"] += 1

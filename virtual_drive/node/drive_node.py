@@ -35,6 +35,12 @@ from canopen.sdo import SdoAbortedError
 
 from firmware_protocol.cia402 import CW_HALT, SW_SPEED_ZERO
 from firmware_protocol.cob_id import check_cob_id, check_heartbeat_consumers
+from firmware_protocol.current_stability import (
+    CURRENT_KEYS,
+    MOTOR_KEYS,
+    check_cascade,
+    check_current_gains,
+)
 from firmware_protocol.entry import LimitError
 from firmware_protocol.enums import StoreStatus
 from firmware_protocol.od import load_od
@@ -70,6 +76,8 @@ ABORT_PARAM_INCOMPATIBLE = 0x06040043
 ABORT_HARDWARE = 0x06060000
 ABORT_STORE = 0x08000020
 ABORT_DEVICE_STATE = 0x08000022
+ABORT_NO_OBJECT = 0x06020000
+ABORT_NO_SUBINDEX = 0x06090011
 
 MODE_CURRENT = -1  #: manufacturer mode: i_p* = setpoints.i_p_ref (A)
 MODE_PROFILE_VELOCITY = 3
@@ -130,6 +138,21 @@ class DriveLocalNode(LocalNode):
 
     def remove_network(self) -> None:
         self.network = canopen.network._UNINITIALIZED_NETWORK
+
+    def _find_object(self, index: int, subindex: int) -> odm.ODVariable:
+        """The variable at ``index:subindex``; CiA 301 aborts 0x06020000 (no object) and
+        0x06090011 (no sub-index: also a sub-index other than 0 of a VAR, which canopen's
+        LocalNode would otherwise resolve to the VAR itself)."""
+        obj = self.object_dictionary.get(index)
+        if obj is None:
+            raise SdoAbortedError(ABORT_NO_OBJECT)
+        if isinstance(obj, odm.ODVariable):
+            if subindex != 0:
+                raise SdoAbortedError(ABORT_NO_SUBINDEX)
+            return obj
+        if subindex not in obj.subindices:  # an ODArray would make up any sub-index
+            raise SdoAbortedError(ABORT_NO_SUBINDEX)
+        return obj.subindices[subindex]
 
     def get_data(self, index: int, subindex: int, check_readable: bool = False) -> bytes:
         obj = self._find_object(index, subindex)
@@ -410,6 +433,12 @@ class VirtualDrive:
         try:
             self.view.check_constraints(values)
             check_ip_speed_gains(values["speed_controller.k_p"], values["speed_controller.k_i"])
+            gains = {k: values[f"current_controller.{k}"] for k in CURRENT_KEYS}
+            motor = {k: values[f"motor.{k}"] for k in MOTOR_KEYS}
+            check_current_gains(gains, motor)
+            check_cascade(
+                gains, motor, values["speed_controller.k_p"], values["speed_controller.k_i"]
+            )
         except LimitError as exc:
             return str(exc)
         return None
@@ -797,6 +826,9 @@ class VirtualDrive:
         self.checker.check_rules(changes, staged=True)
         if which & 2:
             self.checker.check_speed_gains(staged[11], staged[12])
+        self.checker.check_current_set(
+            {}, gains=current_kw, speed=(staged[11], staged[12]) if which & 2 else None
+        )
         with self.sim_lock:
             old_current = {k: self._value(0x2010, s) for s, k in plant.CURRENT_KW.items()}
             try:

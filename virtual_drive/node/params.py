@@ -8,7 +8,11 @@ on the staged gain set (0x20F0) hold on every write of either side (a staged L_c
 refused when written, and so is a motor.L below half of an active or staged L_c) and the set is
 checked again as a whole when 0x20F1 is written. Speed-loop gains must form a stable IP loop
 (:func:`firmware_protocol.stability.check_ip_speed_gains`): a write of 0x2020:1/2 is checked with
-the other gain's present value, the staged pair 0x20F0:11/12 when it is applied.
+the other gain's present value, the staged pair 0x20F0:11/12 when it is applied. Current-loop
+gain sets must be admissible (:func:`firmware_protocol.current_stability.check_current_gains`:
+closed-loop poles, predictive feed-forward and compensation bounds): a write of any 0x2010:1..10
+or of motor.R/L/rated_current/V_dc_nominal is checked on the whole active set with the new
+value in place, the staged set 0x20F0:1..10 when 0x20F1 applies it.
 """
 
 from __future__ import annotations
@@ -17,6 +21,12 @@ from collections.abc import Callable, Mapping
 
 from canopen.sdo import SdoAbortedError
 
+from firmware_protocol.current_stability import (
+    CURRENT_KEYS,
+    MOTOR_KEYS,
+    check_cascade,
+    check_current_gains,
+)
 from firmware_protocol.od import Entry, LimitError, ObjectDictionaryView
 from firmware_protocol.stability import check_ip_speed_gains
 
@@ -27,6 +37,8 @@ ABORT_VALUE_TOO_HIGH = 0x06090031
 ABORT_VALUE_TOO_LOW = 0x06090032
 
 _IP_GAINS = ("speed_controller.k_p", "speed_controller.k_i")
+_CURRENT = tuple(f"current_controller.{k}" for k in CURRENT_KEYS)
+_MOTOR = tuple(f"motor.{k}" for k in MOTOR_KEYS)
 
 
 class ParamChecker:
@@ -58,7 +70,32 @@ class ParamChecker:
             if entry.name in _IP_GAINS:
                 gains = {n: self._current(n) for n in _IP_GAINS} | {entry.name: value}
                 self.check_speed_gains(*(gains[n] for n in _IP_GAINS))
+            if entry.name in _CURRENT or entry.name in _MOTOR or entry.name in _IP_GAINS:
+                self.check_current_set({entry.name: value})
         return value
+
+    def check_current_set(
+        self,
+        changes: Mapping[str, Number],
+        gains: Mapping[str, Number] | None = None,
+        speed: tuple[Number, Number] | None = None,
+    ) -> None:
+        """The current-loop rule and the cascade rule on the active current set (or ``gains``,
+        keys :data:`CURRENT_KEYS`, e.g. the staged set) and the active IP pair (or ``speed``)
+        with ``changes`` (full OD names) in place, as SdoAbortedError."""
+        g = {
+            k: changes.get(n, gains[k] if gains is not None and k in gains else self._current(n))
+            for k, n in zip(CURRENT_KEYS, _CURRENT, strict=True)
+        }
+        m = {k: changes.get(n, self._current(n)) for k, n in zip(MOTOR_KEYS, _MOTOR, strict=True)}
+        if speed is None:
+            speed = (changes.get(n, self._current(n)) for n in _IP_GAINS)
+        k_p, k_i = speed
+        try:
+            check_current_gains(g, m)
+            check_cascade(g, m, k_p, k_i)
+        except LimitError as exc:
+            raise SdoAbortedError(exc.abort_code) from exc
 
     @staticmethod
     def check_speed_gains(k_p: Number, k_i: Number) -> None:
