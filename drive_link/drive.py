@@ -30,6 +30,10 @@ SAVE_SIGNATURE = 0x65766173  # "save"
 STORE_STATUS: dict[int, str] = {0: "ok", 1: "defaults", 2: "damaged", 3: "unreadable"}
 STORE_STATUS_INDEX = 0x2060
 LOAD_SIGNATURE = 0x64616F6C  # "load"
+CONSUMER_MIN_MS = 1000
+"""Shortest default heartbeat consumer time (ms) :meth:`Drive.configure_heartbeat_consumer`
+sets: max(CONSUMER_MIN_MS, 3 x the host producer period). 3 x 100 ms was too tight: at load 25
+the host's producer thread stalled > 300 ms and the drive quick-stopped with the host alive."""
 
 #: Gains field → (current/speed set, OD name of the active value, OD name of the staged value).
 _GAIN_OBJECTS: dict[str, tuple[int, str, str]] = {
@@ -359,10 +363,19 @@ class Drive:
 
     def configure_heartbeat_consumer(self, timeout_ms: int | None = None) -> None:
         """Make the drive watch this host's heartbeat (0x1016 sub1): on loss it reacts per
-        abort_connection_option_code (0x6007). ``timeout_ms`` defaults to 3 × the host period."""
+        abort_connection_option_code (0x6007).
+
+        ``timeout_ms`` defaults to max(:data:`CONSUMER_MIN_MS` = 1000 ms, 3 × the host producer
+        period): 1000 ms with the default 100 ms producer. CiA practice puts the consumer time
+        at 2-3 × the producer time plus the sender's jitter; the host is a general-purpose OS
+        whose producer thread was seen stalling > 300 ms at load 25 (a false heartbeat loss
+        quick-stops the motor). The price: a host that really dies is noticed up to ~1 s after
+        its last heartbeat instead of 0.3 s; pass a smaller ``timeout_ms`` on a quiet,
+        real-time host where faster reaction matters more than false stops."""
         if self._producer is None or self.host_id is None:
             raise StateError("no host heartbeat is produced (connect with heartbeat_ms)")
-        t = int(timeout_ms if timeout_ms is not None else 3 * self._producer.period_ms)
+        default = max(CONSUMER_MIN_MS, 3 * self._producer.period_ms)
+        t = int(timeout_ms if timeout_ms is not None else default)
         if not 0 < t <= 0xFFFF:
             raise InvalidValue(f"heartbeat consumer time {t} ms outside 1..65535")
         self.write("consumer_heartbeat_time.consumer_1", (self.host_id << 16) | t)
