@@ -4,7 +4,9 @@
 random index/sub-index (biased towards the objects of the EDS: communication objects
 0x1000–0x1FFF, manufacturer objects 0x2000–0x20FF, CiA 402 objects 0x6000–0x60FF), random lengths
 and bytes, REAL32 subnormals, NaN, ±inf and values at and just past the EDS limits, and
-cross-object orders (motor.L then L_c, staged gain_set then apply, L_c then motor.L). Asserted:
+cross-object orders (motor.L then L_c, staged gain_set then apply, L_c then motor.L, the
+current-controller set that tripped the drive in issue 10 written in random orders and staged).
+The controller objects 0x2010, 0x2020, 0x20F0 and 0x20F1 are in the random set. Asserted:
 
 * nothing is accepted outside the limits of the EDS (read here from the EDS text with
   configparser, independently of firmware_protocol), nor a wrong length, a non-finite REAL32, a
@@ -401,7 +403,15 @@ def _pick_target(rng: random.Random, eds: dict, keys: list) -> tuple[int, int]:
 def _scenario(rng: random.Random, eds: dict) -> list[tuple[int, int, bytes]]:
     """A cross-object order (values inside the EDS limits, so only the rules can refuse)."""
     L_obj, Lc_obj = eds[(0x2000, 2)], eds[(0x2010, 2)]
-    kind = rng.randrange(4)
+    kind = rng.randrange(6)
+    if kind >= 4:  # issue 10's tripping set (predictive, L_c = 0.2 L, big compensation times),
+        # written directly in a random order (4) or staged and applied (5)
+        h5 = [(1, bytes([2])), (2, _f32(0.2 * 14.8e-6)), (6, _f32(7.2e-6)), (8, _f32(10.4e-6)),
+              (7, _f32(2.3e-6)), (10, bytes([rng.randint(0, 1)]))]
+        rng.shuffle(h5)
+        if kind == 4:
+            return [(0x2010, sub, data) for sub, data in h5]
+        return [(0x20F0, sub, data) for sub, data in h5] + [(0x20F1, 0, bytes([1]))]
     if kind == 0:  # motor.L down, then L_c just under 2 x the new L
         L = rng.uniform(L_obj.low, 3 * L_obj.low)
         return [(0x2000, 2, _f32(L)), (0x2010, 2, _f32(min(1.9 * L, Lc_obj.high)))]
