@@ -14,6 +14,13 @@ from typing import Any
 import can
 
 from firmware_protocol.constraints import CONSTRAINTS
+from firmware_protocol.current_stability import (
+    CURRENT_KEYS,
+    MOTOR_KEYS,
+    check_cascade,
+    check_current_gains,
+)
+from firmware_protocol.entry import LimitError
 
 from . import cia402, connection
 from .emcy import Emcy, EmcyListener
@@ -30,6 +37,12 @@ SAVE_SIGNATURE = 0x65766173  # "save"
 STORE_STATUS: dict[int, str] = {0: "ok", 1: "defaults", 2: "damaged", 3: "unreadable"}
 STORE_STATUS_INDEX = 0x2060
 LOAD_SIGNATURE = 0x64616F6C  # "load"
+_LOOP_NAMES = frozenset(
+    [f"current_controller.{k}" for k in CURRENT_KEYS]
+    + [f"motor.{k}" for k in MOTOR_KEYS]
+    + ["speed_controller.k_p", "speed_controller.k_i"]
+)
+"""Objects whose write the current-loop/cascade rule checks (as the drive does)."""
 CONSUMER_MIN_MS = 1000
 """Shortest default heartbeat consumer time (ms) :meth:`Drive.configure_heartbeat_consumer`
 sets: max(CONSUMER_MIN_MS, 3 x the host producer period). 3 x 100 ms was too tight: at load 25
@@ -297,7 +310,24 @@ class Drive:
         v = obj.check(value)
         if isinstance(v, int | float):
             self._check_rules({name: v})
+            if name in _LOOP_NAMES:
+                self._check_loops({name: v})
         self.sdo.download(obj.index, obj.subindex, data, name)
+
+    def _check_loops(self, values: dict[str, float | int]) -> None:
+        """Client-side current-loop and cascade rule (firmware_protocol.current_stability),
+        the drive's present set read back with ``values`` in place."""
+        def present(n: str) -> Any:
+            return values[n] if n in values else self.read(n)
+
+        g = {k: present(f"current_controller.{k}") for k in CURRENT_KEYS}
+        m = {k: present(f"motor.{k}") for k in MOTOR_KEYS}
+        k_p, k_i = present("speed_controller.k_p"), present("speed_controller.k_i")
+        try:
+            check_current_gains(g, m)
+            check_cascade(g, m, k_p, k_i)
+        except LimitError as exc:
+            raise InvalidValue(f"refused before sending: {exc}") from None
 
     def _check_rules(self, values: dict[str, float | int]) -> None:
         """Client-side check of the OD's cross-object rules (firmware_protocol.CONSTRAINTS,

@@ -1,0 +1,62 @@
+"""drive_link refuses, before sending, a current-controller write the drive's rule refuses
+(firmware_protocol.current_stability is the one home of the rule; issue 10).
+
+Truth: the drive's own SDO abort for the same write (sent with canopen's SdoClient), and the
+drive's object unchanged after drive_link refused it.
+"""
+
+from __future__ import annotations
+
+import struct
+import uuid
+
+import can
+import canopen
+import pytest
+from canopen.sdo import SdoAbortedError, SdoClient
+
+from drive_link import Drive, InvalidValue
+
+pytestmark = pytest.mark.timeout(60)
+
+
+def test_host_refuses_what_the_drive_refuses():
+    from virtual_drive.node import VirtualDrive
+
+    ch = f"hg-{uuid.uuid4().hex}"
+    b_drive = can.Bus(interface="virtual", channel=ch)
+    b_host = can.Bus(interface="virtual", channel=ch)
+    vd = VirtualDrive(b_drive, node_id=5).start()
+    d = Drive.connect(bus=b_host, node_id=5, heartbeat_ms=None)
+    net = canopen.Network()
+    net.connect(interface="virtual", channel=ch)
+    sdo = SdoClient(0x605, 0x585, canopen.ObjectDictionary())
+    sdo.network = net
+    sdo.RESPONSE_TIMEOUT = 2.0
+    net.subscribe(0x585, sdo.on_response)
+    try:
+        # predictive control without the back-EMF feed-forward (issue 10: held 649 of 1000 rpm)
+        with pytest.raises(InvalidValue, match="feed-forward"):
+            d.write("current_controller.type", 2)
+        assert d.read("current_controller.type") == 0
+        with pytest.raises(SdoAbortedError) as exc:
+            sdo.download(0x2010, 1, bytes([2]))
+        assert exc.value.code == 0x06090030
+        # a PI pair far above the paper's (k_p = 100 V/A): unstable current loop
+        d.write("current_controller.type", 1)
+        with pytest.raises(InvalidValue, match="unstable"):
+            d.write("current_controller.k_p", 100.0)
+        with pytest.raises(SdoAbortedError) as exc:
+            sdo.download(0x2010, 4, struct.pack("<f", 100.0))
+        assert exc.value.code == 0x06090031
+        assert d.read("current_controller.k_p") == pytest.approx(0.4647)
+        # what both accept goes through
+        d.write("current_controller.emf_feedforward", 1)
+        d.write("current_controller.type", 2)
+        assert d.read("current_controller.type") == 2
+    finally:
+        net.disconnect()
+        d.close()
+        vd.stop()
+        b_drive.shutdown()
+        b_host.shutdown()
