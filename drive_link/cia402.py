@@ -124,7 +124,7 @@ class StateMachine:
         self.write_controlword(cw)
         return self._wait(targets, timeout, what)
 
-    def enable(self, timeout: float = 1.0) -> str:
+    def enable(self, timeout: float = 3.0) -> str:
         """Go to OPERATION ENABLED via the shortest legal path (transitions 2, 3, 4 / 16)."""
         deadline = time.monotonic() + timeout
         what = "enable"
@@ -154,7 +154,7 @@ class StateMachine:
             return state
         raise DriveTimeout(f"enable: drive stayed in {state} for {timeout:g} s")
 
-    def disable(self, timeout: float = 1.0) -> str:
+    def disable(self, timeout: float = 3.0) -> str:
         """Disable the power stage: OPERATION ENABLED → SWITCHED ON (transition 5).
 
         From QUICK STOP ACTIVE the voltage is disabled instead (transition 12).
@@ -168,13 +168,13 @@ class StateMachine:
             CW_DISABLE_OPERATION, (SWITCHED_ON, SWITCH_ON_DISABLED), timeout, "disable"
         )
 
-    def disable_voltage(self, timeout: float = 1.0) -> str:
+    def disable_voltage(self, timeout: float = 3.0) -> str:
         """Go to SWITCH ON DISABLED (transitions 7, 9, 10, 12)."""
         if self.state in (SWITCH_ON_DISABLED, FAULT):
             return self.state
         return self._step(CW_DISABLE_VOLTAGE, (SWITCH_ON_DISABLED,), timeout, "disable voltage")
 
-    def quick_stop(self, timeout: float = 1.0) -> str:
+    def quick_stop(self, timeout: float = 3.0) -> str:
         """Quick stop (transition 11); returns QUICK STOP ACTIVE or, after the stop,
         SWITCH ON DISABLED (quick_stop_option_code 0..4)."""
         state = self.state
@@ -184,7 +184,7 @@ class StateMachine:
             CW_QUICK_STOP, (QUICK_STOP_ACTIVE, SWITCH_ON_DISABLED), timeout, "quick stop"
         )
 
-    def fault_reset(self, timeout: float = 1.0) -> str:
+    def fault_reset(self, timeout: float = 3.0) -> str:
         """Reset a fault (transition 15: rising edge of controlword bit 7) to SWITCH ON DISABLED."""
         state = self.state
         if state not in (FAULT, FAULT_REACTION_ACTIVE):

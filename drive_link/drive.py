@@ -71,6 +71,10 @@ _GAIN_OBJECTS: dict[str, tuple[int, str, str]] = {
 }
 
 
+#: NMT commands confirmed by the next heartbeat, and the state it must report
+_NMT_CONFIRM = {"start": "OPERATIONAL", "stop": "STOPPED", "pre-operational": "PRE-OPERATIONAL"}
+
+
 @dataclass(frozen=True)
 class Gains:
     """Controller gains as the drive holds them (SI units).
@@ -122,7 +126,7 @@ class Drive:
         node_id: int,
         table: ObjectTable | None = None,
         sdo_timeout: float = 0.3,
-        retries: int = 2,
+        retries: int = 5,
     ):
         if not 1 <= node_id <= 127:
             raise InvalidValue(f"node-ID {node_id} outside 1..127")
@@ -168,7 +172,7 @@ class Drive:
         port: int | None = None,
         host_id: int = 0x7F,
         sdo_timeout: float = 0.3,
-        retries: int = 2,
+        retries: int = 5,
         **bus_kwargs: Any,
     ) -> Drive:
         """Connect to node ``node_id`` on a bus opened from python-can settings (``None`` =
@@ -354,6 +358,25 @@ class Drive:
         self.supervisor.wait_ready()
         self.supervisor.expect_nmt(command)
         send_nmt(self._conn.network, command, self.node_id)
+        target = _NMT_CONFIRM.get(command)
+        if target is None or not self.heartbeat.last_time:
+            return  # resets are confirmed by the boot-up; without heartbeats nothing confirms
+        # An NMT command has no answer (CiA 301): on a lossy bus it is lost silently. Repeat it
+        # until a heartbeat sent after it reports the target state (idempotent in that state).
+        period = self.heartbeat.producer_time or 0.1
+        deadline = time.monotonic() + max(3.0, 6 * period)
+        while True:
+            sent = time.monotonic()
+            try:
+                self.heartbeat.wait_for((target,), max(0.3, 2.5 * period), after=sent)
+                return
+            except DriveTimeout:
+                if time.monotonic() >= deadline:
+                    raise DriveTimeout(
+                        f"node {self.node_id}: NMT {command} not confirmed by a heartbeat "
+                        f"reporting {target} within {deadline - sent + 2.5 * period:.1f} s"
+                    ) from None
+            send_nmt(self._conn.network, command, self.node_id)
 
     # ------------------------------------------------------------------ restart supervision
     @property
@@ -435,19 +458,19 @@ class Drive:
         """Active mode: "speed", "current", "torque" (or "mode N")."""
         return cia402.mode_name(int(self.read("modes_of_operation_display")))
 
-    def enable(self, timeout: float = 1.0) -> str:
+    def enable(self, timeout: float = 3.0) -> str:
         """Go to OPERATION ENABLED; :class:`DriveTimeout` / :class:`StateError` otherwise."""
         return self.sm.enable(timeout)
 
-    def disable(self, timeout: float = 1.0) -> str:
+    def disable(self, timeout: float = 3.0) -> str:
         """Disable operation (power stage off, OPERATION ENABLED → SWITCHED ON)."""
         return self.sm.disable(timeout)
 
-    def quick_stop(self, timeout: float = 1.0) -> str:
+    def quick_stop(self, timeout: float = 3.0) -> str:
         """Quick stop (ramp down per quick_stop_option_code)."""
         return self.sm.quick_stop(timeout)
 
-    def fault_reset(self, timeout: float = 1.0) -> str:
+    def fault_reset(self, timeout: float = 3.0) -> str:
         """Reset a fault (→ SWITCH ON DISABLED); :class:`StateError` if the fault persists."""
         return self.sm.fault_reset(timeout)
 

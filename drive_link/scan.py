@@ -34,6 +34,9 @@ class NodeInfo:
         return f"CiA {self.device_type & 0xFFFF}"
 
 
+#: Probes sent again to nodes seen by heartbeat that did not answer the first one.
+RE_PROBES = 3
+
 #: Extra wait (s) after ``timeout`` for the heartbeat of nodes that answered SDO.
 HEARTBEAT_WAIT = 1.5
 
@@ -108,6 +111,29 @@ def scan(
                 if all(i.nmt_state is not None for i in found.values()):
                     break
             time.sleep(0.01)
+        # One probe per node is not enough on a lossy bus: a node seen by its heartbeat whose
+        # probe (or answer) was lost is asked again, a few times.
+        for _ in range(RE_PROBES):
+            with lock:
+                again = [
+                    n for n, i in found.items()
+                    if i.device_type is None and i.abort_code is None and n in node_ids
+                    and n not in busy
+                ]
+            if not again:
+                break
+            try:
+                for nid in again:
+                    net.send_message(0x600 + nid, _PROBE)
+            except (can.CanError, RuntimeError, OSError) as exc:
+                raise BusError(f"CAN send failed while scanning: {exc}") from None
+            deadline = time.monotonic() + max(timeout, 0.3)
+            while time.monotonic() < deadline:
+                with lock:
+                    if all(found[n].device_type is not None or found[n].abort_code is not None
+                           for n in again):
+                        break
+                time.sleep(0.01)
     finally:
         for cob, cb in subs:
             try:

@@ -93,7 +93,8 @@ class Exchange:
         initial: bool = False,
     ) -> bytes:
         """Send ``frame`` and return the first response ``accept`` takes; resend it after
-        ``timeout``, 2 × ``timeout``, … s without one, at most ``resends`` times."""
+        ``timeout``, 2 × ``timeout``, then every 4 × ``timeout`` s without one, at most
+        ``resends`` times."""
         wait = timeout
         for _ in range(resends + 1):
             self.send(frame)
@@ -104,7 +105,7 @@ class Exchange:
                     break
                 if accept(resp):
                     return resp
-            wait *= 2
+            wait = min(2 * wait, 4 * timeout)  # back off, but keep probing a slow node
         what = "initiate" if initial else "segment"
         raise NoAnswer(f"no answer to the {what} request", resends + 1, initial)
 
