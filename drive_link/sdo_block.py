@@ -67,7 +67,7 @@ def block_upload(
     timeout: float = 0.3,
     resends: int = 2,
     ack_resends: int = 8,
-    silence_s: float = 0.05,
+    silence_s: float = 0.25,
     deadline: float | None = None,
     ack_wait: float = 0.1,
     escalate_after: int = 4,
@@ -78,8 +78,10 @@ def block_upload(
     (doubling); ``resends``: resends of the initiate request; ``ack_wait``: s to wait for the
     answer to the start request or an acknowledgement (doubling, at most 2 s);
     ``ack_resends``: resends of one of them; ``silence_s``: s without a segment before a
-    sub-block counts as ended; ``deadline``: ``time.monotonic()`` value after which
-    the upload gives up. Raises :class:`SdoAbortedError` (the server aborted),
+    sub-block counts as ended (0.25 s: a sub-block takes ~15 ms at 1 Mbit/s, but a busy host
+    stalls its receive thread for 50–200 ms, and an early acknowledgement costs a resend);
+    ``deadline``: ``time.monotonic()`` value after which the upload gives up.
+    Raises :class:`SdoAbortedError` (the server aborted),
     :class:`NoAnswer` (the initiate request got no answer) or :class:`SdoCommunicationError`
     (the upload lost sync, CRC or length mismatch, deadline).
     """

@@ -285,11 +285,15 @@ def test_heartbeat_loss_quick_stop(bench):
         )
         d.trace.arm()
         n_emcy = len(d.emcy_history)
-        d.configure_heartbeat_consumer()  # 3 × 100 ms
+        d.configure_heartbeat_consumer()  # max(1000 ms, 3 × 100 ms)
         assert wait_until(lambda: d.trace.state == "armed", 1.0 * bench.cond.slow)
         # CiA 301: the consumer starts watching at the first heartbeat after it was configured
         time.sleep(0.5 * bench.cond.slow)
-        assert d.state == "OPERATION ENABLED", f"{_tag(bench)} quick stop with heartbeat alive"
+        assert d.state == "OPERATION ENABLED", (
+            f"{_tag(bench)} quick stop with heartbeat alive; EMCY since enable: "
+            f"{[hex(e.code) for e in d.emcy_history[n_emcy:]]}, all: "
+            f"{[hex(e.code) for e in d.emcy_history]}, status: {d.status()}"
+        )
         d.stop_host_heartbeat()
         got = wait_until(
             lambda: [e for e in d.emcy_history[n_emcy:] if e.code == 0x8130], 3.0 * bench.cond.slow
