@@ -52,18 +52,7 @@ the host's producer thread stalled > 300 ms and the drive quick-stopped with the
 _GAIN_OBJECTS: dict[str, tuple[int, str, str]] = {
     **{
         f: (1, f"current_controller.{f}", f"gain_set.{f}")
-        for f in (
-            "type",
-            "L_c",
-            "R_c",
-            "k_p",
-            "k_i",
-            "T_BT",
-            "T_DD",
-            "T_SD",
-            "V_G",
-            "emf_feedforward",
-        )
+        for f in CURRENT_KEYS  # the current-loop set, as the drive's rule names it
     },
     "speed_k_p": (2, "speed_controller.k_p", "gain_set.speed_k_p"),
     "speed_k_i": (2, "speed_controller.k_i", "gain_set.speed_k_i"),

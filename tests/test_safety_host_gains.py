@@ -30,10 +30,12 @@ def test_host_refuses_what_the_drive_refuses():
     d = Drive.connect(bus=b_host, node_id=5, heartbeat_ms=None)
     net = canopen.Network()
     net.connect(interface="virtual", channel=ch)
-    sdo = SdoClient(0x605, 0x585, canopen.ObjectDictionary())
+    # the drive's second SDO server (0x1201: 0x680+N / 0x6B0+N): a second client on the
+    # Drive's own channel 0x1200 would collide with its supervision reads (SDO has no lock)
+    sdo = SdoClient(0x685, 0x6B5, canopen.ObjectDictionary())
     sdo.network = net
     sdo.RESPONSE_TIMEOUT = 2.0
-    net.subscribe(0x585, sdo.on_response)
+    net.subscribe(0x6B5, sdo.on_response)
     try:
         # predictive control without the back-EMF feed-forward (issue 10: held 649 of 1000 rpm)
         with pytest.raises(InvalidValue, match="feed-forward"):
