@@ -116,7 +116,7 @@ def cmd_scan(args: argparse.Namespace) -> int:
         port=args.port,
     )
     try:
-        nodes = scan(conn.bus, timeout=args.timeout)
+        nodes = scan(conn.bus, timeout=_timeout(args, 1.0))
     finally:
         connection.release(conn)
     data = [
@@ -182,7 +182,7 @@ def cmd_status(args: argparse.Namespace, d: Drive) -> int:
 
 def _state_cmd(fn_name: str) -> Callable[[argparse.Namespace, Drive], int]:
     def run(args: argparse.Namespace, d: Drive) -> int:
-        state = getattr(d, fn_name)(timeout=args.timeout)
+        state = getattr(d, fn_name)(timeout=_timeout(args, 3.0))
         _emit(args, {"state": state}, state)
         return 0
 
@@ -210,7 +210,7 @@ def _set_setpoint(
     d.set_mode(mode)
     write(value)
     if args.enable:
-        d.enable(timeout=args.timeout)
+        d.enable(timeout=_timeout(args, 3.0))
     out = {key: d.read(name), "state": d.state}
     _emit(args, out, f"{key} {shown.format(out[key])} ({out['state']})")
     return 0
@@ -313,7 +313,7 @@ def cmd_restore(args: argparse.Namespace, d: Drive) -> int:
 def cmd_nmt(args: argparse.Namespace, d: Drive) -> int:
     cmd = args.command.replace("-", " ") if args.command.startswith("reset") else args.command
     if cmd.startswith("reset"):
-        d.reset(communication_only=cmd == "reset communication", timeout=args.timeout + 2)
+        d.reset(communication_only=cmd == "reset communication", timeout=_timeout(args, 3.0) + 2)
     else:
         d.nmt(cmd)
     _emit(args, {"sent": cmd}, f"NMT {cmd} sent to node {d.node_id}")
@@ -465,7 +465,7 @@ def cmd_identify(args: argparse.Namespace, d: Drive) -> int:
     d.set_mode("current")
     d.set_current(args.i_from)
     if d.state != "OPERATION ENABLED":
-        d.enable(timeout=args.timeout)
+        d.enable(timeout=_timeout(args, 3.0))
     time.sleep(args.settle)
     try:
         tr = record_setpoint_step(
@@ -562,9 +562,21 @@ def _bus_options() -> list[tuple[tuple[str, ...], dict[str, Any], Any]]:
             _env_int("DRIVE_LINK_NODE") or 1,
         ),
         (("--sdo-timeout",), {"type": float, "help": "SDO response timeout per frame, s"}, 0.3),
-        (("--timeout",), {"type": float, "help": "state-change / scan timeout, s"}, 1.0),
+        (
+            ("--timeout",),
+            {"type": float, "help": "state-change timeout, s (default 3) / scan listen time, s "
+             "(default 1)"},
+            None,
+        ),
         (("--json",), {"action": "store_true", "help": "print one JSON document"}, False),
     ]
+
+
+def _timeout(args: argparse.Namespace, default: float) -> float:
+    """``--timeout`` if given, else ``default`` s (a state change under frame loss needs several
+    SDO round trips; a scan only listens)."""
+    t = getattr(args, "timeout", None)
+    return default if t is None else float(t)
 
 
 _TOP = "top_"  # dest prefix of the options given before the sub-command

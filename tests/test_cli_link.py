@@ -240,7 +240,7 @@ def test_every_command_takes_bus_options_before_and_after():
         assert before == _WANT, name
         assert _parsed([name, *pos, *_BUS]) == _WANT, name
         defaults = _parsed([name, *pos])
-        assert defaults["node"] == 1 and defaults["json"] is False and defaults["timeout"] == 1.0
+        assert defaults["node"] == 1 and defaults["json"] is False and defaults["timeout"] is None
 
 
 def test_option_after_the_command_wins_and_host_port_both_sides():
