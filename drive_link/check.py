@@ -116,16 +116,27 @@ def item_identity(d: Drive, opts: dict) -> str:
 
 def item_nmt_bootup(d: Drive, opts: dict) -> str:
     hb = d.heartbeat
-    boots = hb.boot_count
-    t0 = time.monotonic()
-    d.nmt("reset communication")
-    hb.wait_boot(3.0, boots)
+    # The command and the boot-up are single unconfirmed frames: on a lossy bus either can be
+    # lost, so the reset is sent again (up to 3 times) until a boot-up message is seen.
+    for attempt in range(1, 4):
+        boots = hb.boot_count
+        t0 = time.monotonic()
+        d.nmt("reset communication")
+        try:
+            hb.wait_boot(3.0, boots)
+            break
+        except DriveTimeout:
+            if attempt == 3:
+                raise
     dt_boot = time.monotonic() - t0
     st = hb.wait_for(("PRE-OPERATIONAL",), 2.0, after=time.monotonic() - 0.001)
     t1 = time.monotonic()
     d.nmt("start")
     hb.wait_for(("OPERATIONAL",), 2.0, after=t1)
-    return f"boot-up after {dt_boot * 1e3:.0f} ms, heartbeat {st} then OPERATIONAL after start"
+    again = f" (reset sent {attempt} times)" if attempt > 1 else ""
+    return (
+        f"boot-up after {dt_boot * 1e3:.0f} ms{again}, heartbeat {st} then OPERATIONAL after start"
+    )
 
 
 def item_nmt_stopped(d: Drive, opts: dict) -> str:
