@@ -399,9 +399,17 @@ class Drive:
 
     def reset(self, communication_only: bool = False, timeout: float = 3.0) -> None:
         """NMT reset node (or communication) and wait for the boot-up message."""
-        before = self.heartbeat.boot_count
-        self.nmt("reset communication" if communication_only else "reset node")
-        self.heartbeat.wait_boot(timeout, before)
+        # The command and the boot-up are single unconfirmed frames that a lossy bus can lose:
+        # the reset is sent again (up to 3 times) until a boot-up message arrives.
+        for attempt in range(3):
+            before = self.heartbeat.boot_count
+            self.nmt("reset communication" if communication_only else "reset node")
+            try:
+                self.heartbeat.wait_boot(timeout, before)
+                return
+            except DriveTimeout:
+                if attempt == 2:
+                    raise
 
     def configure_heartbeat_consumer(self, timeout_ms: int | None = None) -> None:
         """Make the drive watch this host's heartbeat (0x1016 sub1): on loss it reacts per

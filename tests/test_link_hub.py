@@ -101,10 +101,11 @@ def test_dead_bus_fails_fast_with_clear_error(hub, drive):
     t0 = time.monotonic()
     with pytest.raises(DriveTimeout, match="node 2 did not answer SDO read of statusword"):
         drive.read("statusword")
-    assert time.monotonic() - t0 < 3.0
+    # resends after 0.3, 0.6, then every 1.2 s (6 requests, ~5.7 s): bounded, with margin
+    assert time.monotonic() - t0 < 8.0
     t0 = time.monotonic()
     with pytest.raises(DriveError):
         drive.enable(timeout=0.5)
-    assert time.monotonic() - t0 < 3.0
+    assert time.monotonic() - t0 < 8.0
     hub.set_faults(drop_rate=0.0)
     assert drive.read("device_type") == 0x00020192  # recovers once frames flow again
