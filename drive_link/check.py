@@ -518,6 +518,7 @@ def item_heartbeat_consumer(d: Drive, opts: dict) -> str:
             d.state == cia402.OPERATION_ENABLED,
             f"drive left OPERATION ENABLED with heartbeat alive ({d.state})",
         )
+        logged = [e.code for e in d.error_history()]  # 0x1003, newest first
         prod.stop()
         stopped = True
         deadline = time.monotonic() + 2.0
@@ -528,6 +529,10 @@ def item_heartbeat_consumer(d: Drive, opts: dict) -> str:
                 break
             time.sleep(0.02)
         state = d.state
+        if 0x8130 not in codes:  # the EMCY is one unconfirmed frame: 0x1003 keeps the error too
+            now = [e.code for e in d.error_history()]
+            if now != logged and 0x8130 in now[: max(1, len(now) - len(logged))]:
+                codes.append(0x8130)
         _expect(
             0x8130 in codes, f"no EMCY 0x8130 after heartbeat loss (got {[hex(c) for c in codes]})"
         )
