@@ -298,7 +298,9 @@ def test_heartbeat_loss_quick_stop(bench):
         got = wait_until(
             lambda: [e for e in d.emcy_history[n_emcy:] if e.code == 0x8130], 3.0 * bench.cond.slow
         )
-        assert got, f"{_tag(bench)} no EMCY 0x8130 after the host heartbeat stopped"
+        if not got:  # an EMCY is one unconfirmed frame (lost on a lossy bus): 0x1003 keeps it
+            got = [e for e in d.error_history()[:1] if e.code == 0x8130]
+        assert got, f"{_tag(bench)} no EMCY 0x8130 (frame or 0x1003) after the heartbeat stopped"
         d.trace.wait(5.0 * bench.cond.slow)
         tr = d.trace.upload()
         state = wait_until(
