@@ -562,14 +562,19 @@ def _spin(d: Drive, rpm: int = SPIN_RPM) -> float:
     d.set_mode("speed")
     rpm = min(rpm, int(d.read("max_motor_speed")))
     d.set_speed(rpm)
-    d.enable(timeout=2.0)
+    d.enable()
+    return _reach_speed(d, rpm, f"motor did not come up to {rpm} rpm")
+
+
+def _reach_speed(d: Drive, rpm: int, failure: str) -> float:
+    """Wait (profile ramp time + 5 s) until the speed reaches 80 % of ``rpm``; return it."""
     acc = max(int(d.read("profile_acceleration")), 1)
     deadline = time.monotonic() + 2.0 * rpm / acc + 5.0
     v = float(d.read("measurements.speed"))
     while v < 0.8 * rpm and time.monotonic() < deadline:
         time.sleep(0.02)
         v = float(d.read("measurements.speed"))
-    _expect(v >= 0.8 * rpm, f"motor did not come up to {rpm} rpm (at {v:.0f} rpm)")
+    _expect(v >= 0.8 * rpm, f"{failure} (at {v:.0f} rpm)")
     return v
 
 
@@ -686,14 +691,7 @@ def item_halt(d: Drive, opts: dict) -> str:
 
 
 def _spin_back(d: Drive) -> float:
-    acc = max(int(d.read("profile_acceleration")), 1)
-    deadline = time.monotonic() + 2.0 * SPIN_RPM / acc + 5.0
-    v = float(d.read("measurements.speed"))
-    while v < 0.8 * SPIN_RPM and time.monotonic() < deadline:
-        time.sleep(0.02)
-        v = float(d.read("measurements.speed"))
-    _expect(v >= 0.8 * SPIN_RPM, f"halt released: motor did not turn again ({v:.0f} rpm)")
-    return v
+    return _reach_speed(d, SPIN_RPM, "halt released: motor did not turn again")
 
 
 def item_cob_id_validation(d: Drive, opts: dict) -> str:
