@@ -43,6 +43,7 @@ def register_tools(sub: argparse._SubParsersAction, bus: argparse.ArgumentParser
         _lazy("shell", "cmd_shell"),
         "interactive session on one connection: the drive-link commands without the prefix, "
         "history and TAB completion of commands and object names; 'help', 'exit' or Ctrl-D",
+        needs_drive=False,  # connects itself, with the session's heartbeat supervision
     )
     p.add_argument(
         "--history",
@@ -56,3 +57,75 @@ def register_tools(sub: argparse._SubParsersAction, bus: argparse.ArgumentParser
         help="do not supervise the session (default: host heartbeat 100 ms and the drive's "
         "heartbeat consumer set, so the drive stops the motor if the shell dies)",
     )
+
+    p = add(
+        "record",
+        _lazy("record", "cmd_record"),
+        "record every frame on the bus to FILE until --seconds or Ctrl-C; the suffix picks the "
+        "format: .asc/.blf (Vector, SavvyCAN), .log (candump/canplayer), .csv, .trc, "
+        ".mf4 (with asammdf)",
+        needs_drive=False,
+    )
+    p.add_argument("file", metavar="FILE", help="log file (.asc, .blf, .log, .csv, .trc, .mf4)")
+    p.add_argument(
+        "--seconds", type=float, default=None, help="recording length, s (default: until Ctrl-C)"
+    )
+
+    p = add(
+        "replay",
+        _lazy("replay", "cmd_replay"),
+        "decode a bus recording offline (any python-can log format): TPDO signals as in "
+        "'live' (summary, --csv, --plot), SDO block uploads, trace uploads reassembled",
+        needs_drive=False,
+    )
+    p.add_argument("file", metavar="FILE", help="recording (.asc, .blf, .log, .csv, .trc, .mf4)")
+    p.add_argument("--csv", default=None, metavar="OUT", help="TPDO signals on one time base")
+    p.add_argument(
+        "--trace-csv",
+        default=None,
+        metavar="OUT",
+        help="reassembled trace uploads (OUT_1, OUT_2 … when several)",
+    )
+    p.add_argument(
+        "--plot", nargs="+", default=None, metavar="SIGNAL", help="text plot of these signals"
+    )
+    p.add_argument("--width", type=int, default=100, help="plot width, columns (default 100)")
+    p.add_argument("--height", type=int, default=24, help="plot height, rows (default 24)")
+
+    live = sub.choices.get("live")
+    if live is not None:
+        _add_live_plot(live)
+
+
+def _add_live_plot(p: argparse.ArgumentParser) -> None:
+    """``live --plot SIGNAL...``: the existing ``live`` command draws a terminal plot instead of
+    its summary when ``--plot`` is given (its handler is wrapped, its options kept)."""
+    g = p.add_argument_group("terminal plot (--plot)")
+    g.add_argument(
+        "--plot",
+        nargs="+",
+        metavar="SIGNAL",
+        default=None,
+        help="plot these TPDO signals live (i_p, speed, i_p_ref, speed_ref, v_L, e_L …); keys: "
+        "space quick stop, q quick stop and quit, x quit",
+    )
+    g.add_argument("--window", type=float, default=5.0, help="time span shown, s (default 5)")
+    g.add_argument("--fps", type=float, default=10.0, help="redraws per second (default 10)")
+    g.add_argument(
+        "--frames",
+        type=int,
+        default=None,
+        help="print N frames as text and exit (no terminal needed)",
+    )
+    g.add_argument(
+        "--width", type=int, default=None, help="text width, columns (default: terminal)"
+    )
+    g.add_argument("--height", type=int, default=None, help="text height, rows (default: terminal)")
+    summary = p.get_default("func")
+
+    def run(args: argparse.Namespace, d: Any) -> int:
+        if args.plot:
+            return _lazy("live_plot", "cmd_live_plot")(args, d)
+        return summary(args, d)
+
+    p.set_defaults(func=run)

@@ -1,15 +1,336 @@
-"""``drive-link shell``: placeholder (being built)."""
+"""``drive-link shell``: the ``drive-link`` commands in one interactive session.
+
+One :class:`~drive_link.drive.Drive` stays open for the whole session (one bus connection, one
+supervision: the host heartbeat runs and the drive's heartbeat consumer watches it unless
+``--no-heartbeat``), and every line is run through the same argparse sub-parsers and handlers as
+the one-shot command (``read statusword`` = ``drive-link read statusword``), on that Drive.
+
+On a terminal: readline history (``~/.drive_link_history``) and TAB completion of commands,
+options and object names (from the drive's object table). From a pipe or file: one command per
+line, no prompt, ``#`` comments; the exit code is the last command's. A failing command prints
+one line on stderr and the session goes on; Ctrl-C stops the running command, not the shell;
+``exit`` (optionally with a code) or Ctrl-D ends it.
+"""
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import os
+import shlex
+import sys
+from collections.abc import Iterable
+from pathlib import Path
+from typing import TextIO
 
+from . import cli
 from .drive import Drive
+from .errors import DriveError
 
-__all__ = ["cmd_shell"]
+__all__ = ["HISTORY_FILE", "Shell", "cmd_shell"]
+
+#: Default history file (only read and written on an interactive terminal).
+HISTORY_FILE = Path("~/.drive_link_history")
+HISTORY_LENGTH = 2000
+#: Words the shell handles itself.
+BUILTINS = ("help", "exit", "quit")
+#: Bus options that name the connection: a line may not point elsewhere than the shell's.
+_CONNECTION_OPTS = ("interface", "channel", "bitrate", "host", "port", "node")
+#: Commands that make no sense inside a shell.
+_NOT_IN_SHELL = {"shell": "already in a shell"}
+#: Positional argument names that take an object name (completion offers the OD's names).
+_OBJECT_DESTS = {"name", "names", "pattern", "objects", "object"}
 
 
-def cmd_shell(args: argparse.Namespace, d: Drive) -> int:
-    """Interactive session (not finished yet)."""
-    print("drive-link shell: not finished yet")
-    return 1
+class _ParseExitError(Exception):
+    """argparse wanted to exit (usage error or --help) with this code."""
+
+    def __init__(self, code: int):
+        super().__init__(code)
+        self.code = code
+
+
+def _defaults() -> dict[str, object]:
+    return {f[0].lstrip("-").replace("-", "_"): d for f, _kw, d in cli._bus_options()}
+
+
+class Shell:
+    """Runs drive-link command lines on one open drive.
+
+    ``args``: the ``shell`` command's own parsed arguments (bus options, --json …): a line
+    inherits them unless it gives its own; it may not name another bus or node.
+    """
+
+    def __init__(self, drive: Drive, args: argparse.Namespace):
+        self.drive = drive
+        self.args = args
+        self.parser = cli.build_parser()
+        self.sub = next(
+            a for a in self.parser._actions if isinstance(a, argparse._SubParsersAction)
+        )
+        self.last_rc = 0
+
+    # ------------------------------------------------------------------ commands
+    @property
+    def commands(self) -> list[str]:
+        """Every command a line may start with."""
+        names = [n for n in self.sub.choices if n not in _NOT_IN_SHELL]
+        return sorted(names) + list(BUILTINS)
+
+    def help_text(self, topic: str | None = None) -> str:
+        """``help``: the commands with their one-line help; ``help CMD``: its full help."""
+        if topic:
+            p = self.sub.choices.get(topic)
+            if p is None or topic in _NOT_IN_SHELL:
+                raise cli.InvalidValue(f"no command {topic!r} (try: help)")
+            return p.format_help().rstrip()
+        helps = {a.dest: a.help or "" for a in self.sub._choices_actions}
+        lines = ["commands (drive-link COMMAND without the prefix; CMD --help for options):"]
+        for n in self.commands:
+            if n in BUILTINS:
+                continue
+            lines.append(f"  {n:<16} {helps.get(n, '')}")
+        lines += [
+            "  help [CMD]       this list / one command's options",
+            "  exit [CODE]      end the session (also quit, Ctrl-D)",
+        ]
+        return "\n".join(lines)
+
+    def _parse(self, argv: list[str]) -> argparse.Namespace:
+        """Parse ``argv`` with the one-shot parser (argparse exits: :class:`_ParseExitError`)."""
+        try:
+            args = self.parser.parse_args(argv)
+        except SystemExit as exc:
+            raise _ParseExitError(int(exc.code or 0)) from None
+        cli._merge_bus(args)
+        defaults = _defaults()
+        for k, default in defaults.items():
+            mine = getattr(self.args, k, default)
+            given = getattr(args, k, default)
+            if k in _CONNECTION_OPTS:
+                if given != default and given != mine:
+                    raise cli.InvalidValue(
+                        f"--{k.replace('_', '-')} {given}: this shell is connected to node "
+                        f"{self.drive.node_id} on its own bus; start another shell for another"
+                    )
+                setattr(args, k, mine)
+            elif given == default:
+                setattr(args, k, mine)
+        apply = getattr(cli, "_apply_step_defaults", None)
+        if apply is not None:
+            apply(args)
+        return args
+
+    def run_line(self, line: str) -> int | None:
+        """Run one line; returns its exit code (``None`` = end the session)."""
+        try:
+            argv = shlex.split(line, comments=True)
+        except ValueError as exc:
+            return self._fail(cli.InvalidValue(f"cannot split the line: {exc}"))
+        if not argv:
+            return self.last_rc
+        cmd = argv[0]
+        if cmd in ("exit", "quit"):
+            if len(argv) > 1:
+                try:
+                    self.last_rc = int(argv[1])
+                except ValueError:
+                    return self._fail(cli.InvalidValue(f"exit code {argv[1]!r} is not a number"))
+            return None
+        if cmd == "help" or cmd == "?":
+            try:
+                print(self.help_text(argv[1] if len(argv) > 1 else None), flush=True)
+            except DriveError as exc:
+                return self._fail(exc)
+            self.last_rc = 0
+            return 0
+        if cmd in _NOT_IN_SHELL:
+            return self._fail(cli.InvalidValue(f"{cmd}: {_NOT_IN_SHELL[cmd]}"))
+        if cmd not in self.sub.choices:
+            close = [c for c in self.commands if c.startswith(cmd[:3])]
+            hint = f" (did you mean {', '.join(close[:4])}?)" if close else " (try: help)"
+            return self._fail(cli.InvalidValue(f"unknown command {cmd!r}{hint}"), code=2)
+        try:
+            args = self._parse(argv)
+        except _ParseExitError as exc:
+            self.last_rc = exc.code
+            return exc.code
+        except DriveError as exc:
+            return self._fail(exc)
+        try:
+            if getattr(args, "needs_drive", False):
+                rc = args.func(args, self.drive)
+            else:
+                rc = args.func(args)
+        except cli.Refused as exc:
+            return self._fail(exc, prefix="", code=cli.EXIT_UNSAFE)
+        except DriveError as exc:
+            return self._fail(exc)
+        except KeyboardInterrupt:
+            return self._fail(None, prefix="interrupted", code=130)
+        except (ValueError, OSError) as exc:
+            return self._fail(exc, code=1)
+        except SystemExit as exc:  # a handler that exits (argparse inside a handler)
+            rc = int(exc.code or 0) if not isinstance(exc.code, str) else 1
+        sys.stdout.flush()
+        self.last_rc = int(rc or 0)
+        return self.last_rc
+
+    def _fail(
+        self, exc: BaseException | None, prefix: str = "error: ", code: int | None = None
+    ) -> int:
+        """One line on stderr; the exit code cli.main would give."""
+        text = prefix + (str(exc).splitlines()[0] if exc is not None and str(exc) else "")
+        print(f"drive-link: {text}".rstrip(), file=sys.stderr, flush=True)
+        if code is None:
+            code = 1
+            for cls, c in cli.EXIT_CODES:
+                if isinstance(exc, cls):
+                    code = c
+                    break
+        self.last_rc = code
+        return code
+
+    def run(self, lines: Iterable[str]) -> int:
+        """Run ``lines`` until one says exit; returns the last command's exit code."""
+        for line in lines:
+            if self.run_line(line) is None:
+                break
+        return self.last_rc
+
+    # ------------------------------------------------------------------ completion
+    def candidates(self, before: str) -> list[str]:
+        """Completions of the last word of ``before`` (the line up to the cursor)."""
+        try:
+            words = shlex.split(before)
+        except ValueError:
+            words = before.split()
+        text = "" if not before or before[-1].isspace() else (words.pop() if words else "")
+        if not words:
+            pool = self.commands
+        elif words[0] == "help":
+            pool = self.commands if len(words) == 1 else []
+        else:
+            p = self.sub.choices.get(words[0])
+            if p is None:
+                return []
+            if text.startswith("-"):
+                pool = sorted({s for a in p._actions for s in a.option_strings})
+            else:
+                pool = self._positional_pool(p, words[1:])
+        return sorted(c for c in pool if c.startswith(text))
+
+    def _positional_pool(self, p: argparse.ArgumentParser, done: list[str]) -> list[str]:
+        """Choices of the positional argument being typed after ``done`` (words so far)."""
+        takes_value = {
+            s for a in p._actions if a.option_strings and a.nargs != 0 for s in a.option_strings
+        }
+        if done and done[-1] in takes_value:
+            action = next(a for a in p._actions if done[-1] in a.option_strings)
+            return [str(c) for c in action.choices] if action.choices else []
+        skip = False
+        n_pos = 0
+        for w in done:
+            if skip:
+                skip = False
+            elif w in takes_value:
+                skip = True
+            elif not w.startswith("-"):
+                n_pos += 1
+        positionals = [a for a in p._actions if not a.option_strings]
+        for i, a in enumerate(positionals):
+            many = a.nargs in ("+", "*", argparse.REMAINDER)
+            if i == n_pos or (many and i <= n_pos and i == len(positionals) - 1):
+                if a.choices:
+                    return [str(c) for c in a.choices]
+                if a.dest in _OBJECT_DESTS:
+                    return self.drive.table.names()
+                return []
+        return []
+
+
+def _readline_lines(shell: Shell, history: Path, prompt: str) -> Iterable[str]:
+    """Lines typed at the terminal, with readline history and completion."""
+    import readline
+
+    readline.set_completer_delims(" \t\n")
+    matches: list[str] = []
+
+    def complete(text: str, state: int) -> str | None:
+        nonlocal matches
+        if state == 0:
+            buf = readline.get_line_buffer()[: readline.get_endidx()]
+            matches = shell.candidates(buf)
+        return matches[state] if state < len(matches) else None
+
+    readline.set_completer(complete)
+    if "libedit" in (readline.__doc__ or ""):
+        readline.parse_and_bind("bind ^I rl_complete")
+    else:
+        readline.parse_and_bind("tab: complete")
+    readline.set_history_length(HISTORY_LENGTH)
+    with contextlib.suppress(OSError):
+        readline.read_history_file(history)
+    try:
+        while True:
+            try:
+                yield input(prompt)
+            except KeyboardInterrupt:  # Ctrl-C at the prompt: a fresh line, like a shell
+                print()
+                continue
+            except EOFError:  # Ctrl-D
+                print()
+                return
+    finally:
+        with contextlib.suppress(OSError):
+            history.parent.mkdir(parents=True, exist_ok=True)
+            readline.write_history_file(history)
+
+
+def _stream_lines(stream: TextIO) -> Iterable[str]:
+    """Lines from a pipe or file."""
+    for line in stream:
+        yield line.rstrip("\n")
+
+
+def connect_session(args: argparse.Namespace) -> Drive:
+    """The shell's Drive: cli's bus options, with the host heartbeat (100 ms) and the drive's
+    consumer set (so a dead shell stops the motor) unless ``--no-heartbeat``."""
+    sdo_timeout = getattr(args, "sdo_timeout", None)
+    d = Drive.connect(
+        interface=args.interface,
+        channel=args.channel,
+        bitrate=args.bitrate,
+        host=args.host,
+        port=args.port,
+        node_id=args.node,
+        heartbeat_ms=None if args.no_heartbeat else 100,
+        **({} if sdo_timeout is None else {"sdo_timeout": sdo_timeout}),
+    )
+    if not args.no_heartbeat:
+        try:
+            d.configure_heartbeat_consumer()
+        except BaseException:
+            d.close()
+            raise
+    return d
+
+
+def cmd_shell(args: argparse.Namespace) -> int:
+    """``drive-link shell`` (see the module docstring)."""
+    d = connect_session(args)
+    try:
+        shell = Shell(d, args)
+        if sys.stdin.isatty():
+            history = Path(args.history or os.environ.get("DRIVE_LINK_HISTORY") or HISTORY_FILE)
+            print(
+                f"drive-link shell: node {d.node_id}, {d.state}; "
+                "TAB completes, 'help' lists the commands, Ctrl-D ends",
+                flush=True,
+            )
+            lines = _readline_lines(shell, history.expanduser(), f"drive-link[{d.node_id}]> ")
+        else:
+            lines = _stream_lines(sys.stdin)
+        return shell.run(lines)
+    finally:
+        d.close()

@@ -1,0 +1,447 @@
+"""``drive-link replay FILE``: a bus recording decoded offline into the live and trace views.
+
+The file is read with :class:`can.LogReader` (any format python-can reads: .asc, .blf, .log,
+.csv, .trc, .mf4 with asammdf), so recordings from Vector tools, SavvyCAN or candump work too.
+
+* TPDOs are decoded by the same :class:`~drive_link.live.LiveStreams` the live view uses, fed
+  from the file instead of the bus. The mapping is the one the drive reported in the recording
+  (SDO reads of 0x1800+k/0x1A00+k, as ``drive-link`` does when its live view starts) or, if the
+  recording has none, the object dictionary's defaults for node ``--node``.
+* SDO traffic of node N on both servers (0x600+N/0x580+N and 0x1201's COB-IDs) is followed:
+  expedited values are kept, and every block upload is reassembled (CiA 301 §7.2.4.3.10-14: the
+  sub-blocks as acknowledged by the client, so retransmitted segments count once, the unused
+  bytes of the last segment dropped). A block upload of trace_data (0x2102) becomes a
+  :class:`~drive_link.trace.Trace` with the channel list, length, divider and trigger position
+  the client read just before it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import can
+import canopen
+import numpy as np
+
+from .errors import InvalidValue
+from .live import LiveStreams, MappedField, TpdoConfig
+from .objects import ObjectTable
+from .trace import TRACE_DATA, TS, Trace
+
+__all__ = ["BlockUpload", "Replay", "SdoFollower", "cmd_replay", "replay_file"]
+
+#: Timestamps fed to LiveStreams start here (it takes 0.0 as "no timestamp").
+_T0 = 1.0
+
+
+@dataclass
+class BlockUpload:
+    """One reassembled SDO block upload: ``index``, ``subindex``, ``data``, time ``t`` (s from
+    the start of the recording) of its end, ``size`` announced by the server (None if not)."""
+
+    index: int
+    subindex: int
+    data: bytes
+    t: float
+    size: int | None = None
+
+
+class _BlockState:
+    def __init__(self, index: int, sub: int):
+        self.index, self.sub = index, sub
+        self.phase = "init"  # init → start → segments → end
+        self.size: int | None = None
+        self.data = bytearray()
+        self.block: list[tuple[int, bytes, bool]] = []
+        self.last_seen = False
+
+
+class SdoFollower:
+    """Follows the SDO traffic of one server (client→server ``rx`` COB-ID, server→client ``tx``):
+    expedited upload answers and confirmed expedited downloads into ``values`` ((index, sub) →
+    raw bytes), completed block uploads into ``uploads``."""
+
+    def __init__(self, rx: int, tx: int):
+        self.rx, self.tx = rx, tx
+        self.values: dict[tuple[int, int], bytes] = {}
+        self.uploads: list[BlockUpload] = []
+        self.aborted = 0
+        self._block: _BlockState | None = None
+        self._download: tuple[int, int, bytes] | None = None
+
+    def feed(self, can_id: int, data: bytes, t: float) -> None:
+        """One frame (ignored unless it is on this server's COB-IDs)."""
+        if len(data) < 1:
+            return
+        if can_id == self.rx:
+            self._client(data)
+        elif can_id == self.tx:
+            self._server(data, t)
+
+    def _client(self, d: bytes) -> None:
+        b0 = d[0]
+        blk = self._block
+        if b0 == 0x80:  # abort
+            self._block = None
+            self.aborted += 1
+            return
+        ccs = b0 >> 5
+        if ccs == 5 and len(d) >= 4 and (b0 & 0x03) == 0:  # block upload initiate
+            self._block = _BlockState(d[1] | d[2] << 8, d[3])
+        elif ccs == 5 and blk is not None and (b0 & 0x03) == 3 and blk.phase == "start":
+            blk.phase = "segments"
+        elif ccs == 5 and blk is not None and (b0 & 0x03) == 2 and blk.phase == "segments":
+            self._ack(blk, d[1] if len(d) > 1 else 0)
+        elif ccs == 5 and (b0 & 0x03) == 1:  # client's end confirmation
+            self._block = None
+        elif ccs == 1 and len(d) >= 8 and b0 & 0x02 and b0 & 0x01:  # expedited download, size
+            n = 4 - ((b0 >> 2) & 0x03)
+            self._download = (d[1] | d[2] << 8, d[3], bytes(d[4 : 4 + n]))
+
+    def _ack(self, blk: _BlockState, ackseq: int) -> None:
+        """Commit segments 1..ackseq of the sub-block in order (first copy of each)."""
+        got: dict[int, tuple[bytes, bool]] = {}
+        for seq, payload, last in blk.block:
+            got.setdefault(seq, (payload, last))
+        for seq in range(1, ackseq + 1):
+            if seq not in got:
+                break
+            payload, last = got[seq]
+            blk.data += payload
+            if last:
+                blk.last_seen = True
+                blk.phase = "end"
+                break
+        blk.block = []
+
+    def _server(self, d: bytes, t: float) -> None:
+        b0 = d[0]
+        blk = self._block
+        if blk is not None and blk.phase == "segments":
+            seq = b0 & 0x7F
+            if seq == 0:  # not a segment: an abort (0x80 …)
+                self._block = None
+                self.aborted += 1
+                return
+            blk.block.append((seq, bytes(d[1:8]).ljust(7, b"\0"), bool(b0 & 0x80)))
+            return
+        if b0 == 0x80:
+            self._block = None
+            self._download = None
+            self.aborted += 1
+            return
+        scs = b0 >> 5
+        if scs == 6 and blk is not None:
+            if blk.phase == "init" and (b0 & 0x01) == 0:
+                if b0 & 0x02 and len(d) >= 8:
+                    blk.size = int.from_bytes(d[4:8], "little")
+                blk.phase = "start"
+            elif blk.phase == "end" and (b0 & 0x03) == 1:
+                unused = (b0 >> 2) & 0x07
+                data = bytes(blk.data[: len(blk.data) - unused] if unused else blk.data)
+                self.uploads.append(BlockUpload(blk.index, blk.sub, data, t, blk.size))
+                self._block = None
+        elif scs == 2 and len(d) >= 8 and b0 & 0x02:  # expedited upload answer
+            n = 4 - ((b0 >> 2) & 0x03) if b0 & 0x01 else 4
+            self.values[(d[1] | d[2] << 8, d[3])] = bytes(d[4 : 4 + n])
+        elif scs == 3 and len(d) >= 4 and self._download is not None:  # download confirmed
+            idx, sub, raw = self._download
+            if (d[1] | d[2] << 8, d[3]) == (idx, sub):
+                self.values[(idx, sub)] = raw
+            self._download = None
+
+
+def _default_int(table: ObjectTable, name: str, node: int) -> int:
+    text = str(table[name].default).replace("$NODEID", str(node)).replace(" ", "")
+    return sum(int(part, 0) for part in text.split("+") if part)
+
+
+class _Known:
+    """Values of node N's objects: what the recording showed, else the EDS default."""
+
+    def __init__(self, table: ObjectTable, node: int, followers: list[SdoFollower]):
+        self.table, self.node, self.followers = table, node, followers
+
+    def raw(self, name: str) -> Any:
+        obj = self.table[name]
+        for f in self.followers:
+            raw = f.values.get((obj.index, obj.subindex))
+            if raw is not None:
+                try:
+                    return obj.decode(raw)
+                except Exception:
+                    break
+        return _default_int(self.table, name, self.node)
+
+    def int(self, name: str) -> int:
+        return int(self.raw(name))
+
+
+def tpdo_configs(known: _Known) -> list[TpdoConfig]:
+    """The node's TPDOs as the recording (or the EDS) has them."""
+    table = known.table
+    out = []
+    for k in range(1, 513):
+        comm = f"tpdo{k}_communication"
+        if f"{comm}.cob_id" not in table:
+            break
+        cob = known.int(f"{comm}.cob_id")
+        flds = []
+        offset = 0
+        for i in range(1, known.int(f"tpdo{k}_mapping.number_of_mapped_objects") + 1):
+            ref = known.int(f"tpdo{k}_mapping.mapped_object_{i}")
+            index, sub, bits = ref >> 16, (ref >> 8) & 0xFF, ref & 0xFF
+            obj = table.by_index(index, sub)
+            if obj is not None and obj.bits == bits:
+                flds.append(MappedField(obj.name, index, sub, offset, bits, obj.fmt, obj.unit))
+            else:
+                flds.append(MappedField(f"0x{index:04X}:{sub:02X}", index, sub, offset, bits, ""))
+            offset += bits
+        out.append(
+            TpdoConfig(
+                k,
+                cob & 0x7FF,
+                known.int(f"{comm}.transmission_type"),
+                known.int(f"{comm}.event_timer"),
+                flds,
+                valid=not cob & 0x80000000,
+            )
+        )
+    return out
+
+
+@dataclass
+class Replay:
+    """A decoded recording: ``live`` (TPDO streams, times from :data:`_T0`), ``traces``,
+    frames per CAN-ID, ``duration`` (s), ``start`` (timestamp of the first frame)."""
+
+    path: Path
+    node: int
+    live: LiveStreams
+    frames: int
+    error_frames: int
+    duration: float
+    start: float
+    per_id: dict[int, int]
+    uploads: list[BlockUpload] = field(default_factory=list)
+    traces: list[Trace] = field(default_factory=list)
+
+    def table(self) -> dict[str, np.ndarray]:
+        """Every TPDO signal on one time base (``t`` in s from the first frame of the file)."""
+        w = self.live.window(self.duration + 2 * _T0)
+        w["t"] = w["t"] - _T0
+        return w
+
+    def summary(self) -> dict[str, Any]:
+        """JSON-ready: frames, duration, per-ID counts, per-TPDO frames/rate/dropped, signal
+        statistics (min, max, mean, last), traces (samples, dt, channels)."""
+        st = self.live.stats
+        dur = max(self.duration, 1e-9)
+        tpdo = {
+            k: {
+                "cob_id": f"0x{v['cob_id']:03X}",
+                "frames": v["frames"],
+                "dropped": v["dropped"],
+                "rate_hz": v["frames"] / dur,
+                "expected_hz": v["expected_hz"],
+            }
+            for k, v in st["tpdo"].items()
+        }
+        sig = {}
+        for name, (_t, y) in self.live.streams().items():
+            y = y[np.isfinite(y)]
+            if len(y):
+                sig[name] = {
+                    "unit": self.live.units.get(name, ""),
+                    "min": float(y.min()),
+                    "max": float(y.max()),
+                    "mean": float(y.mean()),
+                    "last": float(y[-1]),
+                }
+        return {
+            "file": str(self.path),
+            "node": self.node,
+            "frames": self.frames,
+            "error_frames": self.error_frames,
+            "seconds": self.duration,
+            "frames_per_id": {f"0x{k:03X}": v for k, v in sorted(self.per_id.items())},
+            "tpdo": tpdo,
+            "signals": sig,
+            "block_uploads": [
+                {"index": f"0x{u.index:04X}", "subindex": u.subindex, "bytes": len(u.data),
+                 "t": u.t}
+                for u in self.uploads
+            ],
+            "traces": [
+                {"samples": len(tr.t), "dt": tr.dt, "trigger_index": tr.trigger_index,
+                 "channels": list(tr.signals), "t": tr.meta.get("t")}
+                for tr in self.traces
+            ],
+        }
+
+
+def _trace_from(upload: BlockUpload, known: _Known) -> Trace | None:
+    """The trace in ``upload`` with the configuration read before it (None if it does not fit)."""
+    table = known.table
+    try:
+        count = known.int("trace_config.channel_count")
+        length = known.int("trace_config.length")
+        divider = known.int("trace_config.divider")
+        trig = known.int("trace_config.trigger_position")
+        names = []
+        for i in range(1, count + 1):
+            ref = known.int(f"trace_channels.channel_{i}")
+            obj = table.by_index(ref >> 16, (ref >> 8) & 0xFF)
+            names.append(obj.name if obj else f"0x{ref >> 16:04X}:{(ref >> 8) & 0xFF:02X}")
+    except (KeyError, ValueError):
+        return None
+    if count < 1 or len(upload.data) != length * count * 4:
+        return None
+    data = np.frombuffer(upload.data, dtype="<f4").reshape(length, count)
+    t = (np.arange(length, dtype=np.float64) - trig) * divider * TS
+    signals = {n: data[:, i].copy() for i, n in enumerate(names)}
+    units = {n: (table[n].unit if n in table else "") for n in names}
+    return Trace(t, signals, units, trig, divider, meta={"t": upload.t, "source": "replay"})
+
+
+def _reader(path: Path) -> can.LogReader:
+    if not path.is_file():
+        raise InvalidValue(f"{path}: no such file")
+    try:
+        return can.LogReader(path)
+    except (ValueError, NotImplementedError, ImportError) as exc:
+        raise InvalidValue(f"{path}: {str(exc).splitlines()[0]}") from None
+
+
+def replay_file(path: str | Path, node: int = 1, table: ObjectTable | None = None) -> Replay:
+    """Decode the recording at ``path`` for node ``node`` (see the module docstring)."""
+    p = Path(path)
+    if not 1 <= node <= 127:
+        raise InvalidValue(f"node-ID {node} outside 1..127")
+    table = table or ObjectTable.from_od(node)
+    servers = [(0x600 + node, 0x580 + node)]
+    try:
+        servers.append(
+            (
+                _default_int(table, "sdo_server_2.cob_id_client_to_server", node) & 0x7FF,
+                _default_int(table, "sdo_server_2.cob_id_server_to_client", node) & 0x7FF,
+            )
+        )
+    except KeyError:
+        pass
+    followers = [SdoFollower(rx, tx) for rx, tx in servers]
+    per_id: collections.Counter[int] = collections.Counter()
+    errors = 0
+    start = end = None
+    # pass 1: SDO (mapping, trace config, uploads) and counts
+    try:
+        for msg in _reader(p):
+            if msg.is_error_frame:
+                errors += 1
+                continue
+            ts = float(msg.timestamp)
+            if start is None:
+                start = ts
+            end = ts
+            per_id[msg.arbitration_id] += 1
+            for f in followers:
+                f.feed(msg.arbitration_id, bytes(msg.data), ts - start)
+    except InvalidValue:
+        raise
+    except Exception as exc:  # a damaged or foreign file: one line
+        why = str(exc).splitlines()[0] if str(exc) else repr(exc)
+        raise InvalidValue(f"{p}: cannot read: {why}") from None
+    if start is None:
+        raise InvalidValue(f"{p}: no CAN frames in the file")
+    duration = float(end - start)
+    known = _Known(table, node, followers)
+    net = canopen.Network()  # no bus: frames are handed to its subscribers by notify()
+    live = LiveStreams(net, tpdo_configs(known), seconds=duration + 2.0)
+    # pass 2: TPDOs through the live view's decoder
+    for msg in _reader(p):
+        if not msg.is_error_frame:
+            net.notify(msg.arbitration_id, msg.data, float(msg.timestamp) - start + _T0)
+    uploads = [u for f in followers for u in f.uploads]
+    uploads.sort(key=lambda u: u.t)
+    traces = []
+    for u in uploads:
+        if (u.index, u.subindex) == TRACE_DATA:
+            tr = _trace_from(u, known)
+            if tr is not None:
+                traces.append(tr)
+    return Replay(p, node, live, sum(per_id.values()), errors, duration, start, dict(per_id),
+                  uploads, traces)
+
+
+def _write_csv(path: Path, cols: dict[str, np.ndarray], units: dict[str, str]) -> Path:
+    import csv
+
+    names = list(cols)
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow([f"{n} [{units.get(n, 's' if n == 't' else '')}]".replace(" []", "")
+                    for n in names])
+        for row in zip(*(cols[n] for n in names), strict=True):
+            w.writerow([f"{v:.9g}" for v in row])
+    return path
+
+
+def cmd_replay(args: argparse.Namespace) -> int:
+    """``drive-link replay FILE [--csv OUT] [--trace-csv OUT] [--plot SIGNAL...]``."""
+    from .cli import _emit
+
+    rep = replay_file(args.file, node=args.node)
+    out = rep.summary()
+    if args.csv:
+        out["csv"] = str(_write_csv(Path(args.csv), rep.table(), rep.live.units))
+    if args.trace_csv:
+        saved = []
+        for i, tr in enumerate(rep.traces):
+            p = Path(args.trace_csv)
+            if len(rep.traces) > 1:
+                p = p.with_name(f"{p.stem}_{i + 1}{p.suffix}")
+            saved.append(str(tr.to_csv(p)))
+        out["trace_csv"] = saved
+    plot: list[str] = []
+    if args.plot:
+        from .live_plot import render, resolve_signals
+
+        sigs = resolve_signals(rep.live, args.plot)
+        plot = render(rep.live, sigs, max(rep.duration, 1e-3), args.width, args.height)
+
+    def text() -> str:
+        lines = [
+            f"{rep.path}: {rep.frames} frames in {rep.duration:.3f} s (node {rep.node})"
+            + (f", {rep.error_frames} error frames" if rep.error_frames else "")
+        ]
+        for k, v in out["tpdo"].items():
+            lines.append(
+                f"  {k} {v['cob_id']}: {v['frames']} frames, {v['rate_hz']:.0f} Hz"
+                f" (expected {v['expected_hz']}), dropped {v['dropped']}"
+            )
+        for n, s in out["signals"].items():
+            lines.append(
+                f"  {n} [{s['unit']}]: last {s['last']:.6g}, mean {s['mean']:.6g}, "
+                f"{s['min']:.6g} .. {s['max']:.6g}"
+            )
+        for u in out["block_uploads"]:
+            lines.append(f"  block upload {u['index']}:{u['subindex']} {u['bytes']} bytes"
+                         f" at {u['t']:.3f} s")
+        for tr in rep.traces:
+            lines.append(
+                f"  trace: {len(tr.t)} samples every {tr.dt * 1e6:g} µs, "
+                f"channels {', '.join(tr.signals)}"
+            )
+        lines += [f"saved {out['csv']}"] if "csv" in out else []
+        lines += [f"saved {p}" for p in out.get("trace_csv", [])]
+        return "\n".join(lines + plot)
+
+    if args.json and plot:
+        out["plot"] = plot
+    _emit(args, out, text)
+    return 0
+
