@@ -249,12 +249,18 @@ def _cmd_design(args: argparse.Namespace) -> int:
     if r["marginal"]:
         verdict = "MARGINAL (a pole on the unit circle, e.g. R_c = 0 cancels the integrator)"
     print(f"  closed loop: {verdict} (max |pole| = {r['max_pole_radius']:.6f}; Jury: {jury})")
-    pms = ", ".join(f"{p:.1f}°" for p in r["phase_margins_deg"]) or "none"
+    pms = (
+        ", ".join(
+            f"{c['phase_margin_deg']:.1f}° at {_fmt(c['hz'], '.0f', 'Hz')}" for c in r["crossovers"]
+        )
+        or "none"
+    )
     print(
         f"  gain margin {_fmt(r['gain_margin_db'], '.2f', 'dB')} "
         f"at {_fmt(r['phase_crossover_hz'], '.0f', 'Hz')}; "
         f"phase margin {_fmt(r['phase_margin_deg'], '.1f', '°')} "
-        f"at {_fmt(r['gain_crossover_hz'], '.0f', 'Hz')} (all crossovers: {pms}); "
+        f"at {_fmt(r['gain_crossover_hz'], '.0f', 'Hz')} (the smallest; every gain "
+        f"crossover: {pms}); "
         f"‖S‖∞ = {_fmt(r['sensitivity_peak'], '.3f')}"
     )
     if r["stable"]:

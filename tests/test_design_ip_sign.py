@@ -16,6 +16,7 @@ import pytest
 
 from drive_link import design
 from drive_link.cli_design import run_cli
+from drive_link.design import speed_loop
 
 pytestmark = pytest.mark.timeout(60)
 
@@ -67,13 +68,13 @@ def test_random_specs_are_refused_exactly_when_the_gains_are_not_positive(seed):
         xi = rng.uniform(0.3, 2.0)
         wn = 10 ** rng.uniform(-1.5, 2.5)
         kp, _ = _paper_gains(a, b, xi, wn)
-        if xi * wn < 0.999 * design.ip_min_xi_omega_n(a, FS):
+        if xi * wn < 0.999 * speed_loop.ip_min_xi_omega_n(a, FS):
             assert kp < 0
             with pytest.raises(ValueError):
                 design.ip_design(a, b, xi, wn, FS)
             refused += 1
             continue
-        if xi * wn < 1.001 * design.ip_min_xi_omega_n(a, FS):
+        if xi * wn < 1.001 * speed_loop.ip_min_xi_omega_n(a, FS):
             continue  # too close to the boundary to tell the sign in floating point
         d = design.ip_design(a, b, xi, wn, FS)
         accepted += 1
@@ -84,7 +85,7 @@ def test_random_specs_are_refused_exactly_when_the_gains_are_not_positive(seed):
         assert np.max(np.abs(oracle)) < 1.0
         assert d.stable
         s_oracle = np.log(oracle) * FS
-        s_want = np.sort_complex(np.log(design.ip_requested_poles(xi, wn, FS)) * FS)
+        s_want = np.sort_complex(np.log(speed_loop.ip_requested_poles(xi, wn, FS)) * FS)
         err = min(
             np.max(np.abs(s_oracle - s_want)), np.max(np.abs(s_oracle - s_want[::-1]))
         )
