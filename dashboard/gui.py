@@ -1,9 +1,12 @@
 """The viser GUI: one panel per browser (:mod:`dashboard.gui_panel`), the shared 3D rotor, and
 the two background loops that keep every panel live.
 
-Layout (control panel, top to bottom): status (with the live data's freshness), who controls,
-Take control, Drive buttons, progress/cancel of a long action, live plots of speed and i_p with
-their references, then tabs Speed · Current · Tuning · Identify · Captures.
+Layout: the plots are the main area, a wide per-browser panel docked left (tabs Live ·
+Capture · Loop, :mod:`dashboard.gui_tabs.plots`); the control panel is docked right (status,
+who controls, Take control, Drive buttons, progress/cancel of a long action, then tabs Speed ·
+Current · Tuning · Identify · Captures, one module each in :mod:`dashboard.gui_tabs`); the 3D
+rotor (:mod:`dashboard.gui_scene`, off with ``--no-3d``) gets the strip between them. Status
+texts: :mod:`dashboard.gui_status`.
 
 Streaming cannot die silently: the plot loop catches every failure of a tick (counted, shown),
 a watchdog in the status loop restarts a plot thread that died or stopped beating, and the page
@@ -32,10 +35,13 @@ import viser
 from dashboard import live_plot
 from dashboard.bench import LIVE_SIGNALS, Bench
 from dashboard.config import BenchConfig
+from dashboard.gui_field import CURRENT_COLORS, SPEED_COLORS
+from dashboard.gui_field import fmt as _fmt
 from dashboard.gui_guard import guard_handshake, install_send_lock, refuse_share_url
-from dashboard.gui_panel import CURRENT_COLORS, SPEED_COLORS, Panel, _fmt
+from dashboard.gui_panel import Panel
 from dashboard.gui_scene import RotorScene
 from dashboard.gui_scene import background as scene_background
+from dashboard.gui_status import DROP_WINDOW_S, controller_text, legend, status_html
 from dashboard.security import LeaseError, allowed_hosts, allowed_origins
 
 log = logging.getLogger(__name__)
@@ -44,10 +50,10 @@ WAKE_TIMEOUT_S = 0.030  #: after a setpoint change, wait at most this for the dr
 MIN_SPAN_SPEED_RPM = 50.0  #: the speed plot's y axis spans at least this (rpm)
 MIN_SPAN_I_P_A = 5.0  #: the i_p plot's y axis spans at least this (A)
 BRAND_COLOR = (31, 97, 141)  #: steel blue: buttons, tabs, sliders
+CONTROL_WIDTH_PX = 380  #: requested width of the control panel (docked right, px)
 LEASE_GRACE_S = 10.0  #: a browser whose WebSocket closed loses control after this (s)
 PLOT_BUCKETS = 80  #: time buckets per live plot (≤ 3 points each sent: min, max, last)
 WATCHDOG_S = 3.0  #: a plot thread silent for this long is replaced (s)
-DROP_WINDOW_S = 5.0  #: dropped-frame rate over this window (s)
 
 # re-exported for tests and older imports
 from dashboard.live_plot import min_span_envelope  # noqa: E402
@@ -105,14 +111,12 @@ class BenchGui:
             brand_color=BRAND_COLOR,
         )
         self.server.gui.main_panel.dock_right()
+        self.server.gui.main_panel.set_width(CONTROL_WIDTH_PX)  # the plots take the rest
         self.server.on_client_connect(self._on_connect)
         self.server.on_client_disconnect(self._on_disconnect)
         self.scene = RotorScene(self.server) if self.config.scene_3d else None
-        if self.scene is None:  # a calm canvas instead of an empty white one
+        if self.scene is None:  # a calm strip between the plots and the controls
             self.server.scene.set_background_image(scene_background())
-            self.server.scene.add_label(
-                "/no_3d", "3D rotor view off (--no-3d)", position=(0.0, 0.0, 0.0)
-            )
         self.bench.lease.on_change(self._on_lease_change)
         self.bench.listeners.append(self._on_bench_event)
         self._start_plot_thread()
@@ -190,6 +194,7 @@ class BenchGui:
                 with contextlib.suppress(Exception):
                     p.show_readback(data)
                     p.gains = data
+                    p._preview()  # the Loop tab's applied (grey) curves follow the drive
         elif kind == "setpoint":
             if "rpm" in data:
                 self._wake_target = ("measurements.speed_ref", float(data["rpm"]))
@@ -352,10 +357,15 @@ class BenchGui:
                 p.show_status(f"<b>state unavailable:</b> {html.escape(str(exc))}")
             return
         stale, fresh_txt = self.freshness()
-        status = self._status_html(s, stale, fresh_txt)
+        latest: dict = {}
+        with contextlib.suppress(Exception):
+            latest = self.bench.drive.live.latest()
+        rate = self._drop_rate((s.get("live") or {}).get("dropped"))
+        stream = (self.stream_errors, self.plot_restarts, self.last_stream_error)
+        status = status_html(s, latest, rate, stale, fresh_txt, stream)
         legends = (
-            _legend(("speed", "speed*"), "rpm", SPEED_COLORS, stale, fresh_txt),
-            _legend(("i_p", "i_p*"), "A", CURRENT_COLORS, stale, fresh_txt),
+            legend(("speed", "speed*"), "rpm", SPEED_COLORS, stale, fresh_txt),
+            legend(("i_p", "i_p*"), "A", CURRENT_COLORS, stale, fresh_txt),
         )
         ctl = s.get("controller")
         gone = None
@@ -367,110 +377,13 @@ class BenchGui:
                 p.show_status(status)
                 p.show_legends(*legends)
                 p.show_action(s.get("action"), s.get("sequence"))
-                txt = _controller_text(ctl, p, gone)
+                txt = controller_text(ctl, p, gone)
                 if p.controller_md.content != txt:
                     p.controller_md.content = txt
             except Exception as exc:
                 log.warning("status for browser #%s failed: %s", p.cid, exc)
         if self.scene is not None:
-            latest = {}
-            with contextlib.suppress(Exception):
-                latest = self.bench.drive.live.latest()
             self.scene.show_status(
                 f"{_fmt(latest.get('measurements.speed'), '.0f')} rpm · {s.get('state')} · "
                 f"i_p {_fmt(latest.get('measurements.i_p'), '.1f')} A"
             )
-
-    def _status_html(self, s: dict, stale: bool, fresh_txt: str) -> str:
-        live = s.get("live") or {}
-        load = live.get("bus_load")
-        latest = {}
-        with contextlib.suppress(Exception):
-            latest = self.bench.drive.live.latest()
-        emcy = s.get("emcy") or []
-        emcy_txt = (
-            ", ".join(
-                f"0x{int(e.get('code', 0)):04X} {e.get('text', '')}".strip() for e in emcy[-3:]
-            )
-            or "none"
-        )
-        hb = s.get("heartbeat_age_s")
-        rate = self._drop_rate(live.get("dropped"))
-        expected = sum(
-            float(t.get("expected_hz") or 0.0) for t in (live.get("tpdo") or {}).values()
-        )
-        share = f" ({100 * rate / expected:.1f} %)" if rate is not None and expected else ""
-        e = html.escape
-        fresh = (
-            f"<b style='color:#b03a2e'>⚠ {e(fresh_txt)}</b>"
-            if stale
-            else f"<span style='color:#1e8449'>● {e(fresh_txt)}</span>"
-        )
-        if self.stream_errors or self.plot_restarts:
-            fresh += (
-                f" <span title='{e(self.last_stream_error or '')}'>· stream recovered "
-                f"{self.stream_errors} error(s), {self.plot_restarts} restart(s)</span>"
-            )
-        cached = " (last read: an action holds the drive)" if s.get("drive_values_cached") else ""
-        extra = []
-        for key, label in (
-            ("bus_state", "CAN"),
-            ("bus_error_frames", "error frames"),
-            ("store_status", "parameter store"),
-            ("boots_seen", "boots seen"),
-            ("supervision_rearmed_at", "supervision re-armed"),
-        ):
-            v = s.get(key)
-            if v is not None:
-                warn = (key == "bus_state" and v in ("ERROR_PASSIVE", "BUS_OFF")) or (
-                    key == "store_status" and v in ("damaged", "unreadable")
-                )
-                txt = f"<b>{label}</b> {e(str(v))}"
-                extra.append(f"<span style='color:#b03a2e'>{txt}</span>" if warn else txt)
-        drops = (
-            f"<span title='TPDO frames that the drive&#39;s event timer promised but that did "
-            f"not arrive, per second over the last {DROP_WINDOW_S:g} s (total since start: "
-            f"{e(str(live.get('dropped', '–')))})'><b>dropped</b> "
-            f"{_fmt(rate, '.1f')} frames/s{share}</span>"
-        )
-        lines = [
-            fresh,
-            f"<b>Bus</b> {e(str(s['bus']))} · <b>node</b> {s['node_id']}",
-            f"<b>NMT</b> {e(str(s.get('nmt_state')))} · <b>402</b> {e(str(s.get('state')))} · "
-            f"<b>mode</b> {e(str(s.get('mode')))}{cached}",
-            f"<b>speed</b> {_fmt(latest.get('measurements.speed'), '.1f')} rpm "
-            f"(set {_fmt(s['speed_setpoint'], '.0f')}) · "
-            f"<b>i_p</b> {_fmt(latest.get('measurements.i_p'), '.2f')} A "
-            f"(set {_fmt(s.get('current_setpoint'), '.1f')})",
-            f"<b>heartbeat age</b> {_fmt(hb * 1e3 if hb is not None else None, '.0f')} ms · "
-            f"<b>bus load</b> {_fmt(load * 100 if load is not None else None, '.1f')} % · {drops}",
-            f"<b>faults/EMCY</b> {e(emcy_txt)}",
-        ]
-        lines.append(" · ".join(extra) or "&nbsp;")  # always the same number of lines
-        return "<div style='font-size:0.85em;line-height:1.35'>" + "<br>".join(lines) + "</div>"
-
-
-def _legend(
-    names: tuple[str, str], unit: str, colors: tuple[str, str], stale: bool, fresh_txt: str
-) -> str:
-    sw = " ".join(
-        f"<span style='color:{c}'>━</span> {html.escape(n)} ({unit})"
-        for n, c in zip(names, colors, strict=True)
-    )
-    mark = (
-        f"<b style='color:#b03a2e'>⚠ {html.escape(fresh_txt)}</b>"
-        if stale
-        else "<span style='color:#1e8449'>● live</span>"
-    )
-    return f"<div style='font-size:0.8em'>{sw} · {mark}</div>"
-
-
-def _controller_text(ctl: dict | None, panel: Panel, gone: float | None) -> str:
-    if not ctl:
-        return "**In control:** nobody (your first action takes control)"
-    you = " (you)" if panel.holds_control() else ""
-    since = time.strftime("%H:%M:%S", time.localtime(ctl["since"]))
-    txt = f"**In control:** {ctl['client']}{you} since {since}"
-    if gone is not None:
-        txt += f" · its page closed: control frees in {max(0.0, gone):.0f} s"
-    return txt

@@ -1,0 +1,91 @@
+"""Pieces every tab of the viser GUI uses: a typed number field with its error line, number
+formatting, the plot colours and uPlot series/plot helpers.
+
+Units: whatever the field's :class:`~dashboard.fields.NumberSpec` label states (rpm, A, µH, …).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import viser.uplot as uplot
+
+from dashboard.fields import FieldError, NumberSpec, show
+
+if TYPE_CHECKING:
+    from dashboard.gui_panel import Panel
+
+__all__ = [
+    "CURRENT_COLORS",
+    "PLOT_HEIGHT_PX",
+    "SPEED_COLORS",
+    "Field",
+    "fmt",
+    "series",
+]
+
+SPEED_COLORS = ("#1f77b4", "#ff7f0e")
+CURRENT_COLORS = ("#2ca02c", "#d62728")
+PLOT_HEIGHT_PX = 330  #: height of a main-area plot including its legend (px)
+
+
+def fmt(x: Any, spec: str = ".4g") -> str:
+    """``x`` formatted with ``spec``; "–" for None, NaN, inf or a non-number."""
+    try:
+        f = float(x)
+    except (TypeError, ValueError):
+        return "–"
+    return format(f, spec) if np.isfinite(f) else "–"
+
+
+def series(labels: tuple[str, ...], colors: tuple[str, ...], x_label: str) -> list[Any]:
+    """uPlot series: the x series named ``x_label``, then one line per label/colour."""
+    out: list[Any] = [uplot.Series(label=x_label)]
+    for lab, col in zip(labels, colors, strict=False):
+        out.append(uplot.Series(label=lab, stroke=col, width=1.5))
+    return out
+
+
+class Field:
+    """A typed number: a text input plus a message line under it (hidden while valid)."""
+
+    def __init__(self, panel: Panel, spec: NumberSpec, initial: float, hint: str = "") -> None:
+        self.panel = panel
+        self.spec = spec
+        self.input = panel.gui.add_text(spec.label, show(initial), hint=hint or None)
+        self.error = panel.gui.add_markdown("", visible=False)
+        self.input.on_update(lambda e: self.validate())
+
+    def validate(self) -> bool:
+        try:
+            self.spec.parse(self.input.value)
+        except FieldError as exc:
+            self._show_error(str(exc))
+            return False
+        self._show_error("")
+        return True
+
+    def _show_error(self, text: str) -> None:
+        if text:
+            self.error.content = f"⚠ {text} — nothing sent"
+            self.error.visible = True
+        elif self.error.visible:
+            self.error.visible = False
+            self.error.content = ""
+
+    def value(self) -> float:
+        """The typed value, exactly; FieldError (shown at the field) otherwise."""
+        try:
+            v = self.spec.parse(self.input.value)
+        except FieldError as exc:
+            self._show_error(str(exc))
+            raise
+        self._show_error("")
+        return v
+
+    def set(self, x: float) -> None:
+        """Show ``x`` (a read-back) in the field without firing its callbacks' echo."""
+        with self.panel.mute():
+            self.input.value = show(x)
+        self._show_error("")

@@ -1,0 +1,124 @@
+"""The status texts of the viser GUI (HTML/markdown strings, no GUI calls): the status block,
+the plot legends with the freshness mark, and who is in control.
+
+Units: rpm, A, ms (heartbeat age), % (bus load), frames/s (dropped).
+"""
+
+from __future__ import annotations
+
+import html
+import time
+from typing import Any
+
+from dashboard.gui_field import fmt as _fmt
+
+__all__ = ["DROP_WINDOW_S", "controller_text", "legend", "status_html"]
+
+DROP_WINDOW_S = 5.0  #: dropped-frame rate over this window (s)
+
+
+def status_html(
+    s: dict,
+    latest: dict,
+    rate: float | None,
+    stale: bool,
+    fresh_txt: str,
+    stream: tuple[int, int, str | None] = (0, 0, None),
+) -> str:
+    """The status block: freshness, bus, NMT/402/mode, speed and i_p with their setpoints,
+    heartbeat age, bus load, dropped TPDO frames/s (``rate``), EMCY and bus health.
+
+    ``s`` is :meth:`Bench.state`, ``latest`` the newest live values, ``stream`` (errors,
+    restarts, last error) of the plot thread. Always the same number of lines.
+    """
+    stream_errors, plot_restarts, last_stream_error = stream
+    live = s.get("live") or {}
+    load = live.get("bus_load")
+    emcy = s.get("emcy") or []
+    emcy_txt = (
+        ", ".join(
+            f"0x{int(e.get('code', 0)):04X} {e.get('text', '')}".strip() for e in emcy[-3:]
+        )
+        or "none"
+    )
+    hb = s.get("heartbeat_age_s")
+    expected = sum(
+        float(t.get("expected_hz") or 0.0) for t in (live.get("tpdo") or {}).values()
+    )
+    share = f" ({100 * rate / expected:.1f} %)" if rate is not None and expected else ""
+    e = html.escape
+    fresh = (
+        f"<b style='color:#b03a2e'>⚠ {e(fresh_txt)}</b>"
+        if stale
+        else f"<span style='color:#1e8449'>● {e(fresh_txt)}</span>"
+    )
+    if stream_errors or plot_restarts:
+        fresh += (
+            f" <span title='{e(last_stream_error or '')}'>· stream recovered "
+            f"{stream_errors} error(s), {plot_restarts} restart(s)</span>"
+        )
+    cached = " (last read: an action holds the drive)" if s.get("drive_values_cached") else ""
+    extra = []
+    for key, label in (
+        ("bus_state", "CAN"),
+        ("bus_error_frames", "error frames"),
+        ("store_status", "parameter store"),
+        ("boots_seen", "boots seen"),
+        ("supervision_rearmed_at", "supervision re-armed"),
+    ):
+        v = s.get(key)
+        if v is not None:
+            warn = (key == "bus_state" and v in ("ERROR_PASSIVE", "BUS_OFF")) or (
+                key == "store_status" and v in ("damaged", "unreadable")
+            )
+            txt = f"<b>{label}</b> {e(str(v))}"
+            extra.append(f"<span style='color:#b03a2e'>{txt}</span>" if warn else txt)
+    drops = (
+        f"<span title='TPDO frames that the drive&#39;s event timer promised but that did "
+        f"not arrive, per second over the last {DROP_WINDOW_S:g} s (total since start: "
+        f"{e(str(live.get('dropped', '–')))})'><b>dropped</b> "
+        f"{_fmt(rate, '.1f')} frames/s{share}</span>"
+    )
+    lines = [
+        fresh,
+        f"<b>Bus</b> {e(str(s['bus']))} · <b>node</b> {s['node_id']}",
+        f"<b>NMT</b> {e(str(s.get('nmt_state')))} · <b>402</b> {e(str(s.get('state')))} · "
+        f"<b>mode</b> {e(str(s.get('mode')))}{cached}",
+        f"<b>speed</b> {_fmt(latest.get('measurements.speed'), '.1f')} rpm "
+        f"(set {_fmt(s['speed_setpoint'], '.0f')}) · "
+        f"<b>i_p</b> {_fmt(latest.get('measurements.i_p'), '.2f')} A "
+        f"(set {_fmt(s.get('current_setpoint'), '.1f')})",
+        f"<b>heartbeat age</b> {_fmt(hb * 1e3 if hb is not None else None, '.0f')} ms · "
+        f"<b>bus load</b> {_fmt(load * 100 if load is not None else None, '.1f')} % · {drops}",
+        f"<b>faults/EMCY</b> {e(emcy_txt)}",
+    ]
+    lines.append(" · ".join(extra) or "&nbsp;")  # always the same number of lines
+    return "<div style='font-size:0.85em;line-height:1.35'>" + "<br>".join(lines) + "</div>"
+
+
+
+
+def legend(
+    names: tuple[str, str], unit: str, colors: tuple[str, str], stale: bool, fresh_txt: str
+) -> str:
+    sw = " ".join(
+        f"<span style='color:{c}'>━</span> {html.escape(n)} ({unit})"
+        for n, c in zip(names, colors, strict=True)
+    )
+    mark = (
+        f"<b style='color:#b03a2e'>⚠ {html.escape(fresh_txt)}</b>"
+        if stale
+        else "<span style='color:#1e8449'>● live</span>"
+    )
+    return f"<div style='font-size:0.8em'>{sw} · {mark}</div>"
+
+
+def controller_text(ctl: dict | None, panel: Any, gone: float | None) -> str:
+    if not ctl:
+        return "**In control:** nobody (your first action takes control)"
+    you = " (you)" if panel.holds_control() else ""
+    since = time.strftime("%H:%M:%S", time.localtime(ctl["since"]))
+    txt = f"**In control:** {ctl['client']}{you} since {since}"
+    if gone is not None:
+        txt += f" · its page closed: control frees in {max(0.0, gone):.0f} s"
+    return txt

@@ -1,0 +1,59 @@
+"""Current tab: i_p* setpoint and the current step test (paper Fig. 13); the step's 50 kHz
+record is drawn in the main area's Capture tab (the bench's "capture" event selects it).
+
+Units: A, samples.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from dashboard import experiments
+from dashboard.fields import NumberSpec
+from dashboard.gui_field import Field, fmt
+from dashboard.models import CurrentStepIn
+
+__all__ = ["CurrentTab"]
+
+
+class CurrentTab:
+    """Mixin of :class:`dashboard.gui_panel.Panel`: the Current tab."""
+
+    gui: Any
+    bench: Any
+
+    def _build_current_tab(self) -> None:
+        gui = self.gui
+        self.i_in = Field(self, NumberSpec("i_p* (A)", -200, 200), 0.0)
+        btn = gui.add_button("Set current")
+        self.current_md = self.md()
+        btn.on_click(self.action(self._set_current, self.current_md))
+        with gui.add_folder("Current step test (Fig. 13)"):
+            self.step_from = Field(self, NumberSpec("From (A)", -200, 200), 15.0)
+            self.step_to = Field(self, NumberSpec("To (A)", -200, 200), 20.0)
+            self.avg_n = Field(
+                self, NumberSpec("Moving average (samples)", 1, 1000, integer=True), 1
+            )
+            run = gui.add_button("Run current step")
+            self.step_md = self.md()
+            run.on_click(self.action(self._current_step, self.step_md))
+
+    def _set_current(self, event: Any) -> None:
+        self.bench.set_current(self.i_in.value())
+
+    def _current_step(self, event: Any) -> str:
+        body = CurrentStepIn(
+            from_A=self.step_from.value(), to_A=self.step_to.value(), duration_ms=2.0
+        )
+        avg = int(self.avg_n.value())
+        res = experiments.current_step(self.bench, body, average_samples=avg)
+        m = res["metrics"]
+        return (
+            f"**{res['controller']}**: rise {fmt(m.get('rise_time_s', np.nan) * 1e6, '.0f')} µs · "
+            f"settling {fmt(m.get('settling_time_s', np.nan) * 1e6, '.0f')} µs · "
+            f"overshoot {fmt(m.get('overshoot_pct'), '.1f')} % · "
+            f"steady-state error {fmt(m.get('steady_state_error_A'), '.3f')} A · "
+            f"model RMS error {fmt(res.get('model_rms_error_A'), '.3f')} A (plot: Capture tab)"
+        )

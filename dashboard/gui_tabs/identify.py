@@ -1,0 +1,55 @@
+"""Identify tab: a current step in current mode, G(z) = b/(z − a) fitted to the speed
+(paper Fig. 16); the data and the fit are drawn in the main area's Capture tab.
+
+Units: A, s; a dimensionless, b rpm/(A·sample) at Ts = 20 µs.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from dashboard import experiments
+from dashboard.fields import NumberSpec
+from dashboard.gui_field import Field, fmt
+from dashboard.models import IdentifyIn
+
+__all__ = ["IdentifyTab"]
+
+
+class IdentifyTab:
+    """Mixin of :class:`dashboard.gui_panel.Panel`: the Identify tab."""
+
+    gui: Any
+    bench: Any
+
+    def _build_identify_tab(self) -> None:
+        gui = self.gui
+        gui.add_markdown(
+            "Current step in current mode; fit G(z) = b/(z − a) to the speed (Fig. 16). "
+            "The drive is put back as found afterwards."
+        )
+        self.id_from = Field(self, NumberSpec("Identify from (A)", -200, 200), 15.0)
+        self.id_to = Field(self, NumberSpec("Identify to (A)", -200, 200), 30.0)
+        self.id_dur = Field(self, NumberSpec("Duration (s)", 0.0, 20.0, lo_open=True), 1.0)
+        self.id_btns = gui.add_button_group("Identification", ("Run", "Use a, b in IP design"))
+        self.id_md = gui.add_markdown("", visible=False)
+        self.id_btns.on_click(self.action(self._identify_button, self.id_md, needs_control=False))
+
+    def _identify_button(self, event: Any) -> str | None:
+        if event.target.value != "Run":
+            ident = self.bench.identified
+            if not ident:
+                raise ValueError("run an identification first")
+            self.a_in.set(float(ident["a"]))
+            self.b_in.set(float(ident["b"]))
+            return self._design_ip(event)
+        if not self._control(self.id_md):
+            return None
+        body = IdentifyIn(
+            from_A=self.id_from.value(), to_A=self.id_to.value(), duration_s=self.id_dur.value()
+        )
+        res = experiments.identify(self.bench, body)
+        return (
+            f"a = **{res['a']:.8f}**, b = **{res['b']:.6g}** rpm/(A·sample) at Ts = 20 µs · "
+            f"fit RMS error {fmt(res['rms_error_rpm'], '.3g')} rpm (plot: Capture tab)"
+        )

@@ -1,0 +1,234 @@
+"""The main area of one browser's page: a wide panel docked left with the plots, tabs
+Live · Capture · Loop.
+
+- Live: speed and i_p with their references (speed*, i_p*), large, one cursor synced across
+  both (click locks it), drag to zoom (x and y), double-click to zoom out.
+- Capture: the selected 50 kHz capture (trace, current step with the model, identification
+  with its fit), the newest one shown when it arrives.
+- Loop: Bode plot of the open current and speed loops and the closed-loop poles in the z-plane
+  for the values typed in the Tuning tab (before anything is applied), the drive's applied set
+  beside them as the reference (paper Figs. 4, 5, 12).
+
+Units: t s (live, identification) or ms (50 kHz captures); speed rpm; currents A; frequency Hz;
+magnitude dB; phase degrees; z-plane dimensionless.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import viser.uplot as uplot
+
+from dashboard import loop_view
+from dashboard.gui_field import CURRENT_COLORS, PLOT_HEIGHT_PX, SPEED_COLORS, series
+
+if TYPE_CHECKING:
+    from dashboard.bench import Capture
+
+__all__ = ["PLOT_AREA_WIDTH_PX", "PlotArea", "capture_view"]
+
+#: requested width of the plot area (px); viser scales the docked regions down together on a
+#: narrower window, keeping 120 px of 3D canvas: at 1280 px the plots get ~61 % of the width.
+PLOT_AREA_WIDTH_PX = 780
+
+#: hides the legend row of the invisible min-span helper series (4th row, last, of a live plot)
+LEGEND_CSS = "<style>.uplot .u-legend tr.u-series:nth-child(4):last-child{display:none}</style>"
+
+CAPTURE_COLORS = ("#2ca02c", "#9467bd", "#d62728", "#7f7f7f", "#1f77b4", "#ff7f0e", "#8c564b")
+TYPED, APPLIED = "#1f618d", "#aab7b8"  #: typed set (bold), applied set (grey reference)
+SPEED_TYPED, SPEED_APPLIED = "#d35400", "#f5cba7"
+
+
+def _cursor(key: str) -> Any:
+    """A crosshair synced across the plots of one group, locked by a click; drag zooms x and y."""
+    return uplot.Cursor(
+        sync=uplot.Cursor_Sync(key=key), lock=True, drag=uplot.Cursor_Drag(x=True, y=True)
+    )
+
+
+def capture_view(cap: Capture) -> tuple[str, str, list[str], tuple[np.ndarray, ...]]:
+    """(title, x label, series labels, data) of a capture for the capture plot."""
+    c = cap.columns
+    if cap.kind == "identification":
+        names = [("speed", "speed (rpm)"), ("model", "model (rpm)")]
+        x, x_label = np.asarray(c["t"], dtype=np.float64), "t (s)"
+        title = f"#{cap.id} identification: speed and the fitted G(z) = b/(z − a)"
+    else:
+        pretty = {"i_p_avg": "ī_p (A)", "i_p_ref": "i_p* (A)", "model": "model (A)"}
+        names = [(k, pretty.get(k, f"{k} (A)")) for k in c if k != "t"][: len(CAPTURE_COLORS)]
+        x, x_label = np.asarray(c["t"], dtype=np.float64) * 1e3, "t (ms)"
+        title = f"#{cap.id} {cap.kind.replace('_', ' ')} at 50 kHz"
+    data = (x, *(np.asarray(c[k], dtype=np.float64) for k, _ in names))
+    return title, x_label, [lab for _, lab in names], data
+
+
+def _capture_series(labels: list[str] | tuple[str, ...], x_label: str) -> tuple[Any, ...]:
+    """The capture plot's series: one per label, the remaining slots hidden."""
+    out = series(tuple(labels), CAPTURE_COLORS, x_label)
+    for col in CAPTURE_COLORS[len(labels) :]:
+        out.append(uplot.Series(label="", stroke=col, show=False))
+    return tuple(out)
+
+
+class PlotArea:
+    """Mixin of :class:`dashboard.gui_panel.Panel`: builds and fills the main plot area."""
+
+    gui: Any
+    config: Any
+
+    def _build_plot_area(self) -> None:
+        gui = self.gui
+        self.plot_panel = gui.add_panel()
+        with self.plot_panel.add_tab("Live"):
+            gui.add_html(LEGEND_CSS)
+            self.speed_legend = gui.add_html("")
+            self.speed_plot = self._live_plot("speed", "rpm", SPEED_COLORS)
+            self.current_legend = gui.add_html("")
+            self.current_plot = self._live_plot("i_p", "A", CURRENT_COLORS)
+        with self.plot_panel.add_tab("Capture"):
+            self.capture_md = gui.add_markdown("No capture yet: run one from the Current, "
+                                               "Identify or Captures tab.")
+            self._build_capture_plot()
+        with self.plot_panel.add_tab("Loop"):
+            self.loop_md = gui.add_markdown("")
+            self._build_loop_plots()
+        self.plot_panel.dock_left()
+        self.plot_panel.set_width(PLOT_AREA_WIDTH_PX)
+
+    def _live_plot(self, name: str, unit: str, colors: tuple[str, str]) -> Any:
+        window = self.config.live_window_s
+        x0 = np.linspace(-window, 0.0, 2)
+        zero = np.zeros(2)
+        return self.gui.add_uplot(
+            (x0, zero, zero, zero),
+            (
+                *series((f"{name} ({unit})", f"{name}* ({unit})"), colors, "t (s)"),
+                uplot.Series(label="", stroke="rgba(0,0,0,0)", width=0, points={"show": False}),
+            ),
+            scales={"x": uplot.Scale(time=False, range=(-window, 0.0))},
+            axes=(uplot.Axis(label="t (s)"), uplot.Axis(label=unit, size=60)),
+            cursor=_cursor("live"),
+            height=PLOT_HEIGHT_PX,
+        )
+
+    # ------------------------------------------------------------------ capture
+    def _build_capture_plot(self) -> None:
+        nan = np.full(2, np.nan)
+        n = len(CAPTURE_COLORS)
+        self._capture_axes: tuple[str, ...] = ()
+        self.capture_plot = self.gui.add_uplot(
+            (np.zeros(2), *(nan,) * n),
+            _capture_series((), "t (ms)"),
+            scales={"x": uplot.Scale(time=False, auto=True)},
+            axes=(uplot.Axis(label="t (ms)"), uplot.Axis(label="A", size=60)),
+            cursor=_cursor("capture"),
+            height=int(PLOT_HEIGHT_PX * 1.6),
+        )
+
+    def show_capture_plot(self, cap: Capture) -> None:
+        """Show ``cap`` in the Capture tab; unused series slots stay empty (NaN) and unlabelled."""
+        title, x_label, labels, data = capture_view(cap)
+        n = len(CAPTURE_COLORS)
+        filler = np.full(data[0].size, np.nan)
+        names = (*labels, *("",) * (n - len(labels)))
+        axes = (x_label, *names)
+        if axes != self._capture_axes:  # labels change with the capture's kind
+            unit = "rpm" if cap.kind == "identification" else "A"
+            self.capture_plot.series = _capture_series(labels, x_label)
+            self.capture_plot.axes = (uplot.Axis(label=x_label), uplot.Axis(label=unit, size=60))
+            self._capture_axes = axes
+        self.capture_plot.data = (*data, *(filler,) * (n - len(labels)))
+        self.capture_md.content = f"**{title}**"
+
+    # ------------------------------------------------------------------ loop
+    def _build_loop_plots(self) -> None:
+        gui = self.gui
+        f = loop_view.frequency_grid()
+        nan = np.full(f.size, np.nan)
+        log_x = {
+            "x": uplot.Scale(
+                time=False, distr=3, log=10, range=(loop_view.F_MIN_HZ, loop_view.F_MAX_HZ)
+            )
+        }
+        labels = ("current, typed", "current, applied", "speed, typed", "speed, applied")
+        colors = (TYPED, APPLIED, SPEED_TYPED, SPEED_APPLIED)
+        self.bode_mag = gui.add_uplot(
+            (f, nan, nan, nan, nan),
+            tuple(series(labels, colors, "f (Hz)")),
+            scales=log_x,
+            axes=(uplot.Axis(label="f (Hz)"), uplot.Axis(label="|L| (dB)", size=60)),
+            cursor=_cursor("bode"),
+            title="Open loops: magnitude",
+            height=int(PLOT_HEIGHT_PX * 0.85),
+        )
+        self.bode_phase = gui.add_uplot(
+            (f, nan, nan, nan, nan),
+            tuple(series(labels, colors, "f (Hz)")),
+            scales=log_x,
+            axes=(uplot.Axis(label="f (Hz)"), uplot.Axis(label="∠L (°)", size=60)),
+            cursor=_cursor("bode"),
+            title="Open loops: phase",
+            height=int(PLOT_HEIGHT_PX * 0.85),
+        )
+        z0 = loop_view.z_plane_data(np.zeros(0), np.zeros(0), np.zeros(0))
+        dot = {"show": True, "size": 9, "width": 2}
+        self.z_plane = gui.add_uplot(
+            z0,
+            (
+                uplot.Series(label="Re z"),
+                uplot.Series(label="|z| = 1", stroke="#7f8c8d", width=1),
+                uplot.Series(label="", stroke="#7f8c8d", width=1),
+                uplot.Series(label="current poles, typed", stroke=TYPED, width=0,
+                             points={**dot, "fill": TYPED}),
+                uplot.Series(label="current poles, applied", stroke=APPLIED, width=0,
+                             points={**dot, "fill": "#ffffff"}),
+                uplot.Series(label="speed poles, typed", stroke=SPEED_TYPED, width=0,
+                             points={**dot, "fill": SPEED_TYPED}),
+            ),
+            scales={
+                "x": uplot.Scale(time=False, range=(-1.3, 1.3)),
+                "y": uplot.Scale(range=(-1.15, 1.15)),
+            },
+            axes=(uplot.Axis(label="Re z"), uplot.Axis(label="Im z", size=60)),
+            cursor=uplot.Cursor(drag=uplot.Cursor_Drag(x=True, y=True)),
+            title="Closed-loop poles (z-plane)",
+            height=int(PLOT_HEIGHT_PX * 1.2),
+        )
+        self.loop_updates = 0
+
+    def show_loop(
+        self, typed: dict[str, Any] | None, applied: dict[str, Any] | None, a: float, b: float
+    ) -> None:
+        """Draw the Bode curves and poles of the ``typed`` set against the ``applied`` one
+        (either may be None: its curves are left empty). Speed model G(z) = b/(z − a)."""
+        f = loop_view.frequency_grid()
+        nan = np.full(f.size, np.nan)
+        views = []
+        for g in (typed, applied):
+            try:
+                views.append(loop_view.loop_view(g, a, b, f) if g else None)
+            except (ValueError, KeyError, ZeroDivisionError):
+                views.append(None)
+        t, r = views
+        self.bode_mag.data = (
+            f,
+            t.current_db if t else nan,
+            r.current_db if r else nan,
+            t.speed_db if t else nan,
+            r.speed_db if r else nan,
+        )
+        self.bode_phase.data = (
+            f,
+            t.current_deg if t else nan,
+            r.current_deg if r else nan,
+            t.speed_deg if t else nan,
+            r.speed_deg if r else nan,
+        )
+        empty = np.zeros(0, dtype=complex)
+        self.z_plane.data = loop_view.z_plane_data(
+            t.current_poles if t else empty,
+            r.current_poles if r else empty,
+            t.speed_poles if t else empty,
+        )
+        self.loop_updates += 1
