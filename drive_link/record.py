@@ -122,9 +122,8 @@ def record_bus(
         stop_event.wait(duration)
     finally:
         seconds = time.monotonic() - t0
-        notifier.stop(1.0)
         try:
-            logger.stop()
+            notifier.stop(1.0)  # also stops (flushes and closes) the logger
         finally:
             bus.shutdown()
     return RecordStats(

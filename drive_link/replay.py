@@ -1,6 +1,6 @@
 """``drive-link replay FILE``: a bus recording decoded offline into the live and trace views.
 
-The file is read with :class:`can.LogReader` (any format python-can reads: .asc, .blf, .log,
+The file is read once with :class:`can.LogReader` (any format python-can reads: .asc, .blf, .log,
 .csv, .trc, .mf4 with asammdf), so recordings from Vector tools, SavvyCAN or candump work too.
 
 * TPDOs are decoded by the same :class:`~drive_link.live.LiveStreams` the live view uses, fed
@@ -18,6 +18,7 @@ The file is read with :class:`can.LogReader` (any format python-can reads: .asc,
 from __future__ import annotations
 
 import argparse
+import binascii
 import collections
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -41,29 +42,45 @@ _T0 = 1.0
 @dataclass
 class BlockUpload:
     """One reassembled SDO block upload: ``index``, ``subindex``, ``data``, time ``t`` (s from
-    the start of the recording) of its end, ``size`` announced by the server (None if not)."""
+    the start of the recording) of its end, ``size`` announced by the server (None if not),
+    ``crc_ok`` (the CRC-16 of the end frame checked against the data; None without CRC)."""
 
     index: int
     subindex: int
     data: bytes
     t: float
     size: int | None = None
+    crc_ok: bool | None = None
+
+    @property
+    def complete(self) -> bool:
+        """The data has the announced size and CRC (as far as the transfer gave them)."""
+        return (self.size is None or len(self.data) == self.size) and self.crc_ok is not False
 
 
 class _BlockState:
-    def __init__(self, index: int, sub: int):
+    def __init__(self, index: int, sub: int, crc: bool):
         self.index, self.sub = index, sub
         self.phase = "init"  # init → start → segments → end
+        self.crc = crc  # client offered CRC; the server's answer confirms
         self.size: int | None = None
         self.data = bytearray()
         self.block: list[tuple[int, bytes, bool]] = []
-        self.last_seen = False
+        self.await_first = True  # after an acknowledgement: leftovers until seqno 1
+        self.ack_no: int | None = None  # drive_link's acknowledgement number (byte 3)
 
 
 class SdoFollower:
     """Follows the SDO traffic of one server (client→server ``rx`` COB-ID, server→client ``tx``):
     expedited upload answers and confirmed expedited downloads into ``values`` ((index, sub) →
-    raw bytes), completed block uploads into ``uploads``."""
+    raw bytes), completed block uploads into ``uploads``.
+
+    Block uploads are followed as the client takes them (:mod:`drive_link.sdo_block`): a
+    sub-block starts at seqno 1 (segments still arriving from the previous one are dropped),
+    the acknowledgement's ``ackseq`` says how many segments count, and an acknowledgement that
+    repeats the previous one's number (reserved byte 3, drive_link's extension; 0 = none) is a
+    resend the server ignores, so it is ignored here too.
+    """
 
     def __init__(self, rx: int, tx: int):
         self.rx, self.tx = rx, tx
@@ -89,14 +106,18 @@ class SdoFollower:
             self._block = None
             self.aborted += 1
             return
-        ccs = b0 >> 5
-        if ccs == 5 and len(d) >= 4 and (b0 & 0x03) == 0:  # block upload initiate
-            self._block = _BlockState(d[1] | d[2] << 8, d[3])
-        elif ccs == 5 and blk is not None and (b0 & 0x03) == 3 and blk.phase == "start":
+        ccs, cs = b0 >> 5, b0 & 0x03
+        if ccs == 5 and len(d) >= 4 and cs == 0:  # block upload initiate
+            self._block = _BlockState(d[1] | d[2] << 8, d[3], bool(b0 & 0x04))
+        elif ccs == 5 and blk is not None and cs == 3 and blk.phase == "start":
             blk.phase = "segments"
-        elif ccs == 5 and blk is not None and (b0 & 0x03) == 2 and blk.phase == "segments":
+        elif ccs == 5 and blk is not None and cs == 2 and blk.phase == "segments":
+            number = d[3] if len(d) > 3 else 0
+            if number and number == blk.ack_no:
+                return  # a resent acknowledgement: the server ignores it
+            blk.ack_no = number
             self._ack(blk, d[1] if len(d) > 1 else 0)
-        elif ccs == 5 and (b0 & 0x03) == 1:  # client's end confirmation
+        elif ccs == 5 and cs == 1:  # client's end confirmation
             self._block = None
         elif ccs == 1 and len(d) >= 8 and b0 & 0x02 and b0 & 0x01:  # expedited download, size
             n = 4 - ((b0 >> 2) & 0x03)
@@ -109,14 +130,14 @@ class SdoFollower:
             got.setdefault(seq, (payload, last))
         for seq in range(1, ackseq + 1):
             if seq not in got:
-                break
+                break  # the recording missed a segment the client had: data incomplete
             payload, last = got[seq]
             blk.data += payload
             if last:
-                blk.last_seen = True
                 blk.phase = "end"
                 break
         blk.block = []
+        blk.await_first = True
 
     def _server(self, d: bytes, t: float) -> None:
         b0 = d[0]
@@ -127,6 +148,9 @@ class SdoFollower:
                 self._block = None
                 self.aborted += 1
                 return
+            if blk.await_first and seq != 1:
+                return  # a leftover of the sub-block already acknowledged
+            blk.await_first = False
             blk.block.append((seq, bytes(d[1:8]).ljust(7, b"\0"), bool(b0 & 0x80)))
             return
         if b0 == 0x80:
@@ -137,13 +161,17 @@ class SdoFollower:
         scs = b0 >> 5
         if scs == 6 and blk is not None:
             if blk.phase == "init" and (b0 & 0x01) == 0:
+                blk.crc = blk.crc and bool(b0 & 0x04)
                 if b0 & 0x02 and len(d) >= 8:
                     blk.size = int.from_bytes(d[4:8], "little")
                 blk.phase = "start"
             elif blk.phase == "end" and (b0 & 0x03) == 1:
                 unused = (b0 >> 2) & 0x07
                 data = bytes(blk.data[: len(blk.data) - unused] if unused else blk.data)
-                self.uploads.append(BlockUpload(blk.index, blk.sub, data, t, blk.size))
+                crc_ok = None
+                if blk.crc and len(d) >= 3:
+                    crc_ok = binascii.crc_hqx(data, 0) == (d[1] | d[2] << 8)
+                self.uploads.append(BlockUpload(blk.index, blk.sub, data, t, blk.size, crc_ok))
                 self._block = None
         elif scs == 2 and len(d) >= 8 and b0 & 0x02:  # expedited upload answer
             n = 4 - ((b0 >> 2) & 0x03) if b0 & 0x01 else 4
@@ -273,7 +301,7 @@ class Replay:
             "signals": sig,
             "block_uploads": [
                 {"index": f"0x{u.index:04X}", "subindex": u.subindex, "bytes": len(u.data),
-                 "t": u.t}
+                 "size": u.size, "crc_ok": u.crc_ok, "complete": u.complete, "t": u.t}
                 for u in self.uploads
             ],
             "traces": [
@@ -299,7 +327,7 @@ def _trace_from(upload: BlockUpload, known: _Known) -> Trace | None:
             names.append(obj.name if obj else f"0x{ref >> 16:04X}:{(ref >> 8) & 0xFF:02X}")
     except (KeyError, ValueError):
         return None
-    if count < 1 or len(upload.data) != length * count * 4:
+    if count < 1 or not upload.complete or len(upload.data) != length * count * 4:
         return None
     data = np.frombuffer(upload.data, dtype="<f4").reshape(length, count)
     t = (np.arange(length, dtype=np.float64) - trig) * divider * TS
@@ -337,7 +365,7 @@ def replay_file(path: str | Path, node: int = 1, table: ObjectTable | None = Non
     per_id: collections.Counter[int] = collections.Counter()
     errors = 0
     start = end = None
-    # pass 1: SDO (mapping, trace config, uploads) and counts
+    pdo_frames: list[tuple[int, bytes, float]] = []  # decoded once the mapping is known
     try:
         for msg in _reader(p):
             if msg.is_error_frame:
@@ -347,24 +375,26 @@ def replay_file(path: str | Path, node: int = 1, table: ObjectTable | None = Non
             if start is None:
                 start = ts
             end = ts
-            per_id[msg.arbitration_id] += 1
-            for f in followers:
-                f.feed(msg.arbitration_id, bytes(msg.data), ts - start)
+            cid = msg.arbitration_id
+            per_id[cid] += 1
+            if 0x180 <= cid < 0x580:
+                pdo_frames.append((cid, bytes(msg.data), ts - start))
+            else:
+                for f in followers:
+                    f.feed(cid, bytes(msg.data), ts - start)
     except InvalidValue:
         raise
     except Exception as exc:  # a damaged or foreign file: one line
         why = str(exc).splitlines()[0] if str(exc) else repr(exc)
         raise InvalidValue(f"{p}: cannot read: {why}") from None
-    if start is None:
+    if start is None or end is None:
         raise InvalidValue(f"{p}: no CAN frames in the file")
     duration = float(end - start)
     known = _Known(table, node, followers)
     net = canopen.Network()  # no bus: frames are handed to its subscribers by notify()
     live = LiveStreams(net, tpdo_configs(known), seconds=duration + 2.0)
-    # pass 2: TPDOs through the live view's decoder
-    for msg in _reader(p):
-        if not msg.is_error_frame:
-            net.notify(msg.arbitration_id, msg.data, float(msg.timestamp) - start + _T0)
+    for cid, data, t in pdo_frames:  # the live view's own decoder
+        net.notify(cid, bytearray(data), t + _T0)
     uploads = [u for f in followers for u in f.uploads]
     uploads.sort(key=lambda u: u.t)
     traces = []
@@ -429,8 +459,11 @@ def cmd_replay(args: argparse.Namespace) -> int:
                 f"{s['min']:.6g} .. {s['max']:.6g}"
             )
         for u in out["block_uploads"]:
-            lines.append(f"  block upload {u['index']}:{u['subindex']} {u['bytes']} bytes"
-                         f" at {u['t']:.3f} s")
+            lines.append(
+                f"  block upload {u['index']}:{u['subindex']} {u['bytes']} bytes at {u['t']:.3f} s"
+                + ("" if u["complete"] else f" INCOMPLETE (announced {u['size']}, CRC "
+                   f"{'ok' if u['crc_ok'] else 'wrong' if u['crc_ok'] is False else 'none'})")
+            )
         for tr in rep.traces:
             lines.append(
                 f"  trace: {len(tr.t)} samples every {tr.dt * 1e6:g} µs, "
