@@ -22,7 +22,8 @@ import subprocess
 import sys
 import time
 
-from virtual_drive.hub import Hub, frame_bits
+from firmware_protocol.can_bits import frame_bits
+from virtual_drive.hub import Hub
 
 CLIENT = r"""
 import json, os, sys, time

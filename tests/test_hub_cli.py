@@ -102,3 +102,68 @@ def test_bad_arguments_are_one_line_errors(args, capsys):
     out, err = capsys.readouterr()
     assert out == ""
     assert len(err.strip().splitlines()) == 1, err
+
+
+@pytest.mark.parametrize("nodes", ["0-3", "1-200", "3-1", "x", "1,1"])
+def test_bad_node_lists_are_one_line_errors(nodes, capsys):
+    code = main(["hub", "--port", "0", "--nodes", nodes])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == ""
+    assert len(err.strip().splitlines()) == 1 and "node" in err, err
+
+
+@pytest.mark.timeout(120)
+def test_hub_with_two_nodes_is_one_command():
+    """`virtual-drive hub --nodes 1-2`: both drives answer SDO on their own node-ID (CiA 301:
+    server 0x600 + N, reply 0x580 + N; 0x1000 device type 0x00020192 of this drive), and SIGTERM
+    stops the hub and both children."""
+    proc = subprocess.Popen(
+        [*CMD, "hub", "--port", "0", "--nodes", "1-2"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        line = proc.stdout.readline().strip()
+        assert JOIN_RE.fullmatch(line), (line, proc.stderr.read() if proc.poll() else "")
+        ready = [proc.stdout.readline() for _ in range(2)]
+        pids = [int(re.search(r"pid (\d+)", r).group(1)) for r in ready]
+        assert [re.search(r"node (\d+)", r).group(1) for r in ready] == ["1", "2"]
+        bus = eval(line, {"can": can})
+        try:
+            time.sleep(Hub.handshake_hold_s + 0.05)
+            for node in (1, 2):
+                bus.send(
+                    can.Message(
+                        arbitration_id=0x600 + node,
+                        data=[0x40, 0x00, 0x10, 0, 0, 0, 0, 0],
+                        is_extended_id=False,
+                    )
+                )
+                deadline = time.monotonic() + 10
+                reply = None
+                while time.monotonic() < deadline:
+                    m = bus.recv(1.0)
+                    if m is not None and m.arbitration_id == 0x580 + node:
+                        reply = m
+                        break
+                assert reply is not None, f"node {node} did not answer"
+                assert bytes(reply.data) == bytes([0x43, 0, 0x10, 0, 0x92, 0x01, 0x02, 0x00])
+        finally:
+            bus.shutdown()
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 0, err
+    for pid in pids:  # the children are gone too
+        assert not _alive(pid), pid
+
+
+def _alive(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().split(")")[-1].split()[0] != "Z"
+    except OSError:
+        return False

@@ -1,4 +1,5 @@
-"""frame_bits / crc15 against hand-worked CAN 2.0 examples and independent oracles.
+"""firmware_protocol.can_bits (frame_bits, crc15, stuff_bit_count) against hand-worked CAN 2.0
+examples and independent oracles.
 
 Truths used here (none taken from the code under test):
 * CAN 2.0 spec (Bosch 1991) part A §3.1.1 frame layout: SOF, 11-bit id, RTR, IDE, r0, DLC, data,
@@ -19,7 +20,7 @@ import random
 
 import pytest
 
-from virtual_drive.hub import crc15, frame_bits
+from firmware_protocol.can_bits import crc15, frame_bits, frame_bits_fast, stuff_bit_count
 
 # --- independent oracles (test-only) ---------------------------------------------------------
 
@@ -52,19 +53,24 @@ def _stuffed_length(bits: str) -> int:
     return len(out)
 
 
-def _frame_fields(can_id: int, data: bytes, extended: bool) -> str:
-    dlc = format(len(data), "04b")
+def _frame_fields(
+    can_id: int, data: bytes, extended: bool, remote: bool = False, dlc: int | None = None
+) -> str:
+    dlc_bits = format(len(data) if dlc is None else dlc, "04b")
+    rtr = "1" if remote else "0"
     payload = "".join(format(b, "08b") for b in data)
     if extended:
         head = "0" + format(can_id >> 18, "011b") + "11" + format(can_id & 0x3FFFF, "018b")
-        head += "0" + "00" + dlc  # RTR, r1, r0, DLC
+        head += rtr + "00" + dlc_bits  # RTR, r1, r0, DLC
     else:
-        head = "0" + format(can_id, "011b") + "0" + "00" + dlc  # SOF, id, RTR, IDE, r0, DLC
+        head = "0" + format(can_id, "011b") + rtr + "00" + dlc_bits  # SOF, id, RTR, IDE, r0, DLC
     return head + payload
 
 
-def _oracle_bits(can_id: int, data: bytes, extended: bool) -> int:
-    fields = _frame_fields(can_id, data, extended)
+def _oracle_bits(
+    can_id: int, data: bytes, extended: bool, remote: bool = False, dlc: int | None = None
+) -> int:
+    fields = _frame_fields(can_id, data, extended, remote, dlc)
     crc = format(_crc15_long_division(fields), "015b")
     return _stuffed_length(fields + crc) + 1 + 2 + 7 + 3
 
@@ -122,8 +128,36 @@ def test_random_frames_match_independent_oracle_and_bounds(extended):
         can_id = rng.randrange(1 << (29 if extended else 11))
         got = frame_bits(can_id, data, extended)
         assert got == _oracle_bits(can_id, data, extended), (hex(can_id), data.hex())
+        assert frame_bits_fast(can_id, data, extended) == got
         base, stuffable = (67, 54) if extended else (47, 34)
         assert 8 * n + base <= got <= 8 * n + base + (stuffable + 8 * n - 1) // 4
+
+
+@pytest.mark.parametrize("extended", [False, True])
+def test_remote_frames_match_independent_oracle(extended):
+    # a remote frame: RTR recessive, the DLC of the requested data, no data field
+    rng = random.Random(7)
+    for _ in range(200):
+        can_id, dlc = rng.randrange(1 << (29 if extended else 11)), rng.randrange(9)
+        got = frame_bits(can_id, b"", extended, is_remote=True, dlc=dlc)
+        assert got == _oracle_bits(can_id, b"", extended, remote=True, dlc=dlc)
+
+
+def test_stuff_bit_count_matches_bit_by_bit_transmitter():
+    rng = random.Random(11)
+    for _ in range(500):
+        n = rng.randrange(0, 140)
+        bits = "".join(rng.choice(("0", "1", "00000", "11111")) for _ in range(n))[:n]
+        value = int(bits, 2) if bits else 0
+        assert stuff_bit_count(value, len(bits)) == _stuffed_length(bits) - len(bits), bits
+
+
+def test_stuff_bits_hand_worked():
+    assert stuff_bit_count(0b00000, 5) == 1  # five equal bits: one stuff bit
+    assert stuff_bit_count(0b0000, 4) == 0
+    # 00000 (stuff 1) then 1111: the stuff bit is the first of five 1s -> a second stuff bit
+    assert stuff_bit_count(0b000001111, 9) == 2
+    assert stuff_bit_count(0b0000000000, 10) == 2  # ten 0s: stuffs after the 5th and 10th
 
 
 def test_bad_frames_raise():
@@ -135,3 +169,9 @@ def test_bad_frames_raise():
         frame_bits(0x20000000, b"", True)
     with pytest.raises(ValueError):
         frame_bits(0x123, bytes(9))
+    with pytest.raises(ValueError):
+        frame_bits(0x123, b"\x01", is_remote=True)
+    with pytest.raises(ValueError):
+        frame_bits(0x123, b"", is_remote=True, dlc=9)
+    with pytest.raises(ValueError):
+        stuff_bit_count(0b100, 2)

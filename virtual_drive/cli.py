@@ -13,7 +13,7 @@ import sys
 from collections.abc import Sequence
 
 #: Modules providing ``add_parser(subparsers)``, in the order shown by ``--help``.
-_SUBCOMMANDS: tuple[str, ...] = ("virtual_drive.node.cli_run", "virtual_drive.hub")
+_SUBCOMMANDS: tuple[str, ...] = ("virtual_drive.node.cli_run", "virtual_drive.hub_cli")
 
 
 class _OneLineErrorParser(argparse.ArgumentParser):

@@ -10,32 +10,30 @@ The hub speaks socketcand "rawmode" (see :mod:`virtual_drive.hub_protocol`) on 1
 Each ``< open NAME >`` channel is its own bus. On a bus, every frame is forwarded to every OTHER
 client in one global order. Frames are paced like a real CAN bus: a frame waiting for the bus
 competes in arbitration (lowest identifier wins among the oldest pending frame of each client,
-so each sender's order is kept), occupies the bus for ``frame_bits(...) / bitrate`` seconds
-(exact bit stuffing), and is delivered when the bus has finished it (plus an optional injected
-delay with uniform jitter, like a USB adapter: ``delay_s`` ± ``jitter_s``, never reordering
-frames, as CAN never does). Frames can be dropped with a seeded RNG for fault tests.
+so each sender's order is kept), occupies the bus for
+:func:`firmware_protocol.can_bits.frame_bits` ``/ bitrate`` seconds (exact bit stuffing), and
+is delivered when the bus has finished it (plus an optional injected delay with uniform jitter,
+like a USB adapter: ``delay_s`` ± ``jitter_s``, never reordering frames, as CAN never does).
+Frames can be dropped with a seeded RNG for fault tests.
 
 One background thread runs a ``select`` loop over all sockets; no locks are needed.
+The ``virtual-drive hub`` command is :mod:`virtual_drive.hub_cli`; the launcher that starts a hub
+with virtual drives is :mod:`virtual_drive.launch`.
 """
 
 from __future__ import annotations
 
-import argparse
-import errno
-import functools
 import logging
 import math
 import random
-import re
 import select
-import signal
 import socket
-import sys
 import threading
 import time
 from collections import deque
 from dataclasses import dataclass
 
+from firmware_protocol.can_bits import arbitration_key, frame_bits_fast
 from virtual_drive.hub_protocol import (
     CommandSplitter,
     ProtocolError,
@@ -45,7 +43,7 @@ from virtual_drive.hub_protocol import (
     parse_send,
 )
 
-__all__ = ["DEFAULT_PORT", "Hub", "HubStats", "add_parser", "crc15", "frame_bits"]
+__all__ = ["DEFAULT_PORT", "Hub", "HubStats"]
 
 #: Port used by ``virtual-drive hub`` when none is given.
 DEFAULT_PORT = 29536
@@ -54,110 +52,6 @@ _log = logging.getLogger(__name__)
 _LOOPBACK_NAMES = ("127.0.0.1", "localhost")
 _QUICKACK = getattr(socket, "TCP_QUICKACK", None)  # Linux only
 _BIND_ADDRESS = "127.0.0.1"
-
-# --------------------------------------------------------------------------------------------
-# CAN 2.0 frame length (bit level)
-# --------------------------------------------------------------------------------------------
-
-_CRC15_POLY = 0x4599  # x^15 + x^14 + x^10 + x^8 + x^7 + x^4 + x^3 + 1 (CAN 2.0 spec §3.1.1.6)
-
-
-def _crc15_table() -> tuple[int, ...]:
-    table = []
-    for byte in range(256):
-        crc = byte << 7
-        for _ in range(8):
-            crc = ((crc << 1) ^ _CRC15_POLY) if crc & 0x4000 else (crc << 1)
-            crc &= 0x7FFF
-        table.append(crc)
-    return tuple(table)
-
-
-_CRC15_TABLE = _crc15_table()
-
-
-def crc15(bits: int, n_bits: int) -> int:
-    """CAN CRC-15 of the ``n_bits`` most significant-first bits held in the integer ``bits``.
-
-    Same result as the bit-serial register of the CAN 2.0 spec (init 0, no final xor). Leading
-    zero bits do not change a CRC with init 0, so the bits are padded on the left to whole bytes.
-    """
-    if n_bits < 0 or bits < 0 or bits >> n_bits:
-        raise ValueError("bits must be a non-negative integer of at most n_bits bits")
-    crc = 0
-    for byte in bits.to_bytes((n_bits + 7) // 8, "big"):
-        crc = ((crc << 8) & 0x7FFF) ^ _CRC15_TABLE[((crc >> 7) ^ byte) & 0xFF]
-    return crc
-
-
-_RUN_OF_FIVE = re.compile("00000|11111")
-
-
-def _stuff_bit_count(bits: str) -> int:
-    """Stuff bits the transmitter inserts into ``bits`` (a '0'/'1' string, SOF .. CRC end).
-
-    After five equal bits a complementary bit is inserted; the inserted bit starts the next run.
-    """
-    count = 0
-    match = _RUN_OF_FIVE.search(bits)
-    while match:
-        count += 1
-        bits = ("1" if bits[match.start()] == "0" else "0") + bits[match.end() :]
-        match = _RUN_OF_FIVE.search(bits)
-    return count
-
-
-# CRC delimiter 1 + ACK slot 1 + ACK delimiter 1 + EOF 7 + intermission (IFS) 3
-_TRAILER_BITS = 13
-
-
-def frame_bits(arbitration_id: int, data: bytes, is_extended: bool = False) -> int:
-    """Bits a classical CAN data frame occupies on the bus, with its exact bit stuffing.
-
-    Counts SOF, arbitration and control fields, data, CRC-15 (all stuffed, stuff bits computed on
-    the real bit pattern), then CRC delimiter, ACK slot and delimiter, EOF (7) and the 3-bit
-    intermission. Standard frame: 47 + 8·n bits before stuffing; extended: 67 + 8·n.
-    Unit: bits (divide by the bit rate in bit/s for seconds).
-
-    Raises ValueError for an identifier out of range or more than 8 data bytes.
-    """
-    n = len(data)
-    if n > 8:
-        raise ValueError(f"classical CAN carries at most 8 data bytes, got {n}")
-    dlc = n
-    if is_extended:
-        if not 0 <= arbitration_id <= 0x1FFFFFFF:
-            raise ValueError(f"extended identifier {arbitration_id:#x} out of 0..0x1FFFFFFF")
-        base, ext = arbitration_id >> 18, arbitration_id & 0x3FFFF
-        # SOF 0 | base 11 | SRR 1 | IDE 1 | ext 18 | RTR 0 | r1 0 | r0 0 | DLC 4  -> 39 bits
-        header = (((((base << 1 | 1) << 1 | 1) << 18 | ext) << 3) << 4) | dlc
-        header_bits = 39
-    else:
-        if not 0 <= arbitration_id <= 0x7FF:
-            raise ValueError(f"standard identifier {arbitration_id:#x} out of 0..0x7FF")
-        # SOF 0 | id 11 | RTR 0 | IDE 0 | r0 0 | DLC 4  -> 19 bits
-        header = ((arbitration_id << 3) << 4) | dlc
-        header_bits = 19
-    n_bits = header_bits + 8 * n
-    value = (header << (8 * n)) | int.from_bytes(data, "big")
-    stuffed_region = (value << 15) | crc15(value, n_bits)
-    region_bits = n_bits + 15
-    stuff = _stuff_bit_count(format(stuffed_region, f"0{region_bits}b"))
-    return region_bits + stuff + _TRAILER_BITS
-
-
-@functools.lru_cache(maxsize=8192)
-def _frame_bits_cached(arbitration_id: int, data: bytes, is_extended: bool) -> int:
-    """frame_bits for frames already validated by the protocol parser (PDOs repeat a lot)."""
-    return frame_bits(arbitration_id, data, is_extended)
-
-
-def _arbitration_key(arbitration_id: int, is_extended: bool) -> int:
-    """Bits sent during arbitration as one integer: the lower one wins the bus."""
-    if is_extended:
-        return (arbitration_id >> 18) << 20 | 0b11 << 18 | (arbitration_id & 0x3FFFF)
-    return arbitration_id << 20  # RTR 0 and IDE 0 beat an extended frame's SRR 1
-
 
 # --------------------------------------------------------------------------------------------
 # Hub state
@@ -603,8 +497,8 @@ class Hub:
         cmd = words[0]
         if client.state == _RAW and cmd == "send":
             frame = parse_send(words)
-            bits = _frame_bits_cached(frame.arbitration_id, frame.data, frame.is_extended)
-            key = _arbitration_key(frame.arbitration_id, frame.is_extended)
+            bits = frame_bits_fast(frame.arbitration_id, frame.data, frame.is_extended)
+            key = arbitration_key(frame.arbitration_id, frame.is_extended)
             bus = client.bus
             if not client.queue:
                 bus.senders.append(client)
@@ -724,82 +618,3 @@ class Hub:
             self._n_forwarded += 1
         for c in touched:
             self._flush(c, now)
-
-
-# --------------------------------------------------------------------------------------------
-# `virtual-drive hub` sub-command
-# --------------------------------------------------------------------------------------------
-
-
-def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    """Register the ``hub`` sub-command on a ``virtual-drive`` argparse sub-parser set."""
-    p = subparsers.add_parser(
-        "hub",
-        help="run the loopback CAN hub (socketcand rawmode on 127.0.0.1)",
-        description="Loopback CAN hub: processes join it with python-can's socketcand "
-        "interface. Binds 127.0.0.1 only. Stop with Ctrl-C or SIGTERM.",
-    )
-    p.add_argument("--host", default="127.0.0.1", help="must be 127.0.0.1 or localhost")
-    p.add_argument("--port", type=int, default=DEFAULT_PORT, help="TCP port, 0 = any free port")
-    p.add_argument("--bitrate", type=int, default=1_000_000, help="emulated bit rate, bit/s")
-    p.add_argument(
-        "--drop-rate", "--drop", type=float, default=0.0, help="probability 0..1 a frame is lost"
-    )
-    p.add_argument("--delay-ms", type=float, default=0.0, help="extra delivery delay, ms")
-    p.add_argument(
-        "--jitter-ms", type=float, default=0.0,
-        help="± uniform jitter of the delivery delay per frame, ms (frame order is kept)",
-    )  # fmt: skip
-    p.add_argument("--seed", type=int, default=0, help="seed of the drop and jitter RNGs")
-    p.add_argument("--channel", default="vcan0", help="channel shown in the join line")
-    p.set_defaults(func=run_hub_command)
-    return p
-
-
-def run_hub_command(args: argparse.Namespace) -> int:
-    """Run the hub until SIGINT/SIGTERM. Returns the process exit code."""
-    try:
-        hub = Hub(
-            host=args.host,
-            port=args.port,
-            bitrate=args.bitrate,
-            drop_rate=args.drop_rate,
-            delay_s=args.delay_ms / 1000.0,
-            jitter_s=args.jitter_ms / 1000.0,
-            seed=args.seed,
-        )
-    except ValueError as exc:
-        print(f"virtual-drive hub: error: {exc}", file=sys.stderr)
-        return 2
-    try:
-        hub.start()
-    except OSError as exc:
-        if exc.errno == errno.EADDRINUSE:
-            msg = f"port {args.port} on 127.0.0.1 is already in use"
-        else:
-            msg = f"cannot listen on 127.0.0.1:{args.port}: {exc.strerror or exc}"
-        print(f"virtual-drive hub: error: {msg}", file=sys.stderr)
-        return 1
-    stop = threading.Event()
-
-    def _on_signal(signum: int, frame: object) -> None:
-        stop.set()
-
-    previous = {s: signal.signal(s, _on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
-    try:
-        print(hub.join_line(args.channel), flush=True)
-        while not stop.wait(0.2):
-            if not hub.running:
-                print("virtual-drive hub: error: hub thread stopped", file=sys.stderr)
-                return 1
-    finally:
-        hub.stop()
-        for s, handler in previous.items():
-            signal.signal(s, handler)
-    st = hub.stats
-    print(
-        f"virtual-drive hub: stopped; {st.frames_forwarded} frames forwarded, "
-        f"{st.frames_dropped} dropped, {st.clients_total} clients",
-        file=sys.stderr,
-    )
-    return 0
