@@ -18,6 +18,7 @@ import numpy as np
 
 from dashboard.actions import Found, LongAction
 from dashboard.security import ControlLease
+from firmware_protocol import emcy_codes
 
 #: The staged gain-set names (0x20F0) → the live object each one mirrors (docs/contracts.md §1).
 LIVE_NAMES: dict[str, str] = {
@@ -90,16 +91,8 @@ SEQUENCE_SLACK_S = 5.0  #: a sequence step later than this (busy host) stops the
 STATUS_PERIOD_S = 2.0  #: Drive.status() (a dozen SDO reads) at most this often (s)
 STORE_PERIOD_S = 10.0  #: the parameter store's health (one SDO read) at most this often (s)
 
-#: EMCY error codes the drive sends (CiA 301 / CiA 402 meanings), for display.
-EMCY_TEXT = {
-    0x0000: "error reset",
-    0x2310: "continuous overcurrent",
-    0x2320: "short circuit",
-    0x3210: "DC-link overvoltage",
-    0x3220: "DC-link undervoltage",
-    0x4210: "excess temperature",
-    0x8130: "heartbeat lost",
-}
+EMCY_TEXT = emcy_codes.MEANINGS
+"""EMCY error code -> meaning for display (:mod:`firmware_protocol.emcy_codes`)."""
 
 
 @dataclasses.dataclass
@@ -472,7 +465,7 @@ class Bench:
 
 def _emcy(e: Any) -> dict[str, Any]:
     out = jsonable(as_dict(e))
-    out["text"] = EMCY_TEXT.get(int(out.get("code", -1)), "")
+    out["text"] = emcy_codes.describe(int(out.get("code", -1)))
     return out
 
 

@@ -11,8 +11,9 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-CONTROLLER_TYPES = {"deadbeat": 0, "pi": 1, "predictive": 2}
-TYPE_NAMES = {v: k for k, v in CONTROLLER_TYPES.items()}
+from firmware_protocol.enums import CONTROLLER_NAMES, CONTROLLER_TYPES
+
+TYPE_NAMES = CONTROLLER_NAMES
 
 
 class Strict(BaseModel):

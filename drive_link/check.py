@@ -16,6 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from firmware_protocol import abort_codes
+
 from . import cia402
 from .drive import Drive
 from .errors import DriveError, DriveTimeout, SdoAbort
@@ -23,13 +25,13 @@ from .nmt import HeartbeatProducer
 
 DEVICE_TYPE_402_SERVO = 0x00020192
 
-ABORT_RANGE = 0x06090030
-ABORT_HIGH = 0x06090031
-ABORT_LOW = 0x06090032
-ABORT_READ_ONLY = 0x06010002
-ABORT_NO_OBJECT = 0x06020000
-ABORT_LENGTH = (0x06070010, 0x06070012, 0x06070013)
-ABORT_STATE = 0x08000022
+ABORT_RANGE = abort_codes.INVALID_VALUE
+ABORT_HIGH = abort_codes.VALUE_TOO_HIGH
+ABORT_LOW = abort_codes.VALUE_TOO_LOW
+ABORT_READ_ONLY = abort_codes.WRITE_READ_ONLY
+ABORT_NO_OBJECT = abort_codes.NO_OBJECT
+ABORT_LENGTH = abort_codes.LENGTHS
+ABORT_STATE = abort_codes.DEVICE_STATE
 
 
 class CheckFailed(Exception):  # noqa: N818
@@ -550,7 +552,7 @@ def item_heartbeat_consumer(d: Drive, opts: dict) -> str:
 # --------------------------------------------------------------------------- issue 10 items
 HALT_BIT = 1 << 8  #: controlword bit 8 (CiA 402 §6.2.1)
 TARGET_REACHED = 1 << 10  #: statusword bit 10
-ABORT_REFUSED_VALUE = (ABORT_RANGE, ABORT_HIGH, ABORT_LOW, 0x06040043)
+ABORT_REFUSED_VALUE = abort_codes.VALUE_REFUSED
 SPIN_RPM = 300  #: modest speed for the motion items (a real vehicle may be on the bench)
 
 

@@ -6,41 +6,12 @@ line a user can act on (the CLI prints exactly that line and exits non-zero).
 
 from __future__ import annotations
 
-#: SDO abort codes, CiA 301 §7.2.4.3.17 (table 22), with their meaning.
-ABORT_MEANINGS: dict[int, str] = {
-    0x05030000: "toggle bit not alternated",
-    0x05040000: "SDO protocol timed out",
-    0x05040001: "client/server command specifier not valid or unknown",
-    0x05040002: "invalid block size",
-    0x05040003: "invalid sequence number",
-    0x05040004: "CRC error",
-    0x05040005: "out of memory",
-    0x06010000: "unsupported access to an object",
-    0x06010001: "attempt to read a write-only object",
-    0x06010002: "attempt to write a read-only object",
-    0x06020000: "object does not exist in the object dictionary",
-    0x06040041: "object cannot be mapped to the PDO",
-    0x06040042: "number and length of objects to be mapped would exceed PDO length",
-    0x06040043: "general parameter incompatibility",
-    0x06040047: "general internal incompatibility in the device",
-    0x06060000: "access failed due to a hardware error",
-    0x06070010: "data type does not match, length of service parameter does not match",
-    0x06070012: "data type does not match, length of service parameter too high",
-    0x06070013: "data type does not match, length of service parameter too low",
-    0x06090011: "sub-index does not exist",
-    0x06090030: "invalid value for parameter",
-    0x06090031: "value of parameter written too high",
-    0x06090032: "value of parameter written too low",
-    0x06090036: "maximum value is less than minimum value",
-    0x060A0023: "resource not available: SDO connection",
-    0x08000000: "general error",
-    0x08000020: "data cannot be transferred or stored to the application",
-    0x08000021: "data cannot be transferred or stored to the application because of local control",
-    0x08000022: "data cannot be transferred or stored to the application "
-    "because of the present device state",
-    0x08000023: "object dictionary dynamic generation failed or no object dictionary is present",
-    0x08000024: "no data available",
-}
+from collections.abc import Mapping
+
+from firmware_protocol import abort_codes
+
+ABORT_MEANINGS: Mapping[int, str] = abort_codes.MEANINGS
+"""SDO abort code -> meaning, CiA 301 table 22 (from :mod:`firmware_protocol.abort_codes`)."""
 
 
 class DriveError(Exception):
@@ -70,7 +41,7 @@ class SdoAbort(DriveError):  # noqa: N818
         self.index = index
         self.subindex = subindex
         self.name = name
-        self.meaning = ABORT_MEANINGS.get(code, "unknown abort code")
+        self.meaning = abort_codes.meaning(code)
         where = (
             f"{name} (0x{index:04X}:{subindex:02X})" if name else f"0x{index:04X}:{subindex:02X}"
         )

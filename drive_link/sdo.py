@@ -34,6 +34,8 @@ import canopen
 from canopen.sdo.client import SdoClient
 from canopen.sdo.exceptions import SdoAbortedError, SdoCommunicationError
 
+from firmware_protocol import abort_codes
+
 from . import sdo_segmented
 from .errors import BusError, DriveTimeout, SdoAbort
 from .sdo_block import block_upload
@@ -45,7 +47,14 @@ Progress = Callable[[int, "int | None"], None]
 
 #: Aborts that mean the transfer itself broke (lost or late frames), not a refusal of the
 #: value: SDO timeout, unknown command specifier, block size, sequence number, CRC, toggle bit.
-PROTOCOL_ABORTS = (0x05040000, 0x05040001, 0x05040002, 0x05040003, 0x05040004, 0x05030000)
+PROTOCOL_ABORTS = (
+    abort_codes.TIMEOUT,
+    abort_codes.COMMAND,
+    abort_codes.BLOCK_SIZE,
+    abort_codes.SEQUENCE,
+    abort_codes.CRC,
+    abort_codes.TOGGLE_BIT,
+)
 
 
 class _Client(SdoClient):

@@ -40,6 +40,8 @@ from collections.abc import Callable
 from canopen.sdo.client import SdoClient
 from canopen.sdo.exceptions import SdoAbortedError, SdoCommunicationError
 
+from firmware_protocol import abort_codes
+
 from .sdo_segmented import Exchange, NoAnswer, continue_upload, upload
 
 CCS_BLOCK_UPLOAD = 0xA0  # client command specifier 5
@@ -47,8 +49,8 @@ SCS_BLOCK_UPLOAD = 0xC0  # server command specifier 6
 CRC_SUPPORTED = 0x04
 SIZE_INDICATED = 0x02
 CS_INITIATE, CS_END, CS_ACK, CS_START = 0, 1, 2, 3
-ABORT_COMMAND = 0x05040001
-ABORT_CRC = 0x05040004
+ABORT_COMMAND = abort_codes.COMMAND
+ABORT_CRC = abort_codes.CRC
 MIN_BLKSIZE = 16
 
 #: Figures of the last block upload in this process (for benchmarks): acks, gaps (sub-blocks

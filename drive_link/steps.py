@@ -13,6 +13,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from firmware_protocol import enums, paper
+
 from . import design, metrics
 from .errors import DriveTimeout, InvalidValue, StateError
 from .trace import TS, Trace, Trigger
@@ -21,9 +23,9 @@ if TYPE_CHECKING:
     from .drive import Drive
 
 #: Speed model G(z) = b/(z − a) of the paper (eq. 26) at Ts = 20 µs: a (1), b (rpm/A per sample).
-SPEED_MODEL_PAPER: tuple[float, float] = (0.9999785, 3.33715e-4)
+SPEED_MODEL_PAPER: tuple[float, float] = paper.SPEED_MODEL
 
-CONTROLLER_NAMES = {0: "deadbeat", 1: "pi", 2: "predictive"}
+CONTROLLER_NAMES = enums.CONTROLLER_NAMES
 
 
 @dataclass

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import re
 
-from . import current_stability, stability
+from . import abort_codes, current_stability, stability
 from .cob_id import RESTRICTED_CAN_IDS
 from .emcy_codes import EMCY_CODES
 from .entry import Entry
@@ -126,11 +126,14 @@ def render_header(view: ObjectDictionaryView) -> str:
     add(_define("OD_ACCESS_CONST", "0x5u"))
     add("")
     add("/* SDO abort codes of the value checks (CiA 301) */")
-    add(_define("OD_ABORT_INVALID_VALUE", "0x06090030UL"))
-    add(_define("OD_ABORT_VALUE_TOO_HIGH", "0x06090031UL"))
-    add(_define("OD_ABORT_VALUE_TOO_LOW", "0x06090032UL"))
-    add(_define("OD_ABORT_READ_ONLY", "0x06010002UL"))
-    add(_define("OD_ABORT_STATE", "0x08000022UL"))
+    for macro, code in (
+        ("INVALID_VALUE", abort_codes.INVALID_VALUE),
+        ("VALUE_TOO_HIGH", abort_codes.VALUE_TOO_HIGH),
+        ("VALUE_TOO_LOW", abort_codes.VALUE_TOO_LOW),
+        ("READ_ONLY", abort_codes.WRITE_READ_ONLY),
+        ("STATE", abort_codes.DEVICE_STATE),
+    ):
+        add(_define(f"OD_ABORT_{macro}", f"0x{code:08X}UL"))
     add("")
     add("/* Device */")
     add(_define("OD_DEFAULT_NODE_ID", f"{view.node_id}u"))

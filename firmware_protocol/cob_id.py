@@ -23,6 +23,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+from . import abort_codes
 from .entry import ABORT_INVALID_VALUE, LimitError
 
 __all__ = [
@@ -34,7 +35,7 @@ __all__ = [
     "is_restricted",
 ]
 
-ABORT_PARAM_INCOMPATIBLE = 0x06040043
+ABORT_PARAM_INCOMPATIBLE = abort_codes.PARAM_INCOMPATIBLE
 COB_INVALID = 1 << 31
 COB_BIT30 = 1 << 30
 COB_FRAME_29BIT = 1 << 29

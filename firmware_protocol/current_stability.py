@@ -67,6 +67,7 @@ from .entry import (
     LimitError,
     f32,
 )
+from .enums import CONTROLLER_NAMES, ControllerType
 from .stability import TS
 
 __all__ = [
@@ -199,7 +200,7 @@ def check_current_gains(
         rho = max(rho, math.exp(-g["R_c"] * Ts / (2.0 * g["L_c"])))
     if not schur_stable(poly, rho):
         radius = max(abs(p) for p in current_loop_poles(g, L, R, Ts))
-        what = {0: "deadbeat", 1: "PI", 2: "predictive"}[kind]
+        what = "PI" if kind == ControllerType.PI else CONTROLLER_NAMES[kind]
         detail = (
             f"L_c/L = {g['L_c'] / L:.4g}"
             if kind != 1

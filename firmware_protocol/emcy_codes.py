@@ -1,23 +1,40 @@
-"""EMCY error codes the drive sends (CiA 301 Table 21, CiA 402 §8) and what triggers them.
+"""EMCY error codes (CiA 301 table 21, CiA 402 §8): the ones the drive sends and their meanings.
 
 The virtual drive (``virtual_drive.node``) and the DSP firmware (macros ``OD_EMCY_*`` in the
-generated header) send exactly these; ``OD.md`` lists them.
+generated header) send exactly :data:`EMCY_CODES`; ``OD.md`` lists them. :data:`MEANINGS` and
+:func:`describe` are what the host shows (``drive_link``, the dashboard): the exact code when it
+is listed, else its class from canopen's own table (:attr:`canopen.emcy.EmcyError.DESCRIPTIONS`).
+
+>>> describe(HEARTBEAT_LOSS)
+'life guard / heartbeat error'
+>>> describe(0x4999)
+'temperature'
 """
 
 from __future__ import annotations
+
+from collections.abc import Mapping
+from types import MappingProxyType
+
+from canopen.emcy import EmcyError
 
 __all__ = [
     "DATA_SET_LOST",
     "DC_OVERVOLTAGE",
     "DC_UNDERVOLTAGE",
     "EMCY_CODES",
+    "ERROR_RESET",
     "HEARTBEAT_LOSS",
+    "MEANINGS",
     "NMT_CONNECTION_LOSS",
     "OVERCURRENT",
     "RPDO_LENGTH",
     "RPDO_VALUE",
+    "describe",
 ]
 
+ERROR_RESET = 0x0000
+"""Error reset / no error (sent when the last error is cleared)."""
 OVERCURRENT = 0x2310
 DC_OVERVOLTAGE = 0x3210
 DC_UNDERVOLTAGE = 0x3220
@@ -60,3 +77,43 @@ EMCY_CODES: dict[int, tuple[str, str]] = {
         "received, data[5] = bytes mapped",
     ),
 }
+
+MEANINGS: Mapping[int, str] = MappingProxyType(
+    {
+        ERROR_RESET: "error reset / no error",
+        0x1000: "generic error",
+        OVERCURRENT: "continuous overcurrent",
+        0x2320: "short circuit / instantaneous overcurrent",
+        DC_OVERVOLTAGE: "DC-link overvoltage",
+        DC_UNDERVOLTAGE: "DC-link undervoltage",
+        0x4210: "excess temperature device",
+        0x4310: "excess temperature drive",
+        0x5000: "device hardware",
+        0x6000: "device software",
+        0x6300: "data set",
+        DATA_SET_LOST: "loss of parameters (stored parameters unusable: defaults in use)",
+        NMT_CONNECTION_LOSS: "communication",
+        0x8110: "CAN overrun (objects lost)",
+        0x8120: "CAN in error passive mode",
+        HEARTBEAT_LOSS: "life guard / heartbeat error",
+        0x8140: "recovered from bus off",
+        RPDO_VALUE: "protocol error (e.g. an RPDO value refused)",
+        RPDO_LENGTH: "PDO not processed due to length error",
+        0x8220: "PDO length exceeded",
+        0xFF00: "device specific",
+    }
+)
+"""EMCY code -> meaning (CiA 301 table 21, CiA 402 §8) for the codes the drive sends and their
+CiA neighbours a generic drive may send."""
+
+
+def describe(code: int) -> str:
+    """Meaning of an EMCY error code: the exact code, else the listed code it refines (low
+    nibble, then low byte cleared), else its class (canopen's class table), else ``"unknown"``."""
+    for mask in (0xFFFF, 0xFFF0, 0xFF00):
+        if code & mask in MEANINGS:
+            return MEANINGS[code & mask]
+    for masked, mask, text in EmcyError.DESCRIPTIONS:
+        if code & mask == masked:
+            return text.lower()
+    return "unknown"

@@ -11,6 +11,8 @@ import struct
 from collections.abc import Mapping
 from dataclasses import dataclass
 
+from . import abort_codes
+
 __all__ = [
     "ABORT_INVALID_VALUE",
     "ABORT_VALUE_TOO_HIGH",
@@ -22,10 +24,10 @@ __all__ = [
     "f32",
 ]
 
-#: CiA 301 SDO abort codes used by value checks.
-ABORT_INVALID_VALUE = 0x06090030
-ABORT_VALUE_TOO_HIGH = 0x06090031
-ABORT_VALUE_TOO_LOW = 0x06090032
+#: CiA 301 SDO abort codes used by value checks (aliases of :mod:`firmware_protocol.abort_codes`).
+ABORT_INVALID_VALUE = abort_codes.INVALID_VALUE
+ABORT_VALUE_TOO_HIGH = abort_codes.VALUE_TOO_HIGH
+ABORT_VALUE_TOO_LOW = abort_codes.VALUE_TOO_LOW
 
 #: CiA 301 data type code -> name.
 TYPE_NAMES: dict[int, str] = {

@@ -5,9 +5,13 @@ Each class names the object(s) it applies to in :data:`ENUM_OBJECTS`.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from enum import IntEnum
+from types import MappingProxyType
 
 __all__ = [
+    "CONTROLLER_NAMES",
+    "CONTROLLER_TYPES",
     "ENUM_OBJECTS",
     "ControllerType",
     "GainSetApply",
@@ -28,6 +32,16 @@ class ControllerType(IntEnum):
     DEADBEAT = 0  # eq. 15, k = 2
     PI = 1  # eq. 22
     PREDICTIVE = 2  # eq. 23 / eq. 25
+
+
+CONTROLLER_TYPES: Mapping[str, int] = MappingProxyType(
+    {c.name.lower(): int(c) for c in ControllerType}
+)
+"""Host-side controller name -> 0x2010:1 code: ``{"deadbeat": 0, "pi": 1, "predictive": 2}``."""
+CONTROLLER_NAMES: Mapping[int, str] = MappingProxyType(
+    {int(c): c.name.lower() for c in ControllerType}
+)
+"""0x2010:1 code -> host-side controller name (the inverse of :data:`CONTROLLER_TYPES`)."""
 
 
 class ModeOfOperation(IntEnum):

@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import math
 
+from . import paper
 from .entry import ABORT_VALUE_TOO_HIGH, ABORT_VALUE_TOO_LOW, LimitError, f32
 
 __all__ = [
@@ -52,11 +53,11 @@ __all__ = [
     "ip_slowest_pole_margin",
 ]
 
-TS = 20e-6
+TS = paper.TS
 """Loop sample time (s), 50 kHz."""
-A_IDENTIFIED = 0.9999785
+A_IDENTIFIED = paper.A_IDENTIFIED
 """Identified speed-model pole a (1 per sample), eq. (26)."""
-B_IDENTIFIED = 3.33715e-4
+B_IDENTIFIED = paper.B_IDENTIFIED
 """Identified speed-model gain b (rpm/A per sample), eq. (26)."""
 TAU_MAX = 10.0
 """Slowest closed-loop time constant the IP rule accepts (s)."""

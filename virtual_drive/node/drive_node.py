@@ -33,6 +33,7 @@ from canopen import objectdictionary as odm
 from canopen.node.local import LocalNode
 from canopen.sdo import SdoAbortedError
 
+from firmware_protocol import abort_codes
 from firmware_protocol.cia402 import CW_HALT, SW_SPEED_ZERO
 from firmware_protocol.cob_id import check_cob_id, check_heartbeat_consumers
 from firmware_protocol.current_stability import (
@@ -68,16 +69,16 @@ from .sdo_block import BlockSdoServer
 
 logger = logging.getLogger(__name__)
 
-ABORT_READ_WRITEONLY = 0x06010001
-ABORT_WRITE_READONLY = 0x06010002
-ABORT_LENGTH = 0x06070010
-ABORT_INVALID_VALUE = 0x06090030
-ABORT_PARAM_INCOMPATIBLE = 0x06040043
-ABORT_HARDWARE = 0x06060000
-ABORT_STORE = 0x08000020
-ABORT_DEVICE_STATE = 0x08000022
-ABORT_NO_OBJECT = 0x06020000
-ABORT_NO_SUBINDEX = 0x06090011
+ABORT_READ_WRITEONLY = abort_codes.READ_WRITE_ONLY
+ABORT_WRITE_READONLY = abort_codes.WRITE_READ_ONLY
+ABORT_LENGTH = abort_codes.LENGTH
+ABORT_INVALID_VALUE = abort_codes.INVALID_VALUE
+ABORT_PARAM_INCOMPATIBLE = abort_codes.PARAM_INCOMPATIBLE
+ABORT_HARDWARE = abort_codes.HARDWARE
+ABORT_STORE = abort_codes.STORE
+ABORT_DEVICE_STATE = abort_codes.DEVICE_STATE
+ABORT_NO_OBJECT = abort_codes.NO_OBJECT
+ABORT_NO_SUBINDEX = abort_codes.NO_SUBINDEX
 
 MODE_CURRENT = -1  #: manufacturer mode: i_p* = setpoints.i_p_ref (A)
 MODE_PROFILE_VELOCITY = 3

@@ -18,6 +18,7 @@ from firmware_protocol.emcy_codes import (  # the codes of OD.md / the C header
     DATA_SET_LOST,
     DC_OVERVOLTAGE,
     DC_UNDERVOLTAGE,
+    ERROR_RESET,
     HEARTBEAT_LOSS,
     NMT_CONNECTION_LOSS,
     OVERCURRENT,
@@ -29,6 +30,7 @@ __all__ = [
     "DATA_SET_LOST",
     "DC_OVERVOLTAGE",
     "DC_UNDERVOLTAGE",
+    "ERROR_RESET",
     "HEARTBEAT_LOSS",
     "NMT_CONNECTION_LOSS",
     "OVERCURRENT",
@@ -39,8 +41,6 @@ __all__ = [
 ]
 
 logger = logging.getLogger(__name__)
-
-ERROR_RESET = 0x0000
 
 #: 0x1001 bits: 0 generic, 1 current, 2 voltage, 3 temperature, 4 communication.
 REG_GENERIC = 0x01

@@ -21,6 +21,7 @@ from collections.abc import Callable, Mapping
 
 from canopen.sdo import SdoAbortedError
 
+from firmware_protocol import abort_codes
 from firmware_protocol.current_stability import (
     CURRENT_KEYS,
     MOTOR_KEYS,
@@ -32,9 +33,9 @@ from firmware_protocol.stability import check_ip_speed_gains
 
 Number = int | float
 
-ABORT_INVALID_VALUE = 0x06090030
-ABORT_VALUE_TOO_HIGH = 0x06090031
-ABORT_VALUE_TOO_LOW = 0x06090032
+ABORT_INVALID_VALUE = abort_codes.INVALID_VALUE
+ABORT_VALUE_TOO_HIGH = abort_codes.VALUE_TOO_HIGH
+ABORT_VALUE_TOO_LOW = abort_codes.VALUE_TOO_LOW
 
 _IP_GAINS = ("speed_controller.k_p", "speed_controller.k_i")
 _CURRENT = tuple(f"current_controller.{k}" for k in CURRENT_KEYS)

@@ -40,6 +40,7 @@ from dataclasses import dataclass, field
 from canopen import objectdictionary as odm
 from canopen.sdo import SdoAbortedError
 
+from firmware_protocol import abort_codes
 from firmware_protocol.cob_id import check_cob_id
 from firmware_protocol.emcy_codes import RPDO_LENGTH, RPDO_VALUE
 from firmware_protocol.entry import LimitError
@@ -50,11 +51,11 @@ RPDO_COMM, RPDO_MAP = 0x1400, 0x1600
 TPDO_COMM, TPDO_MAP = 0x1800, 0x1A00
 N_RPDO, N_TPDO = 2, 4
 PDO_INVALID = 0x80000000
-ABORT_INVALID_VALUE = 0x06090030
-ABORT_UNSUPPORTED_ACCESS = 0x06010000
-ABORT_CANNOT_MAP = 0x06040041
-ABORT_LENGTH_EXCEEDED = 0x06040042
-ABORT_DEVICE_STATE = 0x08000022
+ABORT_INVALID_VALUE = abort_codes.INVALID_VALUE
+ABORT_UNSUPPORTED_ACCESS = abort_codes.UNSUPPORTED_ACCESS
+ABORT_CANNOT_MAP = abort_codes.PDO_CANNOT_MAP
+ABORT_LENGTH_EXCEEDED = abort_codes.PDO_LENGTH_EXCEEDED
+ABORT_DEVICE_STATE = abort_codes.DEVICE_STATE
 
 _FMT = {
     odm.BOOLEAN: "?",

@@ -64,13 +64,15 @@ from canopen.sdo.constants import (
     SDO_STRUCT,
 )
 
+from firmware_protocol import abort_codes
+
 logger = logging.getLogger(__name__)
 
 #: Largest sub-block the protocol allows (seqno is 7 bits, 0 invalid).
 MAX_BLKSIZE = 127
 
-ABORT_READ_ONLY = 0x06010002
-ABORT_LENGTH = 0x06070010
+ABORT_READ_ONLY = abort_codes.WRITE_READ_ONLY
+ABORT_LENGTH = abort_codes.LENGTH
 
 # client command specifiers (bits 7..5 of byte 0)
 _CCS_SEG_DOWN, _CCS_INIT_DOWN, _CCS_INIT_UP, _CCS_SEG_UP = 0, 1, 2, 3

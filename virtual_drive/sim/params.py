@@ -27,17 +27,18 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, fields
 
-Ts: float = 20e-6
+from firmware_protocol import paper
+from firmware_protocol.enums import CONTROLLER_TYPES
+
+Ts: float = paper.TS
 """Sampling period (s): fs = 50 kHz, equal to the PWM period."""
 
 RPM_PER_RAD_S: float = 60.0 / (2.0 * math.pi)
 
-A_IDENTIFIED: float = 0.9999785
+A_IDENTIFIED: float = paper.A_IDENTIFIED
 """Identified speed-model pole a (1), eq. (26), as implied by the paper's IP gains."""
-B_IDENTIFIED: float = 3.33715e-4
+B_IDENTIFIED: float = paper.B_IDENTIFIED
 """Identified speed-model gain b (rpm/A per sample), eq. (26)."""
-
-CONTROLLER_TYPES = {"deadbeat": 0, "pi": 1, "predictive": 2}
 
 
 def _check(
@@ -79,17 +80,17 @@ def mechanics_from_identified(
 class MotorParams:
     """BLDC motor, Table 2.  R, L per phase; K_rpm line-to-line back-EMF constant."""
 
-    R: float = 6.2e-3
+    R: float = paper.R_TABLE2
     """Phase resistance (Ohm), > 0."""
-    L: float = 14.8e-6
+    L: float = paper.L_TABLE2
     """Phase inductance (H), > 0."""
-    K_rpm: float = 0.0125
+    K_rpm: float = paper.K_RPM
     """Line-to-line back-EMF at the flat tops per speed (V/rpm), > 0."""
-    pole_pairs: int = 4
+    pole_pairs: int = paper.POLE_PAIRS
     """Pole pairs (8 poles)."""
-    rated_current: float = 100.0
+    rated_current: float = paper.RATED_CURRENT
     """Rated current (A)."""
-    V_dc_nominal: float = 48.0
+    V_dc_nominal: float = paper.RATED_VOLTAGE
     """Rated DC-link voltage (V)."""
     emf_rounding: float = math.radians(15.0)
     """Width over which each trapezoid corner is rounded (rad electrical), [0, pi/3];
@@ -125,7 +126,9 @@ class MotorParams:
         return 0.5 * self.K_t
 
 
-_J_DEF, _BTOT_DEF = mechanics_from_identified(A_IDENTIFIED, B_IDENTIFIED, 0.0125 * RPM_PER_RAD_S)
+_J_DEF, _BTOT_DEF = mechanics_from_identified(
+    A_IDENTIFIED, B_IDENTIFIED, paper.K_RPM * RPM_PER_RAD_S
+)
 
 
 @dataclass
@@ -158,7 +161,7 @@ class LoadParams:
 class InverterParams:
     """Two-level bridge: DC supply and the real non-idealities of eq. (25)."""
 
-    V_dc: float = 48.0
+    V_dc: float = paper.RATED_VOLTAGE
     """DC supply voltage (V), > 0."""
     T_BT: float = 0.0
     """Blanking (dead) time before each switch turn-on (s), [0, Ts/4]."""
@@ -189,13 +192,13 @@ class CurrentControllerParams:
 
     type: str = "deadbeat"
     """"deadbeat" | "pi" | "predictive" (or 0 / 1 / 2)."""
-    L_c: float = 14.8e-6
+    L_c: float = paper.L_TABLE2
     """Inductance estimate (H), > 0 (the loop is stable for L_c < 2 L)."""
-    R_c: float = 6.2e-3
+    R_c: float = paper.R_TABLE2
     """Resistance estimate (Ohm), >= 0."""
-    k_p: float = 0.4647
+    k_p: float = paper.PI_KP
     """PI proportional gain k_p,i (V/A)."""
-    k_i: float = 0.0492
+    k_i: float = paper.PI_KI
     """PI integral gain k_i,i (V/A per sample)."""
     T_BT: float = 0.0
     """Blanking-time estimate for eq. (25) (s), >= 0."""
@@ -247,9 +250,9 @@ class CurrentControllerParams:
 class SpeedControllerParams:
     """IP speed controller (OD 0x2020), Fig. 17 / eq. (27)."""
 
-    k_p: float = 0.2113
+    k_p: float = paper.IP_KP
     """Proportional gain (A/rpm)."""
-    k_i: float = 2.9994e-5
+    k_i: float = paper.IP_KI
     """Integral gain (1/sample)."""
     current_limit: float = 100.0
     """Limit on |i_p*| (A), [0, 200]."""

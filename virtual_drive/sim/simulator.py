@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from firmware_protocol import emcy_codes
 from virtual_drive._core import ffi, lib
 from virtual_drive.sim.params import (
     RPM_PER_RAD_S,
@@ -30,9 +31,9 @@ from virtual_drive.sim.params import (
 )
 from virtual_drive.sim.signals import SIGNALS
 
-FAULT_OVERCURRENT = 0x2310
-FAULT_OVERVOLTAGE = 0x3210
-FAULT_UNDERVOLTAGE = 0x3220
+FAULT_OVERCURRENT = emcy_codes.OVERCURRENT
+FAULT_OVERVOLTAGE = emcy_codes.DC_OVERVOLTAGE
+FAULT_UNDERVOLTAGE = emcy_codes.DC_UNDERVOLTAGE
 
 FAULT_KINDS: dict[str, int] = {
     "none": 0,
