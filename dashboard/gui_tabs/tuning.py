@@ -15,6 +15,7 @@ from dashboard import tuning
 from dashboard.fields import FieldError, NumberSpec
 from dashboard.gui_field import Field
 from dashboard.models import CONTROLLER_TYPES
+from firmware_protocol import paper
 
 __all__ = ["TuningTab"]
 
@@ -53,9 +54,9 @@ class TuningTab:
         with gui.add_folder("IP design from ξ, ω_n (eqs. 28–31)", expand_by_default=False):
             self.xi_in = Field(self, NumberSpec("ξ", 0.0, 10.0, lo_open=True), 1.0)
             self.wn_in = Field(self, NumberSpec("ω_n (rad/s)", 0.0, 1000.0, lo_open=True), 2.3)
-            self.a_in = Field(self, NumberSpec("a", 0.0, 1.0, lo_open=True), 0.9999785)
+            self.a_in = Field(self, NumberSpec("a", 0.0, 1.0, lo_open=True), paper.A_IDENTIFIED)
             self.b_in = Field(
-                self, NumberSpec("b (rpm/A per sample)", 0.0, 1.0, lo_open=True), 3.33715e-4
+                self, NumberSpec("b (rpm/A per sample)", 0.0, 1.0, lo_open=True), paper.B_IDENTIFIED
             )
             self.design_md = gui.add_markdown("", visible=False)
             gui.add_button("Compute IP gains").on_click(
@@ -69,7 +70,7 @@ class TuningTab:
         self.Lc_ratio.input.on_update(lambda e: self._on_Lc_ratio())
 
     def motor_L(self) -> float:
-        return float(self.gains.get("motor_L", 14.8e-6)) if self.gains else 14.8e-6
+        return float(self.gains.get("motor_L", paper.L_TABLE2)) if self.gains else paper.L_TABLE2
 
     def speed_model(self) -> tuple[float, float]:
         """(a, b) of G(z) = b/(z − a): the identified model, else the paper's."""
