@@ -173,6 +173,27 @@ static void apply_pattern(loop_t *L, float m, int sec, int on, double u0, double
         mode[x_lo] = PLANT_DRIVEN;
         mode[open] = PLANT_OPEN;
         vdrv[open] = 0.0;
+        if (L->p.V_G == 0.0) {
+            /* all sub-intervals in one call (legs a < b driven, see plant_advance_six_step) */
+            double va[5], vb[5], dt[5];
+            int ns = 0, xa = (open == 0) ? 1 : 0;
+            for (k = 0; k < 5; ++k) {
+                double a = (edge[k] > u0) ? edge[k] : u0;
+                double b = (edge[k + 1] < u1) ? edge[k + 1] : u1;
+                double v_hi, v_lo;
+                if (b - a < 1e-15) {
+                    continue;
+                }
+                v_hi = (k >= 1 && k <= 3) ? Vd : 0.0;
+                v_lo = (k == 2) ? Vd : 0.0;
+                va[ns] = (xa == x_hi) ? v_hi : v_lo;
+                vb[ns] = (xa == x_hi) ? v_lo : v_hi;
+                dt[ns] = b - a;
+                ++ns;
+            }
+            L->segments += plant_advance_six_step(&L->p, open, va, vb, dt, ns);
+            return;
+        }
         for (k = 0; k < 5; ++k) {
             double a = (edge[k] > u0) ? edge[k] : u0;
             double b = (edge[k + 1] < u1) ? edge[k + 1] : u1;

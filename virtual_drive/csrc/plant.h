@@ -78,6 +78,13 @@ void plant_set_segment_emf(plant_t *p, double theta_e);
  * Integrates torque into Te_int.  Returns the number of solved sub-segments. */
 int plant_advance(plant_t *p, const int mode[3], const double v_drv[3], double dt);
 
+/* The six-step case of plant_advance (two legs driven, leg z open, V_G = 0 required) over n
+ * consecutive segments of dt_seg[s] seconds with the driven legs at va_seg[s], vb_seg[s] (legs
+ * a < b, the two others than z): bit-identical to n plant_advance calls, without their
+ * per-call set-up.  Returns the number of solved sub-segments. */
+int plant_advance_six_step(plant_t *p, int z, const double *va_seg, const double *vb_seg,
+                           const double *dt_seg, int n);
+
 /* Phase back-EMFs (V) at the present angle and speed. */
 void plant_emf(const plant_t *p, double theta_e, double e[3]);
 
