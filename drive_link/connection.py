@@ -17,6 +17,8 @@ from typing import Any
 import can
 import canopen
 
+from firmware_protocol.can_bits import frame_bits, frame_bits_fast
+
 from .bus import open_bus
 from .bus_health import BusHealth
 
@@ -79,15 +81,17 @@ class PacedNetwork(canopen.Network):
         self.check()
 
 
-def frame_bits(dlc: int, extended: bool = False) -> float:
-    """Approximate bits on the wire of one data frame (incl. typical bit stuffing, 3-bit IFS).
-
-    Standard frame: 47 + 8·dlc bits without stuffing; stuffing adds about 1 bit in 5 of the
-    stuffed part (34 + 8·dlc bits) in the worst case, ~half that for random data.
-    """
-    base = (67 if extended else 47) + 8 * dlc
-    stuffed = (54 if extended else 34) + 8 * dlc
-    return base + 0.1 * stuffed
+def _frame_bits(msg: can.Message) -> int:
+    """Bits ``msg`` occupied on the wire (exact stuffing; :mod:`firmware_protocol.can_bits`).
+    A CAN FD frame counts its classical-frame length (47/67 + 8·n, no stuffing)."""
+    data = bytes(msg.data)
+    if msg.is_fd or len(data) > 8:
+        return (67 if msg.is_extended_id else 47) + 8 * len(data)
+    if msg.is_remote_frame:
+        return frame_bits(
+            msg.arbitration_id, b"", msg.is_extended_id, is_remote=True, dlc=min(msg.dlc, 8)
+        )
+    return frame_bits_fast(msg.arbitration_id, data, msg.is_extended_id)
 
 
 class BusMonitor(can.Listener):
@@ -96,14 +100,14 @@ class BusMonitor(can.Listener):
     def __init__(self, window_s: float = 1.0):
         self.window_s = window_s
         self._lock = threading.Lock()
-        self._recent: deque[tuple[float, float]] = deque()  # (time, bits)
+        self._recent: deque[tuple[float, int]] = deque()  # (time, bits)
         self.frames_total = 0
         self.bits_total = 0.0
 
     def on_message_received(self, msg: can.Message) -> None:
         if msg.is_error_frame:  # a controller report (BusHealth counts it), not a frame on the wire
             return
-        bits = frame_bits(msg.dlc, msg.is_extended_id)
+        bits = _frame_bits(msg)
         now = time.monotonic()
         with self._lock:
             self.frames_total += 1

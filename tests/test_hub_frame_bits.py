@@ -175,3 +175,23 @@ def test_bad_frames_raise():
         frame_bits(0x123, b"", is_remote=True, dlc=9)
     with pytest.raises(ValueError):
         stuff_bit_count(0b100, 2)
+
+
+def test_drive_link_bus_monitor_counts_exact_frame_lengths():
+    # drive_link's bus load uses the same bit physics (one home): the captured car frame is 121
+    # bits, the all-zero frame 53, a remote frame follows the oracle; error frames count nothing
+    import can
+
+    from drive_link.connection import BusMonitor
+
+    mon = BusMonitor()
+    car = bytes.fromhex("4001087500000000")
+    mon.on_message_received(can.Message(arbitration_id=0x0C1, data=car, is_extended_id=False))
+    mon.on_message_received(can.Message(arbitration_id=0, data=b"", is_extended_id=False))
+    mon.on_message_received(
+        can.Message(arbitration_id=0x1234567, is_extended_id=True, is_remote_frame=True, dlc=4)
+    )
+    mon.on_message_received(can.Message(arbitration_id=0x20000008, is_error_frame=True))
+    remote = _oracle_bits(0x1234567, b"", True, remote=True, dlc=4)
+    assert mon.frames_total == 3
+    assert mon.bits_total == 121 + 53 + remote
