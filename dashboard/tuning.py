@@ -1,5 +1,7 @@
-"""Gains: read back, preview (stability, margins, ‖S‖∞ via drive_link.design), apply as one set,
-IP design from ξ and ω_n (eqs. 28–31), store, and live-vs-stored diff.
+"""Gains: read back, preview (stability, margins, ‖S‖∞ via drive_link.design), apply as one set
+(drive_link.gains.apply_gains, the path ``drive-link set-gains`` takes), IP design from ξ and ω_n
+(eqs. 28–31), store, and live-vs-stored diff. The dashboard only presents: every rule and every
+loop model is drive_link's.
 
 Units: L_c H, R_c Ω, current PI k_p/k_i V/A, speed k_p A/rpm, speed k_i 1/sample (Ts = 20 µs).
 """
@@ -10,12 +12,10 @@ import math
 import time
 from typing import Any
 
-import numpy as np
-
-from dashboard.bench import Bench, as_dict
+from dashboard.bench import LIVE_NAMES, Bench, as_dict
 from dashboard.models import TYPE_NAMES
 from drive_link import design
-from drive_link.margins_check import check_gains
+from drive_link import gains as link_gains
 
 #: The paper's identified speed model (Section V), used until an identification has been run.
 A_PAPER = 0.9999785
@@ -46,60 +46,42 @@ def _merged(bench: Bench, changes: dict[str, float | int]) -> dict[str, Any]:
     return out
 
 
-def _poles(tf: design.DiscreteTF) -> list[list[float]]:
-    return [[float(p.real), float(p.imag)] for p in tf.poles()]
-
-
-def _phase_margin(m: design.Margins) -> tuple[float, float]:
-    """(PM °, crossover Hz): the smallest |PM| over all gain crossovers, ties (within 1e-6°)
-    going to the lowest crossover frequency. drive_link's own pick compares |PM| rounded to 9
-    digits, so for the deadbeat loop 1/(z² − 1) float noise made it report the −60° of the
-    20.8 kHz crossing instead of the +60° at 4.2 kHz (python-control, after minreal: +60°)."""
-    if not m.phase_margins_deg:
-        return m.phase_margin_deg, m.gain_crossover_hz
-    smallest = min(abs(p) for p in m.phase_margins_deg)
-    cands = [
-        (hz, p)
-        for p, hz in zip(m.phase_margins_deg, m.gain_crossovers_hz, strict=True)
-        if abs(p) - smallest <= 1e-6
-    ]
-    hz, pm = min(cands)
-    return pm, hz
-
-
-def _margins_dict(loop: design.DiscreteTF, closed: design.DiscreteTF) -> dict[str, Any]:
-    m = design.margins(loop)
-    stable = design.is_stable(closed)
-    pm, pm_hz = _phase_margin(m)
+def _view(r: design.LoopResponse) -> dict[str, Any]:
+    """One loop's preview: stability, margins (PM the smallest, a positive angle; every
+    crossover listed), ‖S‖∞ and the closed-loop poles ([re, im])."""
+    m = design.margins_summary(r.margins)
     return {
-        "stable": stable,
-        "gain_margin_dB": m.gain_margin_db,
-        "phase_margin_deg": pm,
-        "S_inf": m.sensitivity_peak,
-        "gain_crossover_hz": pm_hz,
-        "phase_crossover_hz": m.phase_crossover_hz,
-        "poles": _poles(closed),
-        "max_pole_radius": float(np.max(np.abs(closed.poles()))) if closed.den.size > 1 else 0.0,
+        "stable": r.stable,
+        "gain_margin_dB": m["gain_margin_db"],
+        "phase_margin_deg": m["phase_margin_deg"],
+        "S_inf": m["sensitivity_peak"],
+        "gain_crossover_hz": m["gain_crossover_hz"],
+        "phase_crossover_hz": m["phase_crossover_hz"],
+        "crossovers": m["crossovers"],
+        "poles": [[float(p.real), float(p.imag)] for p in r.poles],
+        "max_pole_radius": r.max_pole_radius,
     }
 
 
 def preview(bench: Bench, changes: dict[str, float | int]) -> dict[str, Any]:
     """Stability, GM, PM and ‖S‖∞ of the current loop (controller on the drive's motor R, L) and
-    of the speed loop (IP on the identified G(z) = b/(z − a)) with ``changes`` applied."""
+    of the speed loop (IP on the identified G(z) = b/(z − a)) with ``changes`` applied, and the
+    verdict ``apply`` would give (``check``: refusals, warnings)."""
     g = _merged(bench, changes)
     R, L = g["motor_R"], g["motor_L"]
-    loop = design.current_loop_tf(
-        g["type"], R=R, L=L, L_c=g["L_c"], R_c=g["R_c"], k_p=g["k_p"], k_i=g["k_i"]
+    cur = design.current_loop_response(
+        g["type"], R=R, L=L, L_c=g["L_c"], R_c=g["R_c"], k_p=g["k_p"], k_i=g["k_i"], n_points=10
     )
-    current = _margins_dict(loop, design.feedback(loop))
+    current = _view(cur)
     current.update(controller=g["type"], L_c=g["L_c"], L_c_over_L=g["L_c"] / L, R_c=g["R_c"])
     a, b = _ab(bench)
     kp, ki = float(g["speed_k_p"]), float(g["speed_k_i"])
-    G = design.DiscreteTF([b], [1.0, -a])
-    ip_fb = design.DiscreteTF([kp * (1.0 + ki), -kp], [1.0, -1.0])  # k_p (1 + k_i z/(z − 1))
-    speed = _margins_dict(ip_fb * G, design.ip_closed_loop(a, b, kp, ki))
+    speed = _view(design.speed_loop_response(a, b, kp, ki, n_points=10))
     speed.update(a=a, b=b, k_p=kp, k_i=ki)
-    return {"current": current, "speed": speed}
+    check = link_gains.check_gains(
+        {k: g[k] for k in LIVE_NAMES if k in g}, R, L, (a, b)
+    )
+    return {"current": current, "speed": speed, "check": check.to_dict()}
 
 
 def _ab(bench: Bench) -> tuple[float, float]:
@@ -110,25 +92,16 @@ def _ab(bench: Bench) -> tuple[float, float]:
 
 
 def apply(bench: Bench, changes: dict[str, float | int], *, force: bool = False) -> dict[str, Any]:
-    """Apply ``changes`` as one set (drive_link.apply_gains); returns the read-back gains.
+    """Apply ``changes`` as one set through :func:`drive_link.gains.apply_gains` (the rule of
+    ``drive-link set-gains``) on the identified speed model; returns the read-back gains.
 
-    Checked before sending by the rule of ``drive-link set-gains`` (drive_link.margins_check) on
-    the drive's motor R, L and the identified speed model: an unstable current or speed loop is
-    refused always, poor margins (L_c > 1.5 L, GM < 2 dB, ‖S‖∞ > 5) unless ``force``
-    (ValueError → 422, nothing applied).
+    An unstable set, or one the drive's rule refuses, is refused always; poor margins
+    (L_c > 1.5 L, GM < 2 dB, ‖S‖∞ > 5) unless ``force`` (GainsRefused, a ValueError → 422,
+    nothing applied).
     """
     with bench.lock:
-        proposed = {**as_dict(bench.drive.read_gains()), **changes}
-        R, L = motor_RL(bench)
-    report = check_gains(proposed, R, L, _ab(bench))
-    fig = report.figures
-    unstable = not (fig["current_loop_stable"] and fig.get("speed_loop_stable", True))
-    if unstable or (not report.ok and not force):
-        hint = "" if unstable else " (force to apply anyway)"
-        raise ValueError("; ".join(report.problems) + hint + "; nothing applied")
-    with bench.lock:
-        bench.drive.apply_gains(**changes)
-    g = read_gains(bench)
+        link_gains.apply_gains(bench.drive, changes, force=force, speed_model=_ab(bench))
+        g = read_gains(bench)
     bench.emit("gains", g)
     return g
 
@@ -225,18 +198,36 @@ def preview_markdown(p: dict[str, Any]) -> str:
         if not m["stable"]:  # margins and ‖S‖∞ of an unstable loop mean nothing
             return f"{name}: **UNSTABLE** · max|pole| {_radius(m['max_pole_radius'])}"
         pm = m["phase_margin_deg"]
+        pm_txt = "–" if pm is None or not math.isfinite(pm) else f"{pm:.1f}"
+        every = m.get("crossovers") or []
+        at = (
+            " (" + ", ".join(f"{x['phase_margin_deg']:.1f}° at {_hz(x['hz'])}" for x in every) + ")"
+            if len(every) > 1
+            else ""
+        )
         return (
             f"{name}: **stable** · GM {_db(m['gain_margin_dB'])} dB · "
-            f"PM {'–' if not math.isfinite(pm) else f'{pm:.1f}'}° · "
+            f"PM {pm_txt}°{at} · "
             f"‖S‖∞ {m['S_inf']:.3f} · max|pole| {_radius(m['max_pole_radius'])}"
         )
 
+    check = p.get("check") or {}
+    verdict = "".join(
+        f"  \n{tag} {msg}"
+        for tag, key in (("**Refused:**", "refusals"), ("**Needs force:**", "warnings"))
+        for msg in check.get(key, [])
+    )
     return (
         "**Before applying**  \n"
         + line(f"Current ({c['controller']}, L_c/L = {c['L_c_over_L']:.3f})", c)
         + "  \n"
         + line(f"Speed (IP, a = {s['a']:.7f}, b = {s['b']:.4g})", s)
+        + verdict
     )
+
+
+def _hz(f: float) -> str:
+    return f"{f / 1e3:.1f} kHz" if f >= 1e3 else f"{f:.3g} Hz"
 
 
 def readback_markdown(g: dict[str, Any]) -> str:

@@ -263,10 +263,9 @@ def cmd_gains_get(args: argparse.Namespace, d: Drive) -> int:
 
 
 def cmd_gains_set(args: argparse.Namespace, d: Drive) -> int:
-    from .margins_check import check_gains
-    from .steps import SPEED_MODEL_PAPER
+    from .gains import GainsRefused, apply_gains
 
-    changes: dict[str, float | int] = {}
+    changes: dict[str, float | int | str] = {}
     for item in args.assignments:
         if "=" not in item:
             raise InvalidValue(f"expected NAME=VALUE, got {item!r}")
@@ -274,24 +273,23 @@ def cmd_gains_set(args: argparse.Namespace, d: Drive) -> int:
         if k not in GAIN_FIELDS:
             raise InvalidValue(f"unknown gain {k!r}; known: {', '.join(GAIN_FIELDS)}")
         val = _parse_value(v)
-        if isinstance(val, str):
+        if isinstance(val, str) and k != "type":  # type=pi as well as type=1
             raise InvalidValue(f"{k}: {v!r} is not a number")
         changes[k] = val
-    current = d.read_gains().to_dict()
-    proposed = {**current, **changes}
-    R, L = float(d.read("motor.R")), float(d.read("motor.L"))
-    model = (args.model_a, args.model_b) if args.model_a is not None else SPEED_MODEL_PAPER
-    report = check_gains(proposed, R, L, model)
-    if not report.ok and not args.force:
-        raise Refused("refused: " + "; ".join(report.problems) + " (use --force to apply anyway)")
-    back = d.apply_gains(**changes).to_dict()
-    out = {"gains": back, "margins": report.figures, "warnings": report.problems}
+    model = (args.model_a, args.model_b) if args.model_a is not None else None
+    try:
+        res = apply_gains(d, changes, force=args.force, speed_model=model)
+    except GainsRefused as exc:
+        hint = "" if exc.unstable else " (use --force to apply anyway)"
+        raise Refused(str(exc).replace(" (force to apply anyway)", "") + hint) from None
+    back = res.gains
+    out = {"gains": back, "margins": res.check.figures, "warnings": list(res.check.warnings)}
     _emit(
         args,
         out,
         lambda: (
             "\n".join(f"{k:>20} = {v:g}" for k, v in back.items())
-            + "".join(f"\nwarning: {p}" for p in report.problems)
+            + "".join(f"\nwarning: {p}" for p in res.check.warnings)
         ),
     )
     return 0
@@ -672,7 +670,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = add("set-gains", cmd_gains_set, "apply gains atomically, e.g. set-gains L_c=13e-6 k_p=0.5")
     p.add_argument("assignments", nargs="+", metavar="NAME=VALUE")
     p.add_argument(
-        "--force", action="store_true", help="apply even with poor or no stability margin"
+        "--force",
+        action="store_true",
+        help="apply despite poor margins (an unstable set is never applied)",
     )
     p.add_argument(
         "--model-a", type=float, default=None, help="speed model a for the speed-loop check"

@@ -237,8 +237,15 @@ def test_gains_preview_matches_python_control(client):
         gm_db, pm, s_inf, stable = oracle(deadbeat_loop(ratio * L))
         assert c["stable"] == stable is True
         assert c["gain_margin_dB"] == pytest.approx(gm_db, abs=0.05)
-        assert c["phase_margin_deg"] == pytest.approx(pm, abs=0.5)
+        # one convention: the smallest margin as a positive angle (python-control: signed;
+        # -41.4° for 1.5 L), both crossovers listed
+        assert c["phase_margin_deg"] == pytest.approx(abs(pm), abs=0.5)
+        assert len(c["crossovers"]) == 2
         assert c["S_inf"] == pytest.approx(s_inf, rel=2e-3)
+    p = client.post("/api/gains/preview", json={"L_c": 1.8 * L}).json()
+    assert p["check"]["warnings"] and not p["check"]["refusals"]  # what apply would say
+    p = client.post("/api/gains/preview", json={"type": "pi", "k_p": 2.0}).json()
+    assert p["current"]["stable"] is False and p["check"]["refusals"]
     ref = client.post("/api/gains/preview", json={"L_c": L}).json()["current"]
     assert ref["phase_margin_deg"] == pytest.approx(60.0, abs=0.2)  # C·P = 1/(z² − 1)
     assert ref["S_inf"] == pytest.approx(2.0, rel=1e-3)
@@ -284,6 +291,19 @@ def test_poor_margins_need_an_explicit_override(client, hdr):
     r = client.put("/api/gains", json={"L_c": 1.8 * L, "force": True}, headers=hdr)
     assert r.status_code == 200 and r.json()["L_c"] == f32(1.8 * L)
     client.put("/api/gains", json={"L_c": L}, headers=hdr)
+
+
+def test_unstable_pi_set_refused_even_forced(client, hdr):
+    """The rule `drive-link set-gains --force` follows too (tests/test_link_gains.py): a PI set
+    whose closed loop python-control finds unstable is never applied."""
+    Phi, Gamma = math.exp(-R * TS / L), (1 - math.exp(-R * TS / L)) / (2 * R)
+    P = ct.tf([Gamma], [1, -Phi, 0], TS)
+    cl = ct.feedback(ct.tf([2.0 + 0.0492, -2.0], [1, -1], TS) * P, 1)
+    assert np.max(np.abs(cl.poles())) > 1.0  # k_p = 2 V/A: unstable
+    before = client.get("/api/gains").json()
+    r = client.put("/api/gains", json={"type": "pi", "k_p": 2.0, "force": True}, headers=hdr)
+    assert r.status_code == 422 and "unstable" in r.text
+    assert client.get("/api/gains").json() == before
 
 
 def test_ip_design_reproduces_paper_gains(client):

@@ -126,7 +126,7 @@ def current_margins(ratio: float) -> tuple[float, float, float]:
         verbose=False,
     )
     gm, pm, _, _ = ct.margin(loop)
-    return 20 * math.log10(gm), pm
+    return 20 * math.log10(gm), abs(pm)  # PM: the smallest margin, a positive angle
 
 
 def test_change_L_c_and_see_readback_and_margins(page, bench):

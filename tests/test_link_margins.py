@@ -1,6 +1,6 @@
-"""The `set-gains` safety check against python-control (test-only oracle): closed-loop poles of
-the paper's deadbeat loop (eq. 15 on eq. 8) and of the PI loop (eq. 22), and the CLI rule
-L_c ≤ 1.5 L."""
+"""The gain-set check (drive_link.gains.check_gains: `set-gains` and the dashboard) against
+python-control (test-only oracle): closed-loop poles of the paper's deadbeat loop (eq. 15 on
+eq. 8) and of the PI loop (eq. 22), and the rule L_c ≤ 1.5 L without force."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import control
 import numpy as np
 import pytest
 
-from drive_link.margins_check import check_gains
+from drive_link.gains import check_gains
 
 R, L, TS = 6.2e-3, 14.8e-6, 20e-6
 PAPER = dict(type=0, L_c=L, R_c=R, k_p=0.4647, k_i=0.0492, speed_k_p=0.2113, speed_k_i=2.9994e-5)
