@@ -1,4 +1,4 @@
-"""The drive a parsed command line names (shared by `drive-link` and `drive_link.bench`)."""
+"""The drive a parsed command line names (shared by `drive-link` and `benchmarks/bench_link.py`)."""
 
 from __future__ import annotations
 

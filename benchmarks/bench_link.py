@@ -1,8 +1,8 @@
-"""Benchmark of the host library: prints figures, asserts nothing.
+"""Benchmark of the host library (drive_link): prints figures, asserts nothing.
 
-    python -m drive_link.bench                      # own loopback hub + `virtual-drive run` child
-    python -m drive_link.bench --host 127.0.0.1 --port 29536 --node 1   # any drive on a hub
-    python -m drive_link.bench --interface socketcan --channel can0     # a real bus
+    python benchmarks/bench_link.py                  # own loopback hub + `virtual-drive run` child
+    python benchmarks/bench_link.py --host 127.0.0.1 --port 29536 --node 1   # any drive on a hub
+    python benchmarks/bench_link.py --interface socketcan --channel can0     # a real bus
 
 Figures: expedited SDO read latency (median / p99), trace upload throughput by SDO block
 upload vs segmented upload, status-read latency while a block upload runs on the second SDO
@@ -14,13 +14,14 @@ from __future__ import annotations
 import argparse
 import contextlib
 import statistics
-import tempfile
 import threading
 import time
 
-from .cli_connect import connect_from_args
-from .drive import Drive
-from .scan import scan
+from drive_link.cli_connect import connect_from_args
+from drive_link.drive import Drive
+from drive_link.errors import DriveError
+from drive_link.scan import scan
+from virtual_drive.launch import virtual_bench
 
 
 def _pct(xs: list[float], q: float) -> float:
@@ -93,8 +94,8 @@ def run(d: Drive, n_reads: int = 300) -> dict[str, float]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of ``python -m drive_link.bench``."""
-    ap = argparse.ArgumentParser(prog="python -m drive_link.bench", description=__doc__)
+    """Entry point of ``python benchmarks/bench_link.py``."""
+    ap = argparse.ArgumentParser(prog="bench_link.py", description=__doc__)
     ap.add_argument("--interface")
     ap.add_argument("--channel")
     ap.add_argument("--bitrate", type=int)
@@ -112,15 +113,10 @@ def main(argv: list[str] | None = None) -> int:
     hub = None
     with contextlib.ExitStack() as stack:
         if args.interface is None and args.port is None:
-            from virtual_drive.hub import Hub
-            from virtual_drive.node import spawn_virtual_drive
-
-            hub = stack.enter_context(Hub(port=0))
-            store = tempfile.mktemp(suffix=".json")
-            proc = spawn_virtual_drive(port=hub.port, node_id=args.node, store=store)
-            stack.callback(proc.stop)
-            args.host, args.port = "127.0.0.1", hub.port
-            print(f"virtual drive (child process) on loopback hub 127.0.0.1:{hub.port}, 1 Mbit/s")
+            bench = stack.enter_context(virtual_bench(nodes=(args.node,)))
+            hub = bench.hub
+            args.host, args.port = bench["host"], bench.port
+            print(f"virtual drive (child process) on loopback hub 127.0.0.1:{bench.port}, 1 Mbit/s")
         d = connect_from_args(args)
         stack.callback(d.close)
         run(d, args.reads)
@@ -131,8 +127,6 @@ def main(argv: list[str] | None = None) -> int:
 
 def lossy_uploads(d: Drive, hub, rates: list[float], n: int) -> None:
     """Upload the same 32 KB trace ``n`` times per hub drop rate; print exact/wrong/failed."""
-    from .errors import DriveError
-
     hub.set_faults(drop_rate=0.0)
     d.trace.configure(["i_p", "speed"], divider=1, length=4000, trigger="immediate")
     d.trace.arm()
