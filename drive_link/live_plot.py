@@ -260,6 +260,13 @@ def cmd_live_plot(args: argparse.Namespace, d: Drive) -> int:
         raise InvalidValue(f"--window {args.window}: must be > 0 s")
     live = d.live
     signals = resolve_signals(live, args.plot)
+    nmt = d.nmt_state
+    if nmt != "OPERATIONAL" and not getattr(args, "json", False):
+        print(
+            f"drive-link: note: node {d.node_id} is {nmt}: TPDOs flow only in OPERATIONAL "
+            "(drive-link nmt start)",
+            file=sys.stderr,
+        )
     size = shutil.get_terminal_size((100, 24))
     width = args.width or size.columns
     height = args.height or size.lines

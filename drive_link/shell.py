@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import json
 import os
 import shlex
 import sys
@@ -25,7 +26,7 @@ from typing import TextIO
 
 from . import cli
 from .drive import Drive
-from .errors import DriveError
+from .errors import DriveError, InvalidValue, SdoAbort
 
 __all__ = ["HISTORY_FILE", "Shell", "cmd_shell"]
 
@@ -82,7 +83,7 @@ class Shell:
         if topic:
             p = self.sub.choices.get(topic)
             if p is None or topic in _NOT_IN_SHELL:
-                raise cli.InvalidValue(f"no command {topic!r} (try: help)")
+                raise InvalidValue(f"no command {topic!r} (try: help)")
             return p.format_help().rstrip()
         helps = {a.dest: a.help or "" for a in self.sub._choices_actions}
         lines = ["commands (drive-link COMMAND without the prefix; CMD --help for options):"]
@@ -109,7 +110,7 @@ class Shell:
             given = getattr(args, k, default)
             if k in _CONNECTION_OPTS:
                 if given != default and given != mine:
-                    raise cli.InvalidValue(
+                    raise InvalidValue(
                         f"--{k.replace('_', '-')} {given}: this shell is connected to node "
                         f"{self.drive.node_id} on its own bus; start another shell for another"
                     )
@@ -126,7 +127,7 @@ class Shell:
         try:
             argv = shlex.split(line, comments=True)
         except ValueError as exc:
-            return self._fail(cli.InvalidValue(f"cannot split the line: {exc}"))
+            return self._fail(None, f"error: cannot split the line: {exc}", 2)
         if not argv:
             return self.last_rc
         cmd = argv[0]
@@ -135,59 +136,70 @@ class Shell:
                 try:
                     self.last_rc = int(argv[1])
                 except ValueError:
-                    return self._fail(cli.InvalidValue(f"exit code {argv[1]!r} is not a number"))
+                    return self._fail(None, f"error: exit code {argv[1]!r} is not a number", 2)
             return None
         if cmd == "help" or cmd == "?":
             try:
                 print(self.help_text(argv[1] if len(argv) > 1 else None), flush=True)
             except DriveError as exc:
-                return self._fail(exc)
+                return self._fail(None, f"error: {exc}", 2)
             self.last_rc = 0
             return 0
         if cmd in _NOT_IN_SHELL:
-            return self._fail(cli.InvalidValue(f"{cmd}: {_NOT_IN_SHELL[cmd]}"))
+            return self._fail(None, f"error: {cmd}: {_NOT_IN_SHELL[cmd]}", 2)
         if cmd not in self.sub.choices:
             close = [c for c in self.commands if c.startswith(cmd[:3])]
             hint = f" (did you mean {', '.join(close[:4])}?)" if close else " (try: help)"
-            return self._fail(cli.InvalidValue(f"unknown command {cmd!r}{hint}"), code=2)
+            return self._fail(None, f"error: unknown command {cmd!r}{hint}", 2)
+        json_before = getattr(cli, "_JSON_ERRORS", False)
+        cli._JSON_ERRORS = json_before or "--json" in argv  # argparse errors as JSON too
+        try:
+            return self._run_args(argv)
+        finally:
+            cli._JSON_ERRORS = json_before
+
+    def _run_args(self, argv: list[str]) -> int:
+        """Parse and run one command on the shell's Drive; errors as cli.main reports them."""
+        args: argparse.Namespace | None = None
         try:
             args = self._parse(argv)
-        except _ParseExitError as exc:
-            self.last_rc = exc.code
-            return exc.code
-        except DriveError as exc:
-            return self._fail(exc)
-        try:
             if getattr(args, "needs_drive", False):
                 rc = args.func(args, self.drive)
             else:
                 rc = args.func(args)
+        except _ParseExitError as exc:
+            rc = exc.code
         except cli.Refused as exc:
-            return self._fail(exc, prefix="", code=cli.EXIT_UNSAFE)
+            rc = self._fail(args, str(exc), cli.EXIT_UNSAFE)
         except DriveError as exc:
-            return self._fail(exc)
+            msg = f"error: {exc}"
+            hint = getattr(cli, "_state_hint", None)
+            state_code = getattr(cli, "_ABORT_STATE", None)
+            if hint and isinstance(exc, SdoAbort) and exc.code == state_code:
+                msg += f": {hint(exc)}"
+            code = next((c for cls, c in cli.EXIT_CODES if isinstance(exc, cls)), 1)
+            rc = self._fail(args, msg, code)
         except KeyboardInterrupt:
-            return self._fail(None, prefix="interrupted", code=130)
+            rc = self._fail(args, "interrupted", 130)
         except (ValueError, OSError) as exc:
-            return self._fail(exc, code=1)
-        except SystemExit as exc:  # a handler that exits (argparse inside a handler)
-            rc = int(exc.code or 0) if not isinstance(exc.code, str) else 1
+            rc = self._fail(args, f"error: {exc}", 1)
+        except SystemExit as exc:  # a handler that exits
+            rc = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
         sys.stdout.flush()
         self.last_rc = int(rc or 0)
         return self.last_rc
 
-    def _fail(
-        self, exc: BaseException | None, prefix: str = "error: ", code: int | None = None
-    ) -> int:
-        """One line on stderr; the exit code cli.main would give."""
-        text = prefix + (str(exc).splitlines()[0] if exc is not None and str(exc) else "")
-        print(f"drive-link: {text}".rstrip(), file=sys.stderr, flush=True)
-        if code is None:
-            code = 1
-            for cls, c in cli.EXIT_CODES:
-                if isinstance(exc, cls):
-                    code = c
-                    break
+    def _fail(self, args: argparse.Namespace | None, message: str, code: int) -> int:
+        """One failure as cli.main reports it: ``drive-link: MESSAGE`` on stderr, or with
+        --json ``{"error": …, "exit_code": …}`` on stdout."""
+        line = message.splitlines()[0] if message else message
+        as_json = getattr(cli, "_JSON_ERRORS", False) or bool(getattr(args, "json", False))
+        if as_json:
+            print(json.dumps({"error": line.removeprefix("error: "), "exit_code": code}))
+        else:
+            print(f"drive-link: {line}", file=sys.stderr)
+        sys.stdout.flush()
+        sys.stderr.flush()
         self.last_rc = code
         return code
 
@@ -261,6 +273,8 @@ def _readline_lines(shell: Shell, history: Path, prompt: str) -> Iterable[str]:
         if state == 0:
             buf = readline.get_line_buffer()[: readline.get_endidx()]
             matches = shell.candidates(buf)
+            if len(matches) == 1:  # a whole word: go on typing the next one
+                matches = [matches[0] + " "]
         return matches[state] if state < len(matches) else None
 
     readline.set_completer(complete)
