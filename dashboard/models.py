@@ -2,18 +2,79 @@
 
 Units are SI as on the drive (A, V, Ω, H, s, rpm) unless a field's name says otherwise.
 Gain names are the drive's staged gain-set names (object 0x20F0, docs/contracts.md §1).
+A field that carries an OD object's value takes its bounds from the EDS (:func:`od_field`;
+:func:`od_fields` lists them), so the API cannot drift from what the drive accepts.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Literal
+from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from firmware_protocol.enums import CONTROLLER_NAMES, CONTROLLER_TYPES
+from firmware_protocol.od import load_od
+
+__all__ = [
+    "CONTROLLER_TYPES",
+    "OD_KEY",
+    "TYPE_NAMES",
+    "CommandIn",
+    "ControlIn",
+    "ControlOut",
+    "CurrentIn",
+    "CurrentStepIn",
+    "GainsIn",
+    "IPDesignIn",
+    "IdentifyIn",
+    "LoadIn",
+    "Margins",
+    "ModeIn",
+    "SequenceIn",
+    "SequenceStep",
+    "SpeedIn",
+    "SpeedStepIn",
+    "Strict",
+    "TraceIn",
+    "od_field",
+    "od_fields",
+]
 
 TYPE_NAMES = CONTROLLER_NAMES
+
+OD_KEY = "x-od-object"
+"""JSON-schema key naming the OD object that bounds a field (shown in the OpenAPI schema)."""
+
+
+def od_field(
+    od_name: str, default: Any = ..., *, ge: float | None = None, description: str = ""
+) -> Any:
+    """A pydantic ``Field`` bounded by the EDS ``LowLimit``/``HighLimit`` of ``od_name``
+    (inclusive), its unit in the description. ``ge`` may only raise the low bound (a stricter
+    rule of the dashboard, e.g. a trace needs 2 samples)."""
+    entry = load_od().entry(od_name)
+    low = entry.low
+    if ge is not None:
+        low = ge if low is None else max(ge, low)
+    unit = f"{entry.unit}; " if entry.unit and entry.unit != "1" else ""
+    return Field(
+        default,
+        ge=low,
+        le=entry.high,
+        description=f"{unit}{description or od_name}",
+        json_schema_extra={OD_KEY: od_name},
+    )
+
+
+def od_fields(model: type[BaseModel]) -> dict[str, str]:
+    """Field name -> OD object for the fields of ``model`` bounded by the EDS."""
+    out = {}
+    for name, info in model.model_fields.items():
+        extra = info.json_schema_extra
+        if isinstance(extra, dict) and OD_KEY in extra:
+            out[name] = str(extra[OD_KEY])
+    return out
 
 
 class Strict(BaseModel):
@@ -44,20 +105,20 @@ class ModeIn(Strict):
 
 
 class SpeedIn(Strict):
-    rpm: float = Field(..., ge=-4000, le=4000, description="speed setpoint, rpm")
+    rpm: float = od_field("target_velocity", description="speed setpoint")
 
 
 class CurrentIn(Strict):
-    i_p_ref: float = Field(..., ge=-200, le=200, description="pseudo-current setpoint i_p*, A")
+    i_p_ref: float = od_field("setpoints.i_p_ref", description="pseudo-current setpoint i_p*")
 
 
 class SpeedStepIn(Strict):
-    delta_rpm: float = Field(..., ge=-4000, le=4000, description="step added to the setpoint, rpm")
+    delta_rpm: float = od_field("target_velocity", description="step added to the setpoint")
 
 
 class SequenceStep(Strict):
     at_s: float = Field(..., ge=0, le=600, description="time after start, s")
-    rpm: float = Field(..., ge=-4000, le=4000)
+    rpm: float = od_field("target_velocity")
 
 
 class SequenceIn(Strict):
@@ -72,25 +133,26 @@ class SequenceIn(Strict):
 
 
 class LoadIn(Strict):
-    T_load: float = Field(..., ge=-20, le=20, description="load torque step, N·m (virtual drive)")
+    T_load: float = od_field("sim_load.T_load", description="load torque step (virtual drive)"
+    )
 
 
 class GainsIn(Strict):
     """A partial gain set; omitted fields keep their live values. Applied as one set."""
 
     type: Literal["deadbeat", "pi", "predictive"] | None = None
-    L_c: float | None = Field(None, gt=0, le=2e-3, description="H; must be < 2·motor.L")
-    R_c: float | None = Field(None, ge=0, le=1, description="Ω")
-    k_p: float | None = Field(None, ge=0, le=100, description="current PI k_p, V/A")
-    k_i: float | None = Field(None, ge=0, le=100, description="current PI k_i, V/A")
-    T_BT: float | None = Field(None, ge=0, le=1e-4, description="s")
-    T_DD: float | None = Field(None, ge=0, le=1e-4, description="s")
-    T_SD: float | None = Field(None, ge=0, le=1e-4, description="s")
-    V_G: float | None = Field(None, ge=0, le=10, description="V")
+    L_c: float | None = od_field("gain_set.L_c", None, description="must be < 2·motor.L")
+    R_c: float | None = od_field("gain_set.R_c", None)
+    k_p: float | None = od_field("gain_set.k_p", None, description="current PI k_p")
+    k_i: float | None = od_field("gain_set.k_i", None, description="current PI k_i")
+    T_BT: float | None = od_field("gain_set.T_BT", None)
+    T_DD: float | None = od_field("gain_set.T_DD", None)
+    T_SD: float | None = od_field("gain_set.T_SD", None)
+    V_G: float | None = od_field("gain_set.V_G", None)
     emf_feedforward: bool | None = None
-    speed_k_p: float | None = Field(None, ge=0, le=100, description="IP k_p, A/rpm")
-    speed_k_i: float | None = Field(None, ge=0, le=1, description="IP k_i, 1/sample")
-    speed_current_limit: float | None = Field(None, ge=0, le=200, description="A")
+    speed_k_p: float | None = od_field("gain_set.speed_k_p", None, description="IP k_p")
+    speed_k_i: float | None = od_field("gain_set.speed_k_i", None, description="IP k_i")
+    speed_current_limit: float | None = od_field("gain_set.speed_current_limit", None)
     force: bool = Field(
         False,
         description="apply a stable set that fails the margin rule (L_c ≤ 1.5 L, GM ≥ 2 dB, "
@@ -122,30 +184,37 @@ class IPDesignIn(Strict):
 
 
 class CurrentStepIn(Strict):
-    from_A: float = Field(15.0, ge=-200, le=200)
-    to_A: float = Field(20.0, ge=-200, le=200)
+    from_A: float = od_field("setpoints.i_p_ref", 15.0)
+    to_A: float = od_field("setpoints.i_p_ref", 20.0)
     duration_ms: float = Field(2.0, gt=0, le=300, description="recorded after the step, ms")
 
 
 class TraceIn(Strict):
     channels: list[str] = Field(
-        ["measurements.i_p", "measurements.i_p_ref"], min_length=1, max_length=8
+        ["measurements.i_p", "measurements.i_p_ref"],
+        min_length=1,
+        max_length=int(load_od().entry("trace_config.channel_count").high or 8),
     )
-    divider: int = Field(1, ge=1, le=5000, description="loop samples (20 µs) per trace sample")
-    length: int = Field(1000, ge=2, le=16384, description="samples per channel")
-    pre_trigger: int = Field(100, ge=0, le=16383)
+    divider: int = od_field(
+        "trace_config.divider", 1, description="loop samples (20 µs) per trace sample"
+    )
+    length: int = od_field("trace_config.length", 1000, ge=2, description="samples per channel")
+    pre_trigger: int = od_field("trace_config.pre_trigger", 100)
     trigger: Literal["immediate", "setpoint_step", "signal", "fault"] = "immediate"
     trigger_level: float | None = Field(None, description="trigger level in the source's unit")
     trigger_edge: Literal["rising", "falling", "either"] = "rising"
-    step_to_A: float | None = Field(
-        None, ge=-200, le=200, description="with trigger=setpoint_step: i_p* to step to once armed"
+    step_to_A: float | None = od_field(
+        "setpoints.i_p_ref", None, description="with trigger=setpoint_step: i_p* to step to"
     )
     average_samples: int = Field(5, ge=1, le=1000, description="moving-average window for ī_p")
 
     @model_validator(mode="after")
     def _fits(self) -> TraceIn:
-        if self.length * len(self.channels) > 16384:
-            raise ValueError("length × channels exceeds the recorder capacity (16384 samples)")
+        capacity = int(load_od().entry("trace_config.capacity").default or 0)
+        if self.length * len(self.channels) > capacity:
+            raise ValueError(
+                f"length × channels exceeds the recorder capacity ({capacity} samples)"
+            )
         if self.pre_trigger >= self.length:
             raise ValueError("pre_trigger must be < length")
         if self.trigger == "signal" and self.trigger_level is None:
@@ -171,8 +240,8 @@ class TraceIn(Strict):
 
 
 class IdentifyIn(Strict):
-    from_A: float = Field(15.0, ge=-200, le=200, description="i_p* before the step, A")
-    to_A: float = Field(30.0, ge=-200, le=200, description="i_p* after the step, A")
+    from_A: float = od_field("setpoints.i_p_ref", 15.0, description="i_p* before the step")
+    to_A: float = od_field("setpoints.i_p_ref", 30.0, description="i_p* after the step")
     duration_s: float = Field(1.0, gt=0, le=20, description="recorded after the step, s")
 
 

@@ -2326,7 +2326,7 @@
 #define OD_SIM_LOAD__K_GEN_MAX                                   1.0f /* N*m/rpm */
 #define OD_SIM_LOAD__K_GEN_CONFIG_ONLY                           1u /* write only with the power stage off, else 0x08000022 */
 #define OD_SIM_LOAD__K_GEN_REF                                   0x50000220UL
-/* 0x5000:03 sim_load.J REAL32 rw [kg*m^2] - total inertia, default from the paper's identified b = 3.33715e-4 rpm/(A sample) */
+/* 0x5000:03 sim_load.J REAL32 rw [kg*m^2] - total inertia, default from the paper's identified b = 3.33715e-4 rpm/(A sample); up to 1e4 holds the rotor (constant speed, as the paper's current steps at low speed) */
 #define OD_SIM_LOAD__J_INDEX                                     0x5000u
 #define OD_SIM_LOAD__J_SUB                                       0x03u
 #define OD_SIM_LOAD__J_TYPE                                      OD_TYPE_REAL32
@@ -2335,7 +2335,7 @@
 #define OD_SIM_LOAD__J_PDO                                       0u
 #define OD_SIM_LOAD__J_DEFAULT                                   0.06831f /* kg*m^2 */
 #define OD_SIM_LOAD__J_MIN                                       1e-05f /* kg*m^2 */
-#define OD_SIM_LOAD__J_MAX                                       10.0f /* kg*m^2 */
+#define OD_SIM_LOAD__J_MAX                                       10000.0f /* kg*m^2 */
 #define OD_SIM_LOAD__J_CONFIG_ONLY                               1u /* write only with the power stage off, else 0x08000022 */
 #define OD_SIM_LOAD__J_REF                                       0x50000320UL
 /* 0x5000:04 sim_load.B REAL32 rw [N*m*s/rad] - viscous friction, default 10 % of the speed-proportional torque identified in the paper (a = 0.9999785) */

@@ -29,6 +29,7 @@ from dataclasses import dataclass, fields
 
 from firmware_protocol import paper
 from firmware_protocol.enums import CONTROLLER_TYPES
+from firmware_protocol.od import load_od
 
 Ts: float = paper.TS
 """Sampling period (s): fs = 50 kHz, equal to the PWM period."""
@@ -67,6 +68,41 @@ def _check(
     return v
 
 
+OD_LIMITS: dict[str, str] = {
+    **{f"MotorParams.{k}": f"motor.{k}" for k in ("R", "L", "K_rpm", "pole_pairs")},
+    "MotorParams.rated_current": "motor.rated_current",
+    "MotorParams.V_dc_nominal": "motor.V_dc_nominal",
+    **{f"LoadParams.{k}": f"sim_load.{k}" for k in ("T_load", "k_gen", "J", "B")},
+    **{f"InverterParams.{k}": f"sim_inverter.{k}" for k in ("T_BT", "T_DD", "T_SD", "V_G")},
+    **{
+        f"CurrentControllerParams.{k}": f"current_controller.{k}"
+        for k in ("L_c", "R_c", "k_p", "k_i", "T_BT", "T_DD", "T_SD", "V_G")
+    },
+    **{f"SpeedControllerParams.{k}": f"speed_controller.{k}" for k in ("k_p", "k_i")},
+    "SpeedControllerParams.current_limit": "speed_controller.current_limit",
+    **{
+        f"ProtectionParams.{k}": f"protection.{k}"
+        for k in ("overcurrent_trip", "overvoltage_trip", "undervoltage_trip")
+    },
+}
+"""``Class.field`` -> the OD object whose EDS ``LowLimit``/``HighLimit`` (inclusive) bound it.
+
+These limits are read from the EDS (:func:`firmware_protocol.load_od`), never copied, so the
+simulator accepts exactly what the drive's object accepts (``MinNonZero`` excepted: the C
+controllers must survive any value the OD path could not give them). Physics may narrow a
+range further (the blanking time ``InverterParams.T_BT <= Ts/4``, ``T_DD + T_SD < Ts/2``);
+that is stated at the check."""
+
+
+def _od_check(owner: str, name: str, value: float) -> float:
+    """:func:`_check` with the EDS limits and unit of the object ``OD_LIMITS[owner.name]``."""
+    entry = load_od().entry(OD_LIMITS[f"{owner}.{name}"])
+    lo = None if entry.low is None else float(entry.low)
+    hi = None if entry.high is None else float(entry.high)
+    unit = entry.unit if entry.unit not in (None, "1") else ""
+    return _check(owner, name, value, lo=lo, hi=hi, unit=unit or "")
+
+
 def mechanics_from_identified(
     a: float, b: float, K_t: float, Ts: float = Ts
 ) -> tuple[float, float]:
@@ -98,19 +134,15 @@ class MotorParams:
 
     def __post_init__(self) -> None:
         o = "MotorParams"
-        self.R = _check(o, "R", self.R, lo=0.0, lo_open=True, unit="Ohm")
-        self.L = _check(o, "L", self.L, lo=0.0, lo_open=True, unit="H")
-        self.K_rpm = _check(o, "K_rpm", self.K_rpm, lo=0.0, lo_open=True, unit="V/rpm")
-        pp = _check(o, "pole_pairs", self.pole_pairs, lo=1, hi=32)
+        self.R = _od_check(o, "R", self.R)
+        self.L = _od_check(o, "L", self.L)
+        self.K_rpm = _od_check(o, "K_rpm", self.K_rpm)
+        pp = _od_check(o, "pole_pairs", self.pole_pairs)
         if pp != int(pp):
             raise ValueError(f"{o}.pole_pairs must be an integer, got {self.pole_pairs!r}")
         self.pole_pairs = int(pp)
-        self.rated_current = _check(
-            o, "rated_current", self.rated_current, lo=0.0, lo_open=True, unit="A"
-        )
-        self.V_dc_nominal = _check(
-            o, "V_dc_nominal", self.V_dc_nominal, lo=0.0, lo_open=True, unit="V"
-        )
+        self.rated_current = _od_check(o, "rated_current", self.rated_current)
+        self.V_dc_nominal = _od_check(o, "V_dc_nominal", self.V_dc_nominal)
         self.emf_rounding = _check(
             o, "emf_rounding", self.emf_rounding, lo=0.0, hi=math.pi / 3.0, unit="rad"
         )
@@ -146,10 +178,10 @@ class LoadParams:
 
     def __post_init__(self) -> None:
         o = "LoadParams"
-        self.T_load = _check(o, "T_load", self.T_load, unit="N m")
-        self.k_gen = _check(o, "k_gen", self.k_gen, lo=0.0, unit="N m/rpm")
-        self.J = _check(o, "J", self.J, lo=0.0, lo_open=True, unit="kg m^2")
-        self.B = _check(o, "B", self.B, lo=0.0, unit="N m s/rad")
+        self.T_load = _od_check(o, "T_load", self.T_load)
+        self.k_gen = _od_check(o, "k_gen", self.k_gen)
+        self.J = _od_check(o, "J", self.J)
+        self.B = _od_check(o, "B", self.B)
 
     @property
     def B_tot(self) -> float:
@@ -175,15 +207,19 @@ class InverterParams:
     def __post_init__(self) -> None:
         o = "InverterParams"
         self.V_dc = _check(o, "V_dc", self.V_dc, lo=0.0, lo_open=True, hi=1000.0, unit="V")
-        self.T_BT = _check(o, "T_BT", self.T_BT, lo=0.0, hi=Ts / 4.0, unit="s")
-        self.T_DD = _check(o, "T_DD", self.T_DD, lo=0.0, hi=Ts / 2.0, hi_open=True, unit="s")
-        self.T_SD = _check(o, "T_SD", self.T_SD, lo=0.0, hi=Ts / 2.0, hi_open=True, unit="s")
+        for n in ("T_BT", "T_DD", "T_SD"):
+            setattr(self, n, _od_check(o, n, getattr(self, n)))
+        # physics: the PWM model needs each blanking interval inside a quarter period and the
+        # delayed, sampled pattern inside half a period
+        self.T_BT = _check(o, "T_BT", self.T_BT, hi=Ts / 4.0, unit="s")
+        self.T_DD = _check(o, "T_DD", self.T_DD, hi=Ts / 2.0, hi_open=True, unit="s")
+        self.T_SD = _check(o, "T_SD", self.T_SD, hi=Ts / 2.0, hi_open=True, unit="s")
         if self.T_DD + self.T_SD >= Ts / 2.0:
             raise ValueError(
                 f"InverterParams.T_SD: T_DD + T_SD must be < {Ts / 2.0} s, "
                 f"got {self.T_DD + self.T_SD}"
             )
-        self.V_G = _check(o, "V_G", self.V_G, lo=0.0, hi=5.0, unit="V")
+        self.V_G = _od_check(o, "V_G", self.V_G)
 
 
 @dataclass
@@ -224,13 +260,8 @@ class CurrentControllerParams:
         if t not in CONTROLLER_TYPES:
             raise ValueError(f"{o}.type must be one of {list(CONTROLLER_TYPES)}, got {t!r}")
         self.type = t
-        self.L_c = _check(o, "L_c", self.L_c, lo=0.0, lo_open=True, unit="H")
-        self.R_c = _check(o, "R_c", self.R_c, lo=0.0, unit="Ohm")
-        self.k_p = _check(o, "k_p", self.k_p, lo=0.0, unit="V/A")
-        self.k_i = _check(o, "k_i", self.k_i, lo=0.0, unit="V/A")
-        for n in ("T_BT", "T_DD", "T_SD"):
-            setattr(self, n, _check(o, n, getattr(self, n), lo=0.0, hi=Ts, unit="s"))
-        self.V_G = _check(o, "V_G", self.V_G, lo=0.0, hi=10.0, unit="V")
+        for n in ("L_c", "R_c", "k_p", "k_i", "T_BT", "T_DD", "T_SD", "V_G"):
+            setattr(self, n, _od_check(o, n, getattr(self, n)))
         if not isinstance(self.emf_feedforward, (bool, int)) or self.emf_feedforward not in (
             0,
             1,
@@ -259,11 +290,8 @@ class SpeedControllerParams:
 
     def __post_init__(self) -> None:
         o = "SpeedControllerParams"
-        self.k_p = _check(o, "k_p", self.k_p, lo=0.0, unit="A/rpm")
-        self.k_i = _check(o, "k_i", self.k_i, lo=0.0, unit="1/sample")
-        self.current_limit = _check(
-            o, "current_limit", self.current_limit, lo=0.0, hi=200.0, unit="A"
-        )
+        for n in ("k_p", "k_i", "current_limit"):
+            setattr(self, n, _od_check(o, n, getattr(self, n)))
 
 
 @dataclass
@@ -279,15 +307,8 @@ class ProtectionParams:
 
     def __post_init__(self) -> None:
         o = "ProtectionParams"
-        self.overcurrent_trip = _check(
-            o, "overcurrent_trip", self.overcurrent_trip, lo=0.0, lo_open=True, unit="A"
-        )
-        self.overvoltage_trip = _check(
-            o, "overvoltage_trip", self.overvoltage_trip, lo=0.0, lo_open=True, unit="V"
-        )
-        self.undervoltage_trip = _check(
-            o, "undervoltage_trip", self.undervoltage_trip, lo=0.0, unit="V"
-        )
+        for n in ("overcurrent_trip", "overvoltage_trip", "undervoltage_trip"):
+            setattr(self, n, _od_check(o, n, getattr(self, n)))
         if self.undervoltage_trip >= self.overvoltage_trip:
             raise ValueError(
                 f"{o}.undervoltage_trip must be < overvoltage_trip ({self.overvoltage_trip} V), "
