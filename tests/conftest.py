@@ -59,3 +59,68 @@ def min_rate(nominal_hz: float, wait: float, margin: float = 0.9) -> float:
     """Lowest acceptable rate of a ``nominal_hz`` stream from a process kept waiting ``wait``
     s/s by the kernel: ``margin × nominal × (1 − wait)`` (Hz)."""
     return margin * nominal_hz * max(0.0, 1.0 - wait)
+
+
+# --------------------------------------------------------------------------------------------
+# Order and grouping of the run (serial or pytest-xdist ``-n N --dist loadgroup``)
+# --------------------------------------------------------------------------------------------
+
+#: Groups that take longest start first, so that parallel workers finish together (files, or
+#: ``test_matrix.py[condition]`` for the scenario matrix's rows); everything else follows in
+#: collection order, and the SocketCAN lane test (which waits for the background lane) is last.
+SLOW_FIRST = (
+    "tests/scenarios/test_matrix.py[loss5]",
+    "tests/scenarios/test_matrix.py[busy]",
+    "tests/scenarios/test_matrix.py[loss1]",
+    "tests/scenarios/test_matrix.py[latency]",
+    "tests/scenarios/test_matrix.py[idle]",
+    "tests/test_dashboard_browsers.py",
+    "tests/test_sdo_hub_loss.py",
+    "tests/test_dashboard_e2e.py",
+    "tests/test_cli_link.py",
+    "tests/test_link_check.py",
+    "tests/test_sdo_client_recovery.py",
+    "tests/test_fuzz_sdo.py",
+)
+LANE_TEST = "tests/test_socketcan_lane.py::test_socketcan_lane"
+
+
+def _group(item) -> str:
+    """The item's work unit: its file, and for the scenario matrix its condition too (each
+    condition has its own module-scoped bench, so a unit never starts a drive twice)."""
+    path = item.nodeid.split("::", 1)[0]
+    callspec = getattr(item, "callspec", None)
+    if callspec is not None and "condition" in callspec.params:
+        return f"{path}[{callspec.params['condition'].name}]"
+    return path
+
+
+def pytest_collection_modifyitems(config, items):
+    import pytest
+
+    rank = {g: i for i, g in enumerate(SLOW_FIRST)}
+    order = {id(it): n for n, it in enumerate(items)}
+
+    def key(it) -> tuple[int, int, int]:
+        last = it.nodeid.startswith(LANE_TEST)
+        return (int(last), rank.get(_group(it), len(rank)), order[id(it)])
+
+    items.sort(key=key)
+    for it in items:
+        it.add_marker(pytest.mark.xdist_group(name=_group(it)))
+
+
+def pytest_collection_finish(session):
+    """Boot the SocketCAN lane in the background when its test is part of this run."""
+    if any(it.nodeid.startswith(LANE_TEST) for it in session.items):
+        import importlib.util
+        import sys
+
+        mod = sys.modules.get("test_socketcan_lane")
+        if mod is None:
+            path = Path(__file__).resolve().parent / "test_socketcan_lane.py"
+            spec = importlib.util.spec_from_file_location("socketcan_lane_start", path)
+            assert spec and spec.loader
+            mod = importlib.util.module_from_spec(spec)
+            spec.loader.exec_module(mod)
+        mod.start_lane()

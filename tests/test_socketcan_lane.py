@@ -1,13 +1,13 @@
-"""The SocketCAN lane: boots User-Mode Linux once (tests/uml/runner.py) and runs, on a real kernel
+"""The SocketCAN lane: boots User-Mode Linux (tests/uml/runner.py) and runs, on a real kernel
 SocketCAN inside it, tests/uml/vcan_checks.py (the README's vcan0/can0 commands as written, NMT,
-CiA 402, error frames, a full transmit queue) and scenarios of tests/scenarios with
-BENCH_CONDITION=vcan0.
+CiA 402, error frames, a full transmit queue) and the whole scenario suite of tests/scenarios with
+BENCH_CONDITION=vcan0 (the matrix's SocketCAN row).
 
-Which scenarios: UML spends about 38 µs per system call; a drive-link call takes 5-15 s there on a
-busy host and the whole scenario suite 9-10 min (measured at load 15), so by default the lane runs
-:data:`SELECTION` (about 3 min at load 15, 6 min at load 30). ``SOCKETCAN_LANE=full`` runs the
-whole suite on vcan0 (time limit :data:`FULL_TIMEOUT`); ``SOCKETCAN_LANE=off`` leaves the lane
-out on purpose (reported as skipped).
+UML spends about 38 µs per system call: a drive-link call takes 5-15 s there, the lane several
+minutes. It therefore runs in the background while the rest of the suite runs (tests/uml/lane.py,
+started by tests/conftest.py right after collection); this test is ordered last and waits for it.
+``SOCKETCAN_LANE=quick`` runs only :data:`QUICK` inside UML; ``SOCKETCAN_LANE=off`` leaves the
+lane out on purpose (reported as skipped).
 
 Where UML cannot run (package missing, boot or set-up failure, time limit) the test fails with one
 line saying so: a lane that cannot run must not pass quietly.
@@ -18,50 +18,71 @@ from __future__ import annotations
 import importlib.util
 import os
 import sys
-import time
 from pathlib import Path
 
 import pytest
 
 HERE = Path(__file__).resolve().parent
-_spec = importlib.util.spec_from_file_location("uml_runner", HERE / "uml" / "runner.py")
-assert _spec and _spec.loader
-uml = sys.modules.setdefault("uml_runner", importlib.util.module_from_spec(_spec))
-_spec.loader.exec_module(uml)
 
-#: What runs inside UML by default (pytest -k expression on vcan_checks + tests/scenarios): every
-#: vcan_checks item but the drive-side block upload through vcan1's 10-frame queue (a second
-#: drive start, about 1 min on a busy host; the host side of a full queue is checked), and the
-#: scan scenario. NMT + 402 and a speed setpoint are in vcan_checks; 64 KiB uploads in
-#: benchmarks/bench_socketcan_uml.py; everything with SOCKETCAN_LANE=full.
-SELECTION = "(vcan_checks and not block_upload) or test_scan"
-#: Wall-time limits of the lane (boot, checks, power-off), s.
-LANE_TIMEOUT = 720.0
-FULL_TIMEOUT = 1500.0
-MODE = os.environ.get("SOCKETCAN_LANE", "").strip().lower()
 
-pytestmark = pytest.mark.timeout((FULL_TIMEOUT if MODE == "full" else LANE_TIMEOUT) + 60)
+def _load(name: str, path: Path):
+    spec = importlib.util.spec_from_file_location(name, path)
+    assert spec and spec.loader
+    if name not in sys.modules:
+        mod = importlib.util.module_from_spec(spec)
+        sys.modules[name] = mod
+        spec.loader.exec_module(mod)
+    return sys.modules[name]
+
+
+uml = _load("uml_runner", HERE / "uml" / "runner.py")
+lane = _load("uml_lane", HERE / "uml" / "lane.py")
+
+#: ``SOCKETCAN_LANE=quick``: the vcan_checks items but the drive-side block upload through
+#: vcan1's 10-frame queue, and the scan scenario.
+QUICK = "(vcan_checks and not block_upload) or test_scan"
+#: Wall-time limit of the lane (boot, all checks, power-off), s.
+LANE_TIMEOUT = 900.0
+MODE = os.environ.get("SOCKETCAN_LANE", "").strip().lower() or "full"
+NODEID = "tests/test_socketcan_lane.py::test_socketcan_lane"
+
+pytestmark = pytest.mark.timeout(LANE_TIMEOUT + 180)
+
+
+def lane_argv() -> list[str]:
+    """The pytest command run inside UML."""
+    argv = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-rfE"]
+    argv += ["--durations=15", "--durations-min=2"]
+    argv += ["tests/uml/vcan_checks.py", "tests/scenarios"]
+    if MODE == "quick":
+        argv += ["-k", QUICK]
+    return argv
+
+
+def start_lane():
+    """Start the lane in the background (once per test run); its directory, or None if off."""
+    if MODE == "off":
+        return None
+    return lane.start(lane_argv(), timeout=LANE_TIMEOUT, env={"BENCH_CONDITION": "vcan0"})
 
 
 def test_socketcan_lane():
     if MODE == "off":
         pytest.skip("SOCKETCAN_LANE=off")
-    argv = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-rfE"]
-    argv += ["--durations=12", "--durations-min=2"]
-    argv += ["tests/uml/vcan_checks.py", "tests/scenarios"]
-    if MODE != "full":
-        argv += ["-k", SELECTION]
-    t0 = time.monotonic()
-    limit = FULL_TIMEOUT if MODE == "full" else LANE_TIMEOUT
-    res = uml.run_in_uml(argv, timeout=limit, env={"BENCH_CONDITION": "vcan0"})
+    d = start_lane()  # already running when the whole suite runs (tests/conftest.py)
+    res = lane.wait(d, LANE_TIMEOUT + 120)
     load = Path("/proc/loadavg").read_text().split()[0]
-    if res.problem:
-        pytest.fail(f"SocketCAN lane did not run: {res.problem}", pytrace=False)
-    summary = [ln for ln in res.output.splitlines() if ln.startswith(("FAILED", "ERROR"))]
-    last = (res.output.strip().splitlines() or ["no output"])[-1]
-    print(f"SocketCAN lane: {last} ({time.monotonic() - t0:.0f} s in UML, load {load})")
-    print("---- output inside UML (end) ----\n" + res.output[-8000:])
-    assert res.rc == 0, "SocketCAN lane (inside UML): " + "; ".join(summary or [last])
+    if res is None:
+        log = (d / "runner.log").read_text(errors="replace")[-300:] if d else ""
+        pytest.fail(f"SocketCAN lane gave no result in time (load {load}): {log}", pytrace=False)
+    if res["problem"]:
+        pytest.fail(f"SocketCAN lane did not run: {res['problem']}", pytrace=False)
+    output = res["output"]
+    summary = [ln for ln in output.splitlines() if ln.startswith(("FAILED", "ERROR"))]
+    last = (output.strip().splitlines() or ["no output"])[-1]
+    print(f"SocketCAN lane: {last} ({res['seconds']:.0f} s in UML, load {load})")
+    print("---- output inside UML (end) ----\n" + output[-8000:])
+    assert res["rc"] == 0, "SocketCAN lane (inside UML): " + "; ".join(summary or [last])
 
 
 def test_lane_without_uml_says_so_in_one_line(monkeypatch):

@@ -20,6 +20,7 @@ failure, timeout); then ``rc`` is None.
 
 from __future__ import annotations
 
+import json
 import os
 import shlex
 import shutil
@@ -96,9 +97,11 @@ def run_in_uml(
     timeout: float = 300.0,
     cwd: str | Path = ROOT,
     env: Mapping[str, str] | None = None,
+    watch_pid: int | None = None,
 ) -> UmlResult:
     """Boot UML, run ``argv`` (in ``cwd``, with ``env`` added to a small clean environment),
-    power off; at most ``timeout`` s of wall time (then UML is killed)."""
+    power off; at most ``timeout`` s of wall time (then UML is killed). With ``watch_pid``, UML
+    is also killed as soon as that process is gone (the test run that wanted the result)."""
     t0 = time.monotonic()
     why = unavailable()
     if why:
@@ -141,11 +144,20 @@ def run_in_uml(
                 )
             except OSError as exc:
                 return UmlResult(None, "", f"cannot start {kernel}: {exc}", "", "", 0.0)
-            timed_out = False
+            timed_out = orphaned = False
             try:
-                proc.wait(timeout)
-            except subprocess.TimeoutExpired:
-                timed_out = True
+                deadline = time.monotonic() + timeout
+                while proc.poll() is None:
+                    if time.monotonic() > deadline:
+                        timed_out = True
+                        break
+                    if watch_pid is not None and not _alive(watch_pid):
+                        orphaned = True
+                        break
+                    try:
+                        proc.wait(1.0)
+                    except subprocess.TimeoutExpired:
+                        pass
             finally:
                 _kill_group(proc)
         seconds = time.monotonic() - t0
@@ -158,7 +170,10 @@ def run_in_uml(
         rc_text = read("rc").strip()
     rc = int(rc_text) if rc_text.lstrip("-").isdigit() else None
     problem = None
-    if timed_out:
+    if orphaned:
+        problem = f"the test run (pid {watch_pid}) ended before the lane; UML was killed"
+        rc = None
+    elif timed_out:
         problem = f"User-Mode Linux run exceeded {timeout:g} s and was killed"
         rc = None
     elif rc == 125:
@@ -171,6 +186,16 @@ def run_in_uml(
         last = (panic or lines or ["no console output"])[-1]
         problem = f"User-Mode Linux did not run the job (exit {proc.returncode}): {last[:200]}"
     return UmlResult(rc, output, problem, console_text, setup, seconds)
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
 
 
 def _kill_group(proc: subprocess.Popen) -> None:
@@ -193,13 +218,21 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="tests/uml/runner.py", description=__doc__.split("\n\n")[0])
     ap.add_argument("--timeout", type=float, default=300.0, help="wall-time limit, s")
     ap.add_argument("-e", "--env", action="append", default=[], help="NAME=VALUE for the job")
+    ap.add_argument("--result", help="also write the result as JSON to this file")
+    ap.add_argument("--watch-pid", type=int, help="kill UML when this process is gone")
     ap.add_argument("cmd", nargs=argparse.REMAINDER, help="-- command and arguments")
     args = ap.parse_args(argv)
     cmd = args.cmd[1:] if args.cmd[:1] == ["--"] else args.cmd
     if not cmd:
         ap.error("no command given")
     env = dict(e.split("=", 1) for e in args.env)
-    res = run_in_uml(cmd, timeout=args.timeout, env=env)
+    res = run_in_uml(cmd, timeout=args.timeout, env=env, watch_pid=args.watch_pid)
+    if args.result:
+        out = Path(args.result)
+        tmp = out.with_suffix(".part")
+        fields = ("rc", "output", "problem", "seconds", "setup")
+        tmp.write_text(json.dumps({k: getattr(res, k) for k in fields}))
+        tmp.replace(out)  # atomic: a reader never sees half a file
     sys.stdout.write(res.output)
     if res.problem:
         print(f"socketcan-lane: {res.problem}", file=sys.stderr)
