@@ -38,9 +38,9 @@ from virtual_drive.hub_protocol import (
     CommandSplitter,
     ProtocolError,
     format_error,
-    format_frame,
+    frame_line,
     parse_channel,
-    parse_send,
+    parse_send_fields,
 )
 
 __all__ = ["DEFAULT_PORT", "Hub", "HubStats"]
@@ -130,11 +130,9 @@ class _Bus:
         self.deliveries: deque = deque()  # (due, sender, frame), due non-decreasing
         self.last_due = 0.0
 
-    def next_start(self) -> float | None:
-        """Monotonic time of the next arbitration, or None if nothing waits."""
-        if not self.senders:
-            return None
-        return max(self.free_at, min(c.queue[0][0] for c in self.senders))
+
+def _head_arrival(client: _Client) -> float:
+    return client.queue[0][0]
 
 
 class Hub:
@@ -162,6 +160,11 @@ class Hub:
     max_outbuf_bytes = 4 << 20
     #: Bad elements a client may send before the hub disconnects it.
     max_errors_per_client = 100
+    #: A frame due for delivery waits up to this long (s) for the next frame on the bus when
+    #: that one is already queued, so both reach each client in one write (see
+    #: :meth:`_next_deadline`). Frames keep their exact bus timestamps; a lone frame (an SDO
+    #: request or reply) is never held. 0: every frame is delivered when it is due.
+    delivery_batch_s = 0.0003
 
     def __init__(
         self,
@@ -430,12 +433,27 @@ class Hub:
                 self._flush(client, now)
 
     def _next_deadline(self, now: float) -> float | None:
+        """When the hub must wake next (monotonic s), or None.
+
+        A bus needs a wake when its first pending delivery is due. If the next frame waiting for
+        the bus will be due within :attr:`delivery_batch_s` after that, the wake waits for it, so
+        both go out in one write per client (frames back to back, e.g. a node's TPDOs of one
+        tick). Arbitration needs no wake of its own: :meth:`_advance` computes each frame's start
+        from the bus's free time and the arrivals, not from the time it runs.
+        """
         deadline = None
+        batch = self.delivery_batch_s
         for bus in self._buses.values():
-            t = bus.next_start()
+            t = None
+            senders = bus.senders
+            if senders:
+                head = senders[0] if len(senders) == 1 else min(senders, key=_head_arrival)
+                start = max(bus.free_at, head.queue[0][0])
+                t = start + head.queue[0][6] / self._bitrate + self._delay_s
             if bus.deliveries:
                 due = bus.deliveries[0][0]
-                t = due if t is None else min(t, due)
+                if t is None or t > due + batch:
+                    t = due
             if t is not None and (deadline is None or t < deadline):
                 deadline = t
         for c in self._clients.values():
@@ -496,14 +514,21 @@ class Hub:
     def _handle(self, client: _Client, words: list[str], now: float) -> None:
         cmd = words[0]
         if client.state == _RAW and cmd == "send":
-            frame = parse_send(words)
-            bits = frame_bits_fast(frame.arbitration_id, frame.data, frame.is_extended)
-            key = arbitration_key(frame.arbitration_id, frame.is_extended)
-            bus = client.bus
+            can_id, data, ext = parse_send_fields(words)
             if not client.queue:
-                bus.senders.append(client)
+                client.bus.senders.append(client)
             self._seq += 1
-            client.queue.append((now, key, self._seq, frame, bits))
+            client.queue.append(
+                (
+                    now,
+                    arbitration_key(can_id, ext),
+                    self._seq,
+                    can_id,
+                    data,
+                    ext,
+                    frame_bits_fast(can_id, data, ext),
+                )
+            )
             self._n_received += 1
         elif cmd == "echo":
             client.outbuf += b"< echo >"
@@ -578,17 +603,23 @@ class Hub:
         """Run the bus up to ``now``: arbitrate, occupy, schedule delivery, deliver what is due."""
         senders = bus.senders
         while senders:
-            start = max(bus.free_at, min(c.queue[0][0] for c in senders))
-            if start > now:
-                break
-            winner = None
-            best = None
-            for c in senders:
-                arrival, key, seq, _, _ = c.queue[0]
-                if arrival <= start and (best is None or (key, seq) < best):
-                    best = (key, seq)
-                    winner = c
-            _, _, _, frame, bits = winner.queue.popleft()
+            if len(senders) == 1:  # the usual case: no arbitration to decide
+                winner = senders[0]
+                start = max(bus.free_at, winner.queue[0][0])
+                if start > now:
+                    break
+            else:
+                start = max(bus.free_at, min(c.queue[0][0] for c in senders))
+                if start > now:
+                    break
+                winner = None
+                best = None
+                for c in senders:
+                    arrival, key, seq = c.queue[0][:3]
+                    if arrival <= start and (best is None or (key, seq) < best):
+                        best = (key, seq)
+                        winner = c
+            _, _, _, can_id, data, ext, bits = winner.queue.popleft()
             if not winner.queue:
                 senders.remove(winner)
             duration = bits / self._bitrate
@@ -600,12 +631,12 @@ class Hub:
                 continue
             due = self._delivery_due(end, bus.last_due)
             bus.last_due = due
-            bus.deliveries.append((due, winner, frame))
+            bus.deliveries.append((due, winner, can_id, data, ext))
         deliveries = bus.deliveries
         touched: list[_Client] = []
         while deliveries and deliveries[0][0] <= now:
-            due, sender, frame = deliveries.popleft()
-            line = format_frame(frame, self._wall(due))
+            due, sender, can_id, data, ext = deliveries.popleft()
+            line = frame_line(can_id, data, ext, self._wall(due))
             for c in bus.receivers:
                 if c is sender:
                     continue

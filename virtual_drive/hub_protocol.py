@@ -15,7 +15,9 @@ Pure functions only (no I/O), so they can be tested and reused on their own.
 
 from __future__ import annotations
 
+from binascii import b2a_hex
 from dataclasses import dataclass
+from itertools import product
 
 __all__ = [
     "CAN_ERR_FLAG",
@@ -27,8 +29,10 @@ __all__ = [
     "ProtocolError",
     "format_error",
     "format_frame",
+    "frame_line",
     "parse_channel",
     "parse_send",
+    "parse_send_fields",
 ]
 
 #: SocketCAN error-frame flag and "protocol violation" error class (linux/can/error.h).
@@ -157,6 +161,37 @@ def parse_send(words: list[str]) -> Frame:
     raise AssertionError("unreachable")  # pragma: no cover
 
 
+# Every 1-2 digit hex word a byte can be written as ("f", "F", "0f", "aB", ...) -> its value.
+_BYTE_WORDS: dict[str, int] = {
+    "".join(chars): v
+    for v in range(256)
+    for word in ({format(v, "x"), format(v, "02x")})
+    for chars in product(*[(c, c.upper()) for c in word])
+}
+_LENGTHS = {str(n): n for n in range(9)}
+
+
+def parse_send_fields(words: list[str]) -> tuple[int, bytes, bool]:
+    """:func:`parse_send` as a tuple ``(arbitration_id, data, is_extended)``, without building a
+    :class:`Frame`: the hub's per-frame path. Same acceptance and the same ProtocolError."""
+    try:
+        id_word = words[1]
+        n = len(id_word)
+        if (n <= 3 or n == 8) and _HEX.issuperset(id_word):
+            data = bytes(map(_BYTE_WORDS.__getitem__, words[3:]))
+            if len(data) == _LENGTHS[words[2]]:
+                can_id = int(id_word, 16)
+                if n <= 3:
+                    if can_id <= 0x7FF:
+                        return can_id, data, False
+                elif can_id <= 0x1FFFFFFF:
+                    return can_id, data, True
+    except (IndexError, KeyError, ValueError):
+        pass
+    frame = parse_send(words)  # anything unusual: the full check and its precise message
+    return frame.arbitration_id, frame.data, frame.is_extended
+
+
 def parse_channel(words: list[str]) -> str:
     """Parse the words of an ``open`` element into the bus name (letters, digits, ``_.-``, ≤ 15)."""
     if len(words) != 2:
@@ -189,6 +224,21 @@ def format_frame(frame: Frame, timestamp: float) -> bytes:
     else:
         id_str = f"{frame.arbitration_id:03X}"
     return _padded(f"< frame {id_str} {_stamp(timestamp)} {frame.data.hex().upper()}")
+
+
+_ID_PREFIX_STD = tuple(f"< frame {i:03X} ".encode() for i in range(0x800))
+
+
+def frame_line(arbitration_id: int, data: bytes, is_extended: bool, timestamp: float) -> bytes:
+    """:func:`format_frame` from the fields (same bytes): the hub's per-frame path."""
+    prefix = (
+        f"< frame {arbitration_id:08X} ".encode()
+        if is_extended
+        else _ID_PREFIX_STD[arbitration_id]
+    )
+    usecs = round(timestamp * 1e6)
+    body = b"%s%d.%06d %s" % (prefix, usecs // 1_000_000, usecs % 1_000_000, b2a_hex(data).upper())
+    return body + b" " * (-(len(body) + 2) % LINE_BYTES) + b" >"
 
 
 def format_error(reason: str, timestamp: float, error_class: int = CAN_ERR_PROT) -> bytes:
