@@ -94,11 +94,15 @@ def _panel(
     grid = [[" "] * cols for _ in range(height)]
     col = np.clip(((t - (t_end - seconds)) / seconds * cols).astype(int), 0, cols - 1)
     row = np.clip(((hi - y) / (hi - lo) * (height - 1)).round().astype(int), 0, height - 1)
-    for c in np.unique(col):
-        rs = row[col == c]
-        for r in range(int(rs.min()), int(rs.max()) + 1):
+    # t is increasing, so each column's samples are one run: its range and its last sample
+    starts = np.flatnonzero(np.r_[True, col[1:] != col[:-1]])
+    ends = np.r_[starts[1:], len(col)] - 1
+    lows = np.minimum.reduceat(row, starts)
+    highs = np.maximum.reduceat(row, starts)
+    for c, r0, r1, last in zip(col[starts], lows, highs, row[ends], strict=True):
+        for r in range(int(r0), int(r1) + 1):
             grid[r][c] = _SPAN
-        grid[int(rs[-1])][c] = _MARK
+        grid[int(last)][c] = _MARK
     lines = [head]
     for r in range(height):
         label = _fmt(hi) if r == 0 else _fmt(lo) if r == height - 1 else ""

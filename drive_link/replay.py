@@ -30,7 +30,7 @@ import numpy as np
 
 from .errors import InvalidValue
 from .live import LiveStreams, MappedField, TpdoConfig
-from .objects import ObjectTable
+from .objects import ObjectTable, default_table
 from .trace import TRACE_DATA, TS, Trace
 
 __all__ = ["BlockUpload", "Replay", "SdoFollower", "cmd_replay", "replay_file"]
@@ -350,7 +350,7 @@ def replay_file(path: str | Path, node: int = 1, table: ObjectTable | None = Non
     p = Path(path)
     if not 1 <= node <= 127:
         raise InvalidValue(f"node-ID {node} outside 1..127")
-    table = table or ObjectTable.from_od(node)
+    table = table or default_table()  # defaults keep $NODEID: resolved for ``node`` here
     servers = [(0x600 + node, 0x580 + node)]
     try:
         servers.append(
