@@ -87,6 +87,9 @@ def register_tools(sub: argparse._SubParsersAction, bus: argparse.ArgumentParser
         help="reassembled trace uploads (OUT_1, OUT_2 … when several)",
     )
     p.add_argument(
+        "--trace-png", default=None, metavar="OUT", help="the reassembled traces as plots"
+    )
+    p.add_argument(
         "--plot", nargs="+", default=None, metavar="SIGNAL", help="text plot of these signals"
     )
     p.add_argument("--width", type=int, default=100, help="plot width, columns (default 100)")

@@ -139,8 +139,8 @@ def cmd_record(args: argparse.Namespace) -> int:
     """``drive-link record FILE [--seconds S]``: until S s have passed or Ctrl-C."""
     from .cli import _emit
 
-    if args.seconds is not None and not args.seconds > 0:
-        raise InvalidValue(f"--seconds {args.seconds}: must be > 0")
+    if args.seconds is not None and not 0 < args.seconds < 1e7:  # also nan and inf
+        raise InvalidValue(f"--seconds {args.seconds}: must be a number of seconds > 0")
     stop = threading.Event()
     box: dict[str, Any] = {}
 

@@ -421,7 +421,7 @@ def _write_csv(path: Path, cols: dict[str, np.ndarray], units: dict[str, str]) -
 
 
 def cmd_replay(args: argparse.Namespace) -> int:
-    """``drive-link replay FILE [--csv OUT] [--trace-csv OUT] [--plot SIGNAL...]``."""
+    """``drive-link replay FILE [--csv OUT] [--trace-csv OUT] [--trace-png OUT] [--plot S...]``."""
     from .cli import _emit
 
     rep = replay_file(args.file, node=args.node)
@@ -436,6 +436,14 @@ def cmd_replay(args: argparse.Namespace) -> int:
                 p = p.with_name(f"{p.stem}_{i + 1}{p.suffix}")
             saved.append(str(tr.to_csv(p)))
         out["trace_csv"] = saved
+    if args.trace_png:
+        saved = []
+        for i, tr in enumerate(rep.traces):
+            p = Path(args.trace_png)
+            if len(rep.traces) > 1:
+                p = p.with_name(f"{p.stem}_{i + 1}{p.suffix}")
+            saved.append(str(tr.to_png(p)))
+        out["trace_png"] = saved
     plot: list[str] = []
     if args.plot:
         from .live_plot import render, resolve_signals
@@ -470,7 +478,7 @@ def cmd_replay(args: argparse.Namespace) -> int:
                 f"channels {', '.join(tr.signals)}"
             )
         lines += [f"saved {out['csv']}"] if "csv" in out else []
-        lines += [f"saved {p}" for p in out.get("trace_csv", [])]
+        lines += [f"saved {p}" for p in out.get("trace_csv", []) + out.get("trace_png", [])]
         return "\n".join(lines + plot)
 
     if args.json and plot:

@@ -187,7 +187,17 @@ def test_record_and_replay_commands(hub_drive, session, tmp_path):
     col = rows[0].index("measurements.speed [rpm]")
     speeds = np.array([float(r[col]) for r in rows[1:]], dtype=np.float32)
     assert _contains_run(speeds, session["speed_live"])
-    assert trace_out.exists()
+    with open(trace_out) as fh:
+        rows = list(csv.reader(fh))
+    col = rows[0].index("measurements.speed [rpm]")
+    trace_speed = np.array([float(r[col]) for r in rows[1:]], dtype=np.float32)
+    assert np.array_equal(trace_speed, session["trace"].signals["measurements.speed"])
+    png = tmp_path / "trace.png"
+    rc, out, err = run_here(hub_drive, "replay", str(session["paths"]["blf"]), "--trace-png",
+                            str(png), "--json")
+    assert rc == 0, err
+    assert json.loads(out)["trace_png"] == [str(png)]
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
 def test_bad_input_one_line_nothing_written(hub_drive, tmp_path):
@@ -201,6 +211,8 @@ def test_bad_input_one_line_nothing_written(hub_drive, tmp_path):
         rc, out, err = run_here(hub_drive, "record", str(tmp_path / "x.mf4"), "--seconds", "0.1")
         assert rc == 7 and "asammdf" in err and err.count("\n") == 1
         assert not (tmp_path / "x.mf4").exists()
+    rc, out, err = run_here(hub_drive, "record", str(tmp_path / "z.asc"), "--seconds", "inf")
+    assert rc == 7 and err.count("\n") == 1 and not (tmp_path / "z.asc").exists()
     # no hub there: bus error (3), no file
     rc = cli.main(["record", str(tmp_path / "y.asc"), "--host", "127.0.0.1", "--port", "1"])
     assert rc == 3 and not (tmp_path / "y.asc").exists()
