@@ -7,6 +7,7 @@ from __future__ import annotations
 import contextlib
 import fcntl
 import io
+import itertools
 import os
 import pty
 import re
@@ -195,3 +196,33 @@ def test_curses_view_quits_with_a_quick_stop(hub_drive, drive):
     sw = int(drive.read("statusword"))
     assert sw & 0x6F == 0x07 or sw & 0x4F == 0x40, hex(sw)
     assert float(drive.read("measurements.speed")) < 900
+
+
+def test_render_of_a_known_ramp_with_lost_frames():
+    """A 1 kHz TPDO carrying a 0 → 1000 rpm ramp over 1 s, 10 frames left out: the panel's
+    newest sample is top right, the oldest bottom left, every column at or above the one before,
+    the labels are the ramp's ends, and the 10 lost frames are shown."""
+    import canopen
+    import numpy as np
+
+    from drive_link.live import LiveStreams, MappedField, TpdoConfig
+    from drive_link.live_plot import render
+
+    cfg = TpdoConfig(2, 0x281, 0xFF, 1, [MappedField("measurements.speed", 0x2040, 5, 0, 32,
+                                                     "<f", "rpm")])
+    net = canopen.Network()
+    live = LiveStreams(net, [cfg], seconds=5)
+    lost = set(range(500, 510))
+    for k in range(1001):
+        if k not in lost:
+            net.notify(0x281, bytearray(struct.pack("<f", k)), 1.0 + k / 1000)
+    lines = render(live, ["measurements.speed"], seconds=1.0, width=61, height=12)
+    assert lines[0] == "speed [rpm]  now 1000  min 0  max 1000"
+    rows = [line[11:] for line in lines[1:] if line[10:11] == "|"]
+    assert lines[1].startswith("      1000|") and lines[len(rows)].startswith("         0|")
+    star = {c: r for r, row in enumerate(rows) for c, ch in enumerate(row) if ch == "*"}
+    cols = sorted(star)
+    assert star[cols[-1]] == 0 and star[cols[0]] == len(rows) - 1
+    assert all(star[a] >= star[b] for a, b in itertools.pairwise(cols))
+    assert len(cols) == 50 and np.ptp(cols) == 49  # every column of the 50-wide plot has data
+    assert lines[-1].startswith("dropped 10 of 1001")
