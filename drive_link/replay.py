@@ -41,9 +41,10 @@ _T0 = 1.0
 
 @dataclass
 class BlockUpload:
-    """One reassembled SDO block upload: ``index``, ``subindex``, ``data``, time ``t`` (s from
-    the start of the recording) of its end, ``size`` announced by the server (None if not),
-    ``crc_ok`` (the CRC-16 of the end frame checked against the data; None without CRC)."""
+    """One reassembled SDO upload (``kind`` "block" or "segmented"): ``index``, ``subindex``,
+    ``data``, time ``t`` (s from the start of the recording) of its end, ``size`` announced by
+    the server (None if not), ``crc_ok`` (the CRC-16 of a block upload's end frame checked
+    against the data; None without CRC)."""
 
     index: int
     subindex: int
@@ -51,6 +52,7 @@ class BlockUpload:
     t: float
     size: int | None = None
     crc_ok: bool | None = None
+    kind: str = "block"  # or "segmented"
 
     @property
     def complete(self) -> bool:
@@ -72,8 +74,9 @@ class _BlockState:
 
 class SdoFollower:
     """Follows the SDO traffic of one server (client→server ``rx`` COB-ID, server→client ``tx``):
-    expedited upload answers and confirmed expedited downloads into ``values`` ((index, sub) →
-    raw bytes), completed block uploads into ``uploads``.
+    expedited and segmented upload answers and confirmed expedited downloads into ``values``
+    ((index, sub) → raw bytes), completed block and segmented uploads into ``uploads``
+    (a segment repeating the previous toggle bit is the answer to a resent request: dropped).
 
     Block uploads are followed as the client takes them (:mod:`drive_link.sdo_block`): a
     sub-block starts at seqno 1 (segments still arriving from the previous one are dropped),
@@ -89,6 +92,7 @@ class SdoFollower:
         self.aborted = 0
         self._block: _BlockState | None = None
         self._download: tuple[int, int, bytes] | None = None
+        self._seg: list = []  # segmented upload: [index, sub, size, toggle, data]
 
     def feed(self, can_id: int, data: bytes, t: float) -> None:
         """One frame (ignored unless it is on this server's COB-IDs)."""
@@ -104,9 +108,13 @@ class SdoFollower:
         blk = self._block
         if b0 == 0x80:  # abort
             self._block = None
+            self._seg = []
             self.aborted += 1
             return
         ccs, cs = b0 >> 5, b0 & 0x03
+        if b0 == 0x40 and len(d) >= 4:  # upload initiate (expedited or segmented answer)
+            self._seg = [d[1] | d[2] << 8, d[3], None, None, bytearray()]
+            return
         if ccs == 5 and len(d) >= 4 and cs == 0:  # block upload initiate
             self._block = _BlockState(d[1] | d[2] << 8, d[3], bool(b0 & 0x04))
         elif ccs == 5 and blk is not None and cs == 3 and blk.phase == "start":
@@ -173,6 +181,21 @@ class SdoFollower:
                     crc_ok = binascii.crc_hqx(data, 0) == (d[1] | d[2] << 8)
                 self.uploads.append(BlockUpload(blk.index, blk.sub, data, t, blk.size, crc_ok))
                 self._block = None
+        elif scs == 2 and not b0 & 0x02 and self._seg:  # segmented upload begins
+            if b0 & 0x01 and len(d) >= 8:
+                self._seg[2] = int.from_bytes(d[4:8], "little")
+            self._seg[3] = 0
+        elif scs == 0 and self._seg and self._seg[3] is not None:  # an upload segment
+            index, sub, size, toggle, data = self._seg
+            if (b0 >> 4) & 1 != toggle:
+                return  # the same segment again (a resent request answered twice)
+            data += d[1 : 8 - ((b0 >> 1) & 0x07)]
+            self._seg[3] = toggle ^ 1
+            if b0 & 0x01:  # the last one
+                self.values[(index, sub)] = bytes(data)
+                self.uploads.append(BlockUpload(index, sub, bytes(data), t, size, None,
+                                                "segmented"))
+                self._seg = []
         elif scs == 2 and len(d) >= 8 and b0 & 0x02:  # expedited upload answer
             n = 4 - ((b0 >> 2) & 0x03) if b0 & 0x01 else 4
             self.values[(d[1] | d[2] << 8, d[3])] = bytes(d[4 : 4 + n])
@@ -299,8 +322,9 @@ class Replay:
             "frames_per_id": {f"0x{k:03X}": v for k, v in sorted(self.per_id.items())},
             "tpdo": tpdo,
             "signals": sig,
-            "block_uploads": [
-                {"index": f"0x{u.index:04X}", "subindex": u.subindex, "bytes": len(u.data),
+            "uploads": [
+                {"kind": u.kind, "index": f"0x{u.index:04X}", "subindex": u.subindex,
+                 "bytes": len(u.data),
                  "size": u.size, "crc_ok": u.crc_ok, "complete": u.complete, "t": u.t}
                 for u in self.uploads
             ],
@@ -466,9 +490,10 @@ def cmd_replay(args: argparse.Namespace) -> int:
                 f"  {n} [{s['unit']}]: last {s['last']:.6g}, mean {s['mean']:.6g}, "
                 f"{s['min']:.6g} .. {s['max']:.6g}"
             )
-        for u in out["block_uploads"]:
+        for u in out["uploads"]:
             lines.append(
-                f"  block upload {u['index']}:{u['subindex']} {u['bytes']} bytes at {u['t']:.3f} s"
+                f"  {u['kind']} upload {u['index']}:{u['subindex']} {u['bytes']} bytes"
+                f" at {u['t']:.3f} s"
                 + ("" if u["complete"] else f" INCOMPLETE (announced {u['size']}, CRC "
                    f"{'ok' if u['crc_ok'] else 'wrong' if u['crc_ok'] is False else 'none'})")
             )

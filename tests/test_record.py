@@ -63,6 +63,7 @@ def session(hub_drive, tmp_path_factory):
     drive = Drive.connect(host="127.0.0.1", port=hub_drive.port, heartbeat_ms=None)
     try:
         drive.nmt("start")
+        device_name = drive.read("manufacturer_device_name")  # > 4 bytes: segmented upload
         live = drive.live
         drive.set_mode("speed")
         drive.set_speed(800)
@@ -85,6 +86,7 @@ def session(hub_drive, tmp_path_factory):
         "trace": trace,
         "speed_live": v_live.astype(np.float32),
         "frames_live": frames_live,
+        "device_name": device_name,
     }
 
 
@@ -151,6 +153,8 @@ def test_replay_matches_the_drive(session, ext):
     # the trace upload (SDO block upload of 0x2102 on the second server) reassembled
     up = [u for u in rep.uploads if (u.index, u.subindex) == (0x2102, 0)]
     assert len(up) == 1 and up[0].complete and up[0].crc_ok is True
+    seg = [u for u in rep.uploads if u.kind == "segmented" and (u.index, u.subindex) == (0x1008, 0)]
+    assert [u.data.decode() for u in seg] == [session["device_name"]]
     tr = session["trace"]
     assert len(rep.traces) == 1
     got = rep.traces[0]
