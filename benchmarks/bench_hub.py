@@ -8,8 +8,14 @@ Prints:
   reply of a responder process; and a burst of 8 frames answered by one reply (a block-transfer
   sub-block); each with and without python-can's ``tcp_tune``.
 
-Run: python benchmarks/bench_hub.py [--frames 20000] [--round-trips 1000]
-Clients run as separate processes; the hub runs in this process.
+* forwarding the default streams: a virtual drive (``virtual-drive run``, OPERATIONAL: TPDO1-4
+  at 100/1000/1000/100 Hz, about 2,200 frames/s) and two python-can clients on a hub in its own
+  process (``virtual-drive hub``); the hub's CPU from /proc over the window (one core = 100 %;
+  goal of issue 11: <= 10 %), with the load average beside it.
+
+Run: python benchmarks/bench_hub.py [--frames 20000] [--round-trips 1000] [--forward-seconds 15]
+     python benchmarks/bench_hub.py --forward-only
+Clients run as separate processes; the hub of the throughput/round-trip runs in this process.
 """
 
 from __future__ import annotations
@@ -22,8 +28,11 @@ import subprocess
 import sys
 import time
 
+from _bench_clients import cpu_seconds, go, loadavg, result, spawn_client, wait_joined
+
 from firmware_protocol.can_bits import frame_bits
 from virtual_drive.hub import Hub
+from virtual_drive.launch import virtual_bench
 
 CLIENT = r"""
 import json, os, sys, time
@@ -158,18 +167,56 @@ def round_trip(count: int, tune: bool, burst: bool = False) -> list[float]:
     return res[roles[0]]["rtts"]
 
 
+def forwarding(seconds: float) -> dict:
+    """Hub CPU (% of one core) forwarding one virtual drive's default TPDO streams to two
+    python-can clients; also the drive's CPU and the clients' received frame rates."""
+    with virtual_bench(nodes=(1,), hub_process=True) as bus:
+        clients = [spawn_client(r, bus.port, seconds + 4) for r in ("start", "sink")]
+        for c in clients:
+            wait_joined(c)
+        go(clients)
+        time.sleep(2.0)  # NMT start sent, TPDOs flowing
+        hub_pid, drive_pid = bus.hub_process.pid, bus.drives[1].pid
+        c_hub, c_drive, t0 = cpu_seconds(hub_pid), cpu_seconds(drive_pid), time.monotonic()
+        load0 = loadavg()
+        time.sleep(seconds)
+        dt = time.monotonic() - t0
+        hub_pct = 100 * (cpu_seconds(hub_pid) - c_hub) / dt
+        drive_pct = 100 * (cpu_seconds(drive_pid) - c_drive) / dt
+        load1 = loadavg()
+        rates = [result(c).get("rate", 0.0) for c in clients]
+    return {
+        "hub_pct": hub_pct,
+        "drive_pct": drive_pct,
+        "rates": rates,
+        "load": f"{load0} -> {load1}",
+    }
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--frames", type=int, default=20_000, help="frames per throughput run")
     parser.add_argument("--round-trips", type=int, default=1000, help="exchanges per RTT run")
+    parser.add_argument("--forward-seconds", type=float, default=15.0, help="forwarding window")
+    parser.add_argument("--forward-only", action="store_true", help="only the forwarding run")
     args = parser.parse_args(argv)
+    print(f"hub benchmark  (python {sys.version.split()[0]}, {os.cpu_count()} CPUs)")
+    f = forwarding(args.forward_seconds)
+    print(
+        f"forwarding 1 drive's default streams to 2 clients over {args.forward_seconds:g} s: "
+        f"hub CPU {f['hub_pct']:.1f} % of one core (goal <= 10 %); virtual drive "
+        f"{f['drive_pct']:.1f} %; clients received "
+        + " / ".join(f"{r:,.0f}" for r in f["rates"])
+        + f" frames/s; load {f['load']}"
+    )
+    if args.forward_only:
+        return 0
 
     import random
 
     rng = random.Random(1)
     sample = [bytes(rng.randrange(256) for _ in range(8)) for _ in range(args.frames)]
     mean_bits = sum(frame_bits(0x181, d) for d in sample) / len(sample)
-    print(f"hub benchmark  (python {sys.version.split()[0]}, {os.cpu_count()} CPUs)")
     print(f"8-byte frames: mean {mean_bits:.1f} bits with exact stuffing")
     for bitrate, label in ((1_000_000, "1 Mbit/s emulated"), (1_000_000_000, "pacing off")):
         bus_rate, rate, us = throughput(args.frames, bitrate)

@@ -16,7 +16,7 @@ is delivered when the bus has finished it (plus an optional injected delay with 
 like a USB adapter: ``delay_s`` ± ``jitter_s``, never reordering frames, as CAN never does).
 Frames can be dropped with a seeded RNG for fault tests.
 
-One background thread runs a ``select`` loop over all sockets; no locks are needed.
+One background thread runs an ``epoll`` loop over all sockets; no locks are needed.
 The ``virtual-drive hub`` command is :mod:`virtual_drive.hub_cli`; the launcher that starts a hub
 with virtual drives is :mod:`virtual_drive.launch`.
 """
@@ -52,6 +52,8 @@ _log = logging.getLogger(__name__)
 _LOOPBACK_NAMES = ("127.0.0.1", "localhost")
 _QUICKACK = getattr(socket, "TCP_QUICKACK", None)  # Linux only
 _BIND_ADDRESS = "127.0.0.1"
+_EPOLLIN = select.EPOLLIN
+_EPOLLOUT = select.EPOLLOUT
 
 # --------------------------------------------------------------------------------------------
 # Hub state
@@ -96,6 +98,8 @@ class _Client:
     __slots__ = (
         "bus",
         "errors",
+        "events",
+        "fd",
         "outbuf",
         "peer",
         "queue",
@@ -107,6 +111,8 @@ class _Client:
 
     def __init__(self, sock: socket.socket, peer: tuple) -> None:
         self.sock = sock
+        self.fd = sock.fileno()
+        self.events = 0  # epoll events registered for it
         self.peer = peer
         self.state = _WAIT_OPEN
         self.splitter = CommandSplitter()
@@ -195,6 +201,8 @@ class Hub:
         self._listener: socket.socket | None = None
         self._wake_r: socket.socket | None = None
         self._wake_w: socket.socket | None = None
+        self._poll: select.epoll | None = None
+        self._by_fd: dict[int, _Client] = {}
         self._thread: threading.Thread | None = None
         self._stopping = False
         self._clients: dict[socket.socket, _Client] = {}
@@ -327,6 +335,9 @@ class Hub:
         self._listener = listener
         self._wake_r, self._wake_w = socket.socketpair()
         self._wake_r.setblocking(False)
+        self._poll = select.epoll()
+        self._poll.register(listener.fileno(), select.EPOLLIN)
+        self._poll.register(self._wake_r.fileno(), select.EPOLLIN)
         self._stopping = False
         self._thread = threading.Thread(target=self._serve, name="can-hub", daemon=True)
         self._thread.start()
@@ -346,10 +357,10 @@ class Hub:
             self._thread.join(timeout)
         for client in list(self._clients.values()):
             self._close(client)
-        for s in (self._listener, self._wake_r, self._wake_w):
+        for s in (self._listener, self._wake_r, self._wake_w, self._poll):
             if s is not None:
                 s.close()
-        self._listener = self._wake_r = self._wake_w = None
+        self._listener = self._wake_r = self._wake_w = self._poll = None
         self._thread = None
         self._buses.clear()  # frames still in flight are lost with the bus
 
@@ -399,38 +410,41 @@ class Hub:
         now = time.monotonic()
         deadline = self._next_deadline(now)
         timeout = None if deadline is None else max(0.0, deadline - now)
-        rlist: list[socket.socket] = [self._listener, self._wake_r]
-        wlist: list[socket.socket] = []
-        for sock, c in self._clients.items():
-            if len(c.queue) < self.max_pending_per_client:
-                rlist.append(sock)
-            if c.outbuf and c.ready_at <= now:
-                wlist.append(sock)
-        readable, writable, _ = select.select(rlist, wlist, [], timeout)
+        poll = self._poll
+        for c in self._by_fd.values():  # level-triggered interest: read unless its queue is
+            events = _EPOLLIN if len(c.queue) < self.max_pending_per_client else 0  # full,
+            if c.outbuf and c.ready_at <= now:  # write while output waits for room
+                events |= _EPOLLOUT
+            if events != c.events:
+                poll.modify(c.fd, events)
+                c.events = events
+        ready = poll.poll(-1.0 if timeout is None else timeout)
         now = time.monotonic()
-        for sock in readable:
-            if sock is self._listener:
-                self._accept(now)
-            elif sock is self._wake_r:
-                try:
-                    self._wake_r.recv(4096)
-                except OSError:
-                    pass
-            else:
-                client = self._clients.get(sock)
-                if client is not None:
+        writable = []
+        for fd, events in ready:
+            client = self._by_fd.get(fd)
+            if client is None:
+                if fd == self._listener.fileno():
+                    self._accept(now)
+                elif fd == self._wake_r.fileno():
                     try:
-                        self._read(client, now)
-                    except Exception:  # a bug triggered by one client must not stop the bus
-                        _log.exception("hub: dropping client %s (internal error)", client.peer)
-                        self._drop(client)
+                        self._wake_r.recv(4096)
+                    except OSError:
+                        pass
+                continue
+            if events & _EPOLLOUT:
+                writable.append(client)
+            if events & ~_EPOLLOUT:  # data, end of stream or an error: recv tells which
+                try:
+                    self._read(client, now)
+                except Exception:  # a bug triggered by one client must not stop the bus
+                    _log.exception("hub: dropping client %s (internal error)", client.peer)
+                    self._drop(client)
         now = time.monotonic()
-        for bus in list(self._buses.values()):
+        for bus in self._buses.values():
             self._advance(bus, now)
-        for sock in writable:
-            client = self._clients.get(sock)
-            if client is not None:
-                self._flush(client, now)
+        for client in writable:
+            self._flush(client, now)
 
     def _next_deadline(self, now: float) -> float | None:
         """When the hub must wake next (monotonic s), or None.
@@ -473,6 +487,9 @@ class Hub:
             sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
             client = _Client(sock, peer)
             self._clients[sock] = client
+            self._by_fd[client.fd] = client
+            self._poll.register(client.fd, _EPOLLIN)
+            client.events = _EPOLLIN
             self._n_clients_total += 1
             client.outbuf += b"< hi >"
             self._flush(client, now)
@@ -578,6 +595,11 @@ class Hub:
             return
         client.state = _CLOSED
         self._clients.pop(client.sock, None)
+        if self._by_fd.pop(client.fd, None) is not None and self._poll is not None:
+            try:
+                self._poll.unregister(client.fd)
+            except (OSError, ValueError):
+                pass
         bus = client.bus
         if bus is not None and client in bus.receivers:
             bus.receivers.remove(client)
