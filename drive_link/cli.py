@@ -1,8 +1,10 @@
-"""The ``drive-link`` command: talk to a drive (DSP or virtual) from a shell.
+"""The drive-link command: talk to a drive (DSP or virtual) from a shell.
 
 Every command takes the bus options (--interface/--channel/--bitrate, or --host/--port for the
-loopback hub; unset = python-can config/env), --node and --json. Every failure is one line on
-stderr and a non-zero exit code:
+loopback hub; unset = python-can config/env), --node and --json. Values take units (20uH, 50A,
+1000rpm, "-1e30"), converted to the object's unit in the object dictionary; a bare number is in
+that unit. Every failure is one line on stderr (with --json: {"error": ..., "exit_code": N} on
+stdout) and a non-zero exit code:
 
 1 drive refused / failed check, 2 usage, 3 bus error, 4 node not found, 5 timeout,
 6 SDO abort, 7 invalid value, 8 unsafe gains refused (use --force), 130 interrupted.
@@ -15,13 +17,17 @@ import json
 import logging
 import math
 import os
+import re
 import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, NoReturn
 
-from . import connection
-from .cli_connect import connect_from_args
+from firmware_protocol import abort_codes
+
+from . import connection, od_select, units
+from .cia402 import FAULT, FAULT_REACTION_ACTIVE, OPERATION_ENABLED
+from .cli_connect import add_hidden_aliases, bus_options, connect_from_args
 from .drive import GAIN_FIELDS, Drive
 from .errors import (
     BusError,
@@ -30,7 +36,19 @@ from .errors import (
     InvalidValue,
     NodeNotFound,
     SdoAbort,
+    StateError,
 )
+from .restore import leave_as_found
+
+__all__ = [
+    "EXIT_CODES",
+    "EXIT_UNSAFE",
+    "Failed",
+    "Refused",
+    "build_parser",
+    "main",
+    "quantity",
+]
 
 EXIT_CODES: list[tuple[type[BaseException], int]] = [
     (BusError, 3),
@@ -189,69 +207,112 @@ def _state_cmd(fn_name: str) -> Callable[[argparse.Namespace, Drive], int]:
     return run
 
 
+def _usable_state(d: Drive) -> str:
+    """The CiA 402 state; :class:`StateError` with the fix when the drive is in FAULT."""
+    state = d.state
+    if state in (FAULT, FAULT_REACTION_ACTIVE):
+        raise StateError(f"the drive is in {state}: run `drive-link faults`, then `fault-reset`")
+    return state
+
+
+def _switch_mode(args: argparse.Namespace, d: Drive, mode: str, allowed: bool, flag: str) -> bool:
+    """Select ``mode``. The drive changes modes only with the power stage off (0x6060 answers
+    0x08000022 in OPERATION ENABLED): if it is enabled in another mode, disable, switch and
+    return True (the caller enables again) when ``allowed``; otherwise a one-line refusal
+    naming the fix. Nothing is changed before that check."""
+    state = _usable_state(d)
+    now = d.mode
+    if now == mode:
+        return False
+    if state == OPERATION_ENABLED:
+        if not allowed:
+            raise StateError(
+                f"the drive is OPERATION ENABLED in {now} mode and changes mode only with the "
+                f"power stage off: run `drive-link disable` first, or add {flag} "
+                "(disable, switch, enable again)"
+            )
+        d.disable(timeout=_timeout(args, 3.0))
+        d.set_mode(mode)
+        return True
+    d.set_mode(mode)
+    return False
+
+
 def cmd_mode(args: argparse.Namespace, d: Drive) -> int:
-    d.set_mode(args.mode)
-    _emit(args, {"mode": d.mode}, f"mode {d.mode}")
+    if _switch_mode(args, d, args.mode, args.re_enable, "--re-enable"):
+        d.enable(timeout=_timeout(args, 3.0))
+    _emit(args, {"mode": d.mode, "state": d.state}, f"mode {d.mode} ({d.state})")
     return 0
 
 
 def _set_setpoint(
-    args: argparse.Namespace,
-    d: Drive,
-    mode: str,
-    write: Callable[[float], None],
-    value: float,
-    name: str,
-    key: str,
-    shown: str,
+    args: argparse.Namespace, d: Drive, mode: str, name: str, value: float | int, key: str
 ) -> int:
-    """Select ``mode``, ``write(value)``, enable if ``--enable``, print the read-back ``name``
-    as ``key`` (``shown`` formats it, e.g. ``"{:g} A"``) with the drive state."""
-    d.set_mode(mode)
-    write(value)
-    if args.enable:
+    """Write the setpoint ``name`` in ``mode``: the value is checked against the object's
+    limits and the drive's state first (nothing is changed when refused); a drive that is not
+    enabled is refused unless ``--enable`` (a zero setpoint is written: it is the stopped
+    state); prints the read-back as ``key`` with the state."""
+    obj = d.table[name]
+    value = obj.check(value)
+    state = _usable_state(d)
+    if state != OPERATION_ENABLED and not args.enable and value != 0:
+        raise StateError(
+            f"nothing written: the drive is {state} and a setpoint moves nothing until it is "
+            "enabled; add --enable (or run `drive-link enable` first)"
+        )
+    again = _switch_mode(args, d, mode, args.switch_mode, "--switch-mode")
+    d.write(name, value)
+    if args.enable or again:
         d.enable(timeout=_timeout(args, 3.0))
     out = {key: d.read(name), "state": d.state}
-    _emit(args, out, f"{key} {shown.format(out[key])} ({out['state']})")
+    unit = obj.unit
+    _emit(args, out, f"{key} {out[key]:g} {unit} ({out['state']})")
     return 0
 
 
 def cmd_set_speed(args: argparse.Namespace, d: Drive) -> int:
-    return _set_setpoint(
-        args, d, "speed", d.set_speed, args.rpm, "target_velocity", "target_velocity", "{} rpm"
-    )
+    return _set_setpoint(args, d, "speed", "target_velocity", args.rpm, "target_velocity")
 
 
 def cmd_set_current(args: argparse.Namespace, d: Drive) -> int:
-    return _set_setpoint(
-        args, d, "current", d.set_current, args.amps, "setpoints.i_p_ref", "i_p_ref", "{:g} A"
-    )
+    return _set_setpoint(args, d, "current", "setpoints.i_p_ref", args.amps, "i_p_ref")
+
+
+def _with_unit(obj: Any, v: Any) -> str:
+    unit = obj.unit if obj.unit not in ("", "1") else ""
+    label = dict(obj.enum).get(v) if obj.enum and isinstance(v, int) else None
+    return f"{v} {unit}".rstrip() + (f" ({label})" if label else "")
 
 
 def cmd_read(args: argparse.Namespace, d: Drive) -> int:
-    out = {}
-    for n in args.names:
-        out[n] = d.read(n)
-    units = {n: d.table[n].unit for n in args.names}
+    objs = [od_select.select(n, d.table) for n in args.names]
+    out = {o.name: d.read(o.name) for o in objs}
+    by_name = {o.name: o for o in objs}
     _emit(
         args,
         out,
-        lambda: "\n".join(
-            f"{n} = {v} {units[n] if units[n] != '1' else ''}".rstrip() for n, v in out.items()
-        ),
+        lambda: "\n".join(f"{n} = {_with_unit(by_name[n], v)}" for n, v in out.items()),
     )
     return 0
 
 
 def cmd_write(args: argparse.Namespace, d: Drive) -> int:
-    obj = d.table[args.name]
-    value = args.value if obj.data_type == 0x09 else _parse_value(args.value)
-    d.write(args.name, value)
-    back = d.read(args.name) if obj.readable else value
+    obj = od_select.select(args.name, d.table)
+    value = units.parse_for(obj, args.value)
+    d.write(obj.name, value)
+    back = d.read(obj.name) if obj.readable else value
+    _emit(args, {obj.name: back}, f"{obj.name} = {_with_unit(obj, back)}")
+    return 0
+
+
+def cmd_objects(args: argparse.Namespace) -> int:
+    objs = od_select.search(args.pattern)
+    if not objs:
+        raise InvalidValue(f"no object matches {args.pattern!r} (try a part of a name or 0x20)")
     _emit(
         args,
-        {args.name: back},
-        f"{args.name} = {back} {obj.unit if obj.unit != '1' else ''}".rstrip(),
+        [od_select.describe(o) for o in objs],
+        lambda: od_select.table_text(objs),
     )
     return 0
 
@@ -373,7 +434,12 @@ def _save_outputs(args: argparse.Namespace, obj: Any, out: dict) -> None:
 def cmd_trace(args: argparse.Namespace, d: Drive) -> int:
     from .trace import Trigger
 
-    trig = Trigger(args.trigger, args.source, args.level, args.edge)
+    level = args.level
+    if isinstance(level, str):
+        src = args.source if args.source in d.table else f"measurements.{args.source}"
+        unit = d.table[src].unit if src in d.table else ""
+        level = units.parse_value(level, unit, name=f"--level ({src})")
+    trig = Trigger(args.trigger, args.source, level, args.edge)
     tr = d.trace.capture(
         channels=[c.strip() for c in args.channels.split(",") if c.strip()],
         divider=args.divider,
@@ -412,27 +478,14 @@ def cmd_step(args: argparse.Namespace, d: Drive) -> int:
     from . import steps
 
     if args.kind == "current":
-        res = steps.current_step(
-            d,
-            args.i_from,
-            args.i_to,
-            divider=args.divider,
-            length=args.length,
-            pre_trigger=args.pre_trigger,
-            enable=not args.no_enable,
-        )
-    else:
-        model = (args.model_a, args.model_b) if args.model_a is not None else None
-        res = steps.speed_step(
-            d,
-            args.delta,
-            start_rpm=args.start,
-            divider=args.divider,
-            length=args.length,
-            pre_trigger=args.pre_trigger,
-            enable=not args.no_enable,
-            model=model,
-        )
+        for v in (args.i_from, args.i_to):
+            d.table["setpoints.i_p_ref"].check(v)
+    elif args.start is not None:
+        for v in (args.start, args.start + args.delta):
+            d.table["target_velocity"].check(units.parse_value(v, "rpm", integer=True))
+    _usable_state(d)
+    with leave_as_found(d, _timeout(args, 3.0)):
+        res = _run_step(args, d, steps)
     out = res.summary()
     _save_outputs(args, res, out)
     m = res.metrics
@@ -453,6 +506,31 @@ def cmd_step(args: argparse.Namespace, d: Drive) -> int:
     return 0
 
 
+def _run_step(args: argparse.Namespace, d: Drive, steps: Any) -> Any:
+    """The step test itself (drive_link.steps), run inside :func:`leave_as_found`."""
+    if args.kind == "current":
+        return steps.current_step(
+            d,
+            args.i_from,
+            args.i_to,
+            divider=args.divider,
+            length=args.length,
+            pre_trigger=args.pre_trigger,
+            enable=not args.no_enable,
+        )
+    model = (args.model_a, args.model_b) if args.model_a is not None else None
+    return steps.speed_step(
+        d,
+        args.delta,
+        start_rpm=args.start,
+        divider=args.divider,
+        length=args.length,
+        pre_trigger=args.pre_trigger,
+        enable=not args.no_enable,
+        model=model,
+    )
+
+
 def cmd_identify(args: argparse.Namespace, d: Drive) -> int:
     import time
 
@@ -460,12 +538,17 @@ def cmd_identify(args: argparse.Namespace, d: Drive) -> int:
     from .steps import record_setpoint_step
     from .trace import TS
 
-    d.set_mode("current")
-    d.set_current(args.i_from)
-    if d.state != "OPERATION ENABLED":
-        d.enable(timeout=_timeout(args, 3.0))
-    time.sleep(args.settle)
-    try:
+    for v in (args.i_from, args.i_to):
+        d.table["setpoints.i_p_ref"].check(v)
+    _usable_state(d)
+    with leave_as_found(d, _timeout(args, 3.0)):
+        if d.mode != "current" and d.state == OPERATION_ENABLED:
+            d.disable(timeout=_timeout(args, 3.0))
+        d.set_mode("current")
+        d.set_current(args.i_from)
+        if d.state != OPERATION_ENABLED:
+            d.enable(timeout=_timeout(args, 3.0))
+        time.sleep(args.settle)
         tr = record_setpoint_step(
             d,
             ["i_p", "speed"],
@@ -476,8 +559,6 @@ def cmd_identify(args: argparse.Namespace, d: Drive) -> int:
             args.pre_trigger,
             None,
         )
-    finally:
-        d.set_current(args.i_from)
     fit = identify.fit_first_order(
         tr.signals["measurements.i_p"], tr.signals["measurements.speed"], args.divider * TS
     )
@@ -533,37 +614,119 @@ def cmd_check(args: argparse.Namespace, d: Drive) -> int:
     return 1 if failed else 0
 
 
+def cmd_config(args: argparse.Namespace, d: Drive) -> int:
+    from . import config_dcf
+
+    if args.action == "save":
+        out = config_dcf.save(d, args.file, bitrate=args.bitrate)
+        msg = f"saved {out['objects']} objects of node {out['node_id']} to {out['file']}"
+        _emit(args, out, msg)
+        return 0
+    if args.action == "diff":
+        res = config_dcf.diff(d, args.file)
+        out = res.as_dict()
+
+        def text() -> str:
+            lines = [
+                f"{c.name} ({c.index}): drive {c.drive:g}, file {c.file:g} {c.unit}".rstrip()
+                for c in res.changes
+            ]
+            lines.append(f"{len(res.changes)} differ, {res.same} equal")
+            return "\n".join(lines)
+
+        _emit(args, out, text)
+        return 0
+    out = config_dcf.load(d, args.file, dry_run=args.dry_run)
+    n = len(out["changes"])
+    verb = "would write" if args.dry_run else "wrote"
+    _emit(
+        args,
+        out,
+        lambda: "\n".join(
+            [
+                f"{c['name']}: {c['drive']:g} -> {c['file']:g} {c['unit']}".rstrip()
+                for c in out["changes"]
+            ]
+            + [f"{verb} {n} object{'s' if n != 1 else ''} (the others are equal)"]
+        ),
+    )
+    return 0
+
+
+def _config_parsers(add: Callable[..., argparse.ArgumentParser]) -> None:
+    """``config save|load|diff FILE.dcf``."""
+    p = add(
+        "config",
+        cmd_config,
+        "the drive's configuration (motor, protection, gains, CiA 402 settings) as a CiA 306 "
+        "DCF file: save, diff, load (checked first, all or nothing)",
+    )
+    p.add_argument("action", choices=["save", "load", "diff"], help="save / load / diff")
+    p.add_argument("file", type=Path, metavar="FILE.dcf", help="the DCF file")
+    p.add_argument(
+        "--dry-run", action="store_true", help="load: check and show the changes, write nothing"
+    )
+
+
 # --------------------------------------------------------------------------- parser
+#: True while :func:`main` runs with ``--json`` anywhere on the command line: usage errors are
+#: then JSON on stdout too.
+_JSON_ERRORS = False
+
+
 class _Parser(argparse.ArgumentParser):
-    """argparse with a one-line usage error (exit 2) instead of usage + error lines."""
+    """argparse with a one-line usage error (exit 2) instead of usage + error lines, and
+    negative numbers (``-1e30``, ``-5A``, ``-inf``) taken as values, never as options."""
+
+    def __init__(self, *a: Any, **kw: Any) -> None:
+        super().__init__(*a, **kw)
+        self._negative_number_matcher = re.compile(r"^-(\.?\d|inf|nan)", re.IGNORECASE)
 
     def error(self, message: str) -> NoReturn:
-        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+        text = f"{message} (see {self.prog} --help)"
+        if _JSON_ERRORS:
+            print(json.dumps({"error": text, "exit_code": 2}))
+            self.exit(2)
+        self.exit(2, f"{self.prog}: error: {text}\n")
+
+
+def quantity(unit: str, integer: bool = False) -> Callable[[str], float | int]:
+    """argparse ``type=`` for a value in ``unit`` typed with or without a unit (``20uH``,
+    ``1000rpm``, ``-5A``); a wrong dimension, nan/inf or (``integer``) a non-whole value is a
+    one-line usage error. The same parser as the API's (:func:`drive_link.units.parse_value`)."""
+
+    def parse(text: str) -> float | int:
+        try:
+            return units.parse_value(text, unit, integer=integer)
+        except InvalidValue as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    parse.__name__ = f"value in {unit}" if unit else "number"
+    return parse
+
+
+def _object_value(name: str) -> Callable[[str], float | int]:
+    """argparse ``type=`` for a value of the OD object ``name`` (its unit and integer type)."""
+    from .objects import default_table
+
+    obj = default_table()[name]
+    return quantity(obj.unit, integer=not obj.is_float)
 
 
 #: Options every command takes, before or after the sub-command: (flags, add_argument keywords
 #: without ``default``, default). The default is filled in after parsing (see :func:`_merge_bus`).
 def _bus_options() -> list[tuple[tuple[str, ...], dict[str, Any], Any]]:
     return [
-        (("--interface",), {"help": "python-can interface (socketcan, virtual, ...)"}, None),
-        (("--channel",), {"help": "python-can channel (can0, vcan0, ...)"}, None),
-        (("--bitrate",), {"type": int, "help": "bit/s"}, None),
+        *bus_options(),  # python-can's, --host/--port, --node (drive_link.cli_connect)
         (
-            ("--host",),
-            {"help": "loopback hub host (socketcand)"},
-            os.environ.get("DRIVE_LINK_HOST"),
+            ("--sdo-timeout",),
+            {"type": quantity("s"), "help": "SDO response timeout per frame, s (default 0.3)"},
+            0.3,
         ),
-        (("--port",), {"type": int, "help": "loopback hub port"}, _env_int("DRIVE_LINK_PORT")),
-        (
-            ("--node",),
-            {"type": int, "help": "node-ID (default 1)"},
-            _env_int("DRIVE_LINK_NODE") or 1,
-        ),
-        (("--sdo-timeout",), {"type": float, "help": "SDO response timeout per frame, s"}, 0.3),
         (
             ("--timeout",),
-            {"type": float, "help": "state-change timeout, s (default 3) / scan listen time, s "
-             "(default 1)"},
+            {"type": quantity("s"), "help": "state-change timeout, s (default 3) / scan listen "
+             "time, s (default 1)"},
             None,
         ),
         (("--json",), {"action": "store_true", "help": "print one JSON document"}, False),
@@ -586,7 +749,10 @@ def _add_bus_options(p: argparse.ArgumentParser, prefix: str = "") -> None:
     g = p.add_argument_group("bus (unset = python-can config / CAN_* environment)")
     for flags, kw, _default in _bus_options():
         dest = prefix + flags[0].lstrip("-").replace("-", "_")
+        if kw.get("action") != "store_true":
+            kw = {**kw, "metavar": flags[0].lstrip("-").replace("-", "_").upper()}
         g.add_argument(*flags, dest=dest, default=argparse.SUPPRESS, **kw)
+    add_hidden_aliases(g, prefix + "node")  # -n/--node-id
 
 
 def _bus_parent() -> argparse.ArgumentParser:
@@ -620,8 +786,17 @@ def _env_int(name: str) -> int | None:
 
 
 def _outputs(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--csv", type=Path, help="save CSV here")
-    p.add_argument("--png", type=Path, help="save a plot here")
+    p.add_argument("--csv", type=Path, help="save CSV here (t in s, one column per signal)")
+    p.add_argument("--png", type=Path, help="save a plot here (PNG, matplotlib)")
+
+
+_EPILOG = """\
+values take units (20uH, 50A, 1000rpm, '-5 A'); a bare number is in the object's unit
+(drive-link objects PATTERN lists names, index:sub, type, unit, limits, access).
+
+exit codes: 1 drive refused / failed check, 2 usage, 3 bus error, 4 node not found,
+5 timeout, 6 SDO abort, 7 invalid value, 8 unsafe gains refused (use --force), 130 interrupted.
+"""
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -629,7 +804,9 @@ def build_parser() -> argparse.ArgumentParser:
     bus = _bus_parent()
     ap = _Parser(
         prog="drive-link",
-        description=__doc__.split("\n\n")[0],
+        description="Talk to a drive (DSP or virtual) over CAN: state, setpoints, objects,\n"
+        "gains, traces, step tests, identification, configuration files, conformance.",
+        epilog=_EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     _add_bus_options(ap, _TOP)  # accepted before the sub-command too
@@ -638,7 +815,8 @@ def build_parser() -> argparse.ArgumentParser:
     def add(
         name: str, fn: Callable, help: str, needs_drive: bool = True
     ) -> argparse.ArgumentParser:
-        p = sub.add_parser(name, parents=[bus], help=help, description=help)
+        p = sub.add_parser(name, parents=[bus], help=help, description=help, epilog=_EPILOG,
+                           formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
         p.set_defaults(func=fn, needs_drive=needs_drive)
         return p
 
@@ -650,22 +828,74 @@ def build_parser() -> argparse.ArgumentParser:
     )
     add("status", cmd_status, "NMT / CiA 402 state, mode, measurements, gains")
     add("enable", _state_cmd("enable"), "CiA 402: go to OPERATION ENABLED")
-    add("disable", _state_cmd("disable"), "CiA 402: disable operation")
+    add("disable", _state_cmd("disable"), "CiA 402: disable operation (power stage off)")
     add("quick-stop", _state_cmd("quick_stop"), "CiA 402: quick stop")
     add("fault-reset", _state_cmd("fault_reset"), "CiA 402: reset a fault")
-    p = add("mode", cmd_mode, "select speed / current / torque mode")
+    p = add(
+        "mode",
+        cmd_mode,
+        "select speed / current / torque mode (the drive changes mode only while disabled)",
+    )
     p.add_argument("mode", choices=["speed", "current", "torque"])
-    p = add("set-speed", cmd_set_speed, "speed mode and target_velocity (rpm)")
-    p.add_argument("rpm", type=float)
+    p.add_argument(
+        "--re-enable",
+        action="store_true",
+        help="if the drive is enabled in another mode: disable, switch, enable again",
+    )
+    p = add(
+        "set-speed",
+        cmd_set_speed,
+        "speed mode and target_velocity (whole rpm; 1000rpm, '100 rad/s'); needs the drive "
+        "enabled (--enable) unless the value is 0",
+    )
+    p.add_argument(
+        "rpm", type=_object_value("target_velocity"), help="speed setpoint, rpm (or with a unit)"
+    )
     p.add_argument("--enable", action="store_true", help="also enable the drive")
-    p = add("set-current", cmd_set_current, "current mode and i_p_ref (A)")
-    p.add_argument("amps", type=float)
+    p.add_argument(
+        "--switch-mode",
+        action="store_true",
+        help="if the drive is enabled in another mode: disable, switch to speed, enable again",
+    )
+    p = add(
+        "set-current",
+        cmd_set_current,
+        "current mode and i_p_ref (A; 50A, 500mA); needs the drive enabled (--enable) unless "
+        "the value is 0",
+    )
+    p.add_argument(
+        "amps", type=_object_value("setpoints.i_p_ref"), help="pseudo-current setpoint, A"
+    )
     p.add_argument("--enable", action="store_true", help="also enable the drive")
-    p = add("read", cmd_read, "read objects by name (e.g. current_controller.L_c)")
-    p.add_argument("names", nargs="+")
-    p = add("write", cmd_write, "write one object by name")
-    p.add_argument("name")
-    p.add_argument("value")
+    p.add_argument(
+        "--switch-mode",
+        action="store_true",
+        help="if the drive is enabled in another mode: disable, switch to current, enable again",
+    )
+    p = add(
+        "read", cmd_read, "read objects by name or index (current_controller.L_c, 0x6041, 0x2010:2)"
+    )
+    p.add_argument("names", nargs="+", metavar="OBJECT", help="name or INDEX[:SUB] (hex sub)")
+    p = add(
+        "write",
+        cmd_write,
+        "write one object by name or index; the value may carry a unit (20uH, 50A, 1000rpm)",
+    )
+    p.add_argument("name", metavar="OBJECT", help="name or INDEX[:SUB] (hex sub)")
+    p.add_argument("value", help="value in the object's unit, or with a unit; enum labels too")
+    p = add(
+        "objects",
+        cmd_objects,
+        "list the objects: name, index:sub, type, unit, limits, access (no bus needed)",
+        False,
+    )
+    p.add_argument(
+        "pattern",
+        nargs="?",
+        default=None,
+        metavar="PATTERN",
+        help="part of a name or description, a shell pattern (*L_c*), or an index (0x2010)",
+    )
     p = add("gains", cmd_gains_get, "show the active gains")
     p = add("set-gains", cmd_gains_set, "apply gains atomically, e.g. set-gains L_c=13e-6 k_p=0.5")
     p.add_argument("assignments", nargs="+", metavar="NAME=VALUE")
@@ -688,47 +918,116 @@ def build_parser() -> argparse.ArgumentParser:
     p = add("faults", cmd_faults, "error register and fault history (0x1003)")
     p.add_argument("--clear", action="store_true", help="clear the history afterwards")
     p = add("live", cmd_live, "listen to the TPDOs: rates, drops, bus load, latest values")
-    p.add_argument("--seconds", type=float, default=1.0)
+    p.add_argument(
+        "--seconds", type=quantity("s"), default=1.0, help="how long to listen, s (default 1)"
+    )
     p = add("trace", cmd_trace, "capture a trace with the drive's recorder")
     p.add_argument("--channels", default="i_p,i_p_ref", help="comma-separated (measurements names)")
-    p.add_argument("--divider", type=int, default=1, help="loop samples (20 µs) per trace sample")
+    p.add_argument(
+        "--divider", type=int, default=1, help="loop samples (20 µs each) per trace sample"
+    )
     p.add_argument("--length", type=int, default=None, help="samples per channel (default: all)")
-    p.add_argument("--pre-trigger", type=int, default=0)
+    p.add_argument(
+        "--pre-trigger", type=int, default=0, help="samples kept before the trigger (default 0)"
+    )
     p.add_argument(
         "--trigger", default="immediate", choices=["immediate", "signal", "setpoint_step", "fault"]
     )
     p.add_argument("--source", default="measurements.i_p", help="signal trigger source")
-    p.add_argument("--level", type=float, default=0.0)
+    p.add_argument(
+        "--level",
+        default=0.0,
+        help="signal trigger level in the source's unit (A for i_p, rpm for speed), or with "
+        "a unit (5A)",
+    )
     p.add_argument("--edge", default="rising", choices=["rising", "falling", "either"])
-    p.add_argument("--wait", type=float, default=None, help="seconds to wait for the trigger")
+    p.add_argument(
+        "--wait", type=quantity("s"), default=None, help="seconds to wait for the trigger"
+    )
     p.add_argument("--progress", action="store_true", help="progress bar even when not a terminal")
     _outputs(p)
-    p = add("step", cmd_step, "step test with metrics and model overlay")
+    p = add(
+        "step",
+        cmd_step,
+        "step test with metrics and model overlay; the drive's state, mode and setpoint are "
+        "restored afterwards (also on error and Ctrl-C)",
+    )
     p.add_argument("kind", choices=["current", "speed"])
-    p.add_argument("--from", dest="i_from", type=float, default=15.0, help="current step start, A")
-    p.add_argument("--to", dest="i_to", type=float, default=20.0, help="current step end, A")
-    p.add_argument("--delta", type=float, default=500.0, help="speed step, rpm")
-    p.add_argument("--start", type=float, default=None, help="speed before the step, rpm")
-    p.add_argument("--divider", type=int, default=None)
-    p.add_argument("--length", type=int, default=None)
-    p.add_argument("--pre-trigger", type=int, default=None)
+    amps, rpm = _object_value("setpoints.i_p_ref"), quantity("rpm")
+    p.add_argument("--from", dest="i_from", type=amps, default=15.0, help="current step start, A")
+    p.add_argument("--to", dest="i_to", type=amps, default=20.0, help="current step end, A")
+    p.add_argument("--delta", type=rpm, default=500.0, help="speed step, rpm")
+    p.add_argument("--start", type=rpm, default=None, help="speed before the step, rpm")
+    p.add_argument(
+        "--divider",
+        type=int,
+        default=None,
+        help="loop samples (20 µs each) per trace sample (default 1 current, 100 speed)",
+    )
+    p.add_argument(
+        "--length",
+        type=int,
+        default=None,
+        help="trace samples recorded (default 400 current, 1500 speed)",
+    )
+    p.add_argument(
+        "--pre-trigger",
+        type=int,
+        default=None,
+        help="trace samples before the step (default 50 current, 100 speed)",
+    )
     p.add_argument("--no-enable", action="store_true", help="fail instead of enabling the drive")
-    p.add_argument("--model-a", type=float, default=None)
-    p.add_argument("--model-b", type=float, default=None)
+    p.add_argument(
+        "--model-a",
+        type=float,
+        default=None,
+        help="speed model G(z) = b/(z - a): pole a per 20 µs sample (unitless; default the "
+        "paper's 0.9999785)",
+    )
+    p.add_argument(
+        "--model-b",
+        type=float,
+        default=None,
+        help="speed model gain b, rpm/A per 20 µs sample (default the paper's 3.33715e-4)",
+    )
     _outputs(p)
     p = add(
         "identify-drive",
         cmd_identify,
-        "run a current step on the drive, identify G(z) = b/(z - a), suggest IP gains",
+        "run a current step on the drive, identify G(z) = b/(z - a), suggest IP gains; the "
+        "drive's state, mode and setpoint are restored afterwards",
     )
-    p.add_argument("--from", dest="i_from", type=float, default=0.0)
-    p.add_argument("--to", dest="i_to", type=float, default=10.0)
-    p.add_argument("--divider", type=int, default=50)
-    p.add_argument("--length", type=int, default=2000)
-    p.add_argument("--pre-trigger", type=int, default=100)
-    p.add_argument("--settle", type=float, default=0.1)
-    p.add_argument("--xi", type=float, default=1.0)
-    p.add_argument("--omega-n", type=float, default=2.3)
+    p.add_argument(
+        "--from", dest="i_from", type=amps, default=0.0, help="current before the step, A"
+    )
+    p.add_argument("--to", dest="i_to", type=amps, default=10.0, help="current step end, A")
+    p.add_argument(
+        "--divider",
+        type=int,
+        default=50,
+        help="loop samples (20 µs each) per trace sample (default 50 = 1 ms)",
+    )
+    p.add_argument(
+        "--length", type=int, default=2000, help="trace samples recorded (default 2000)"
+    )
+    p.add_argument(
+        "--pre-trigger", type=int, default=100, help="trace samples before the step (default 100)"
+    )
+    p.add_argument(
+        "--settle",
+        type=quantity("s"),
+        default=0.1,
+        help="wait at the start current before recording, s (default 0.1)",
+    )
+    p.add_argument(
+        "--xi", type=float, default=1.0, help="damping ratio ξ of the IP design (unitless)"
+    )
+    p.add_argument(
+        "--omega-n",
+        type=quantity("rad/s"),
+        default=2.3,
+        help="natural frequency ω_n of the IP design, rad/s (default 2.3)",
+    )
     _outputs(p)
     p = add(
         "check",
@@ -738,7 +1037,16 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--only", default=None, help="comma-separated items")
     p.add_argument("--skip", default=None, help="comma-separated items (e.g. store_restore)")
-    p.add_argument("--rate-tolerance", type=float, default=0.25, help="allowed relative rate error")
+    p.add_argument(
+        "--rate-tolerance",
+        type=float,
+        default=0.25,
+        help="allowed relative rate error (unitless, 0.25 = 25 %%)",
+    )
+    _config_parsers(add)
+    from .cli_tools import register_tools
+
+    register_tools(sub, bus)
     try:
         from . import cli_design
     except ImportError:
@@ -760,8 +1068,48 @@ def _apply_step_defaults(args: argparse.Namespace) -> None:
         args.pre_trigger = 50 if cur else 100
 
 
+#: SDO abort "not in the present device state" (CiA 301): the drive refuses the write now.
+_ABORT_STATE = abort_codes.DEVICE_STATE
+
+
+def _state_hint(exc: SdoAbort) -> str:
+    """The fix for an object the drive refused in its present state (abort 0x08000022)."""
+    from .objects import default_table
+
+    table = default_table()
+    obj = table.by_index(exc.index, exc.subindex)
+    if exc.index == 0x6060:
+        return "the mode changes only with the power stage off: run `drive-link disable` first"
+    if obj is not None and obj.entry.config_only:
+        return "this object is written only with the power stage off: `drive-link disable` first"
+    if 0x1400 <= exc.index <= 0x1BFF:
+        return "PDO settings change only in PRE-OPERATIONAL: `drive-link nmt pre-operational` first"
+    if 0x2100 <= exc.index <= 0x2103:
+        return "a trace recording is armed: wait for it (or `drive-link trace`) before changing it"
+    return "the drive does not accept it in its present state (see `drive-link status`)"
+
+
+def _fail(args: argparse.Namespace | None, message: str, code: int, prefix: str = "error: ") -> int:
+    """Report one failure: one line on stderr, or JSON on stdout with ``--json``."""
+    if _JSON_ERRORS or (args is not None and getattr(args, "json", False)):
+        print(json.dumps({"error": message, "exit_code": code}))
+    else:
+        print(f"drive-link: {prefix}{message}", file=sys.stderr)
+    return code
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point; returns the exit code (see module docstring)."""
+    global _JSON_ERRORS
+    argv = list(sys.argv[1:] if argv is None else argv)
+    _JSON_ERRORS = "--json" in argv
+    try:
+        return _main(argv)
+    finally:
+        _JSON_ERRORS = False
+
+
+def _main(argv: list[str]) -> int:
     ap = build_parser()
     args = ap.parse_args(argv)
     _merge_bus(args)
@@ -777,20 +1125,19 @@ def main(argv: list[str] | None = None) -> int:
             return args.func(args, d)
         return args.func(args)
     except Refused as exc:
-        print(f"drive-link: {exc}", file=sys.stderr)
-        return EXIT_UNSAFE
+        return _fail(args, str(exc), EXIT_UNSAFE, prefix="")
     except DriveError as exc:
-        print(f"drive-link: error: {exc}", file=sys.stderr)
+        msg = str(exc)
+        if isinstance(exc, SdoAbort) and exc.code == _ABORT_STATE:
+            msg += f": {_state_hint(exc)}"
         for cls, code in EXIT_CODES:
             if isinstance(exc, cls):
-                return code
-        return 1
+                return _fail(args, msg, code)
+        return _fail(args, msg, 1)
     except KeyboardInterrupt:
-        print("drive-link: interrupted", file=sys.stderr)
-        return 130
+        return _fail(args, "interrupted", 130, prefix="")
     except (ValueError, OSError) as exc:
-        print(f"drive-link: error: {exc}", file=sys.stderr)
-        return 1
+        return _fail(args, str(exc), 1)
     finally:
         if d is not None:
             try:

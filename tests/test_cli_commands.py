@@ -38,7 +38,10 @@ def dl(node, capsys, *args: str) -> tuple[int, object]:
 
 def test_state_commands(node, capsys):
     assert dl(node, capsys, "nmt", "start") == (0, {"sent": "start"})
-    assert dl(node, capsys, "mode", "speed") == (0, {"mode": "speed"})
+    assert dl(node, capsys, "mode", "speed") == (
+        0,
+        {"mode": "speed", "state": "SWITCH ON DISABLED"},
+    )
     assert dl(node, capsys, "enable")[1] == {"state": "OPERATION ENABLED"}
     rc, out = dl(node, capsys, "quick-stop")
     assert rc == 0 and out["state"] in ("QUICK STOP ACTIVE", "SWITCH ON DISABLED")
@@ -49,7 +52,8 @@ def test_state_commands(node, capsys):
     assert rc == 0 and out["history"][0]["code"] == 0x3210 and out["error_register"] & 0x04
     assert out["history"][0]["description"] == "DC-link overvoltage"
     rc, err = dl(node, capsys, "fault-reset")  # the overvoltage persists: refused
-    assert rc == 1 and err.count("\n") == 1 and "fault reset refused" in err
+    # with --json the error is JSON on stdout, with the exit code
+    assert rc == 1 and err["exit_code"] == 1 and "fault reset refused" in err["error"]
     dl(node, capsys, "write", "sim_fault.V_dc_supply", "48")
     rc, out = dl(node, capsys, "fault-reset")
     assert rc == 0 and out == {"state": "SWITCH ON DISABLED"}

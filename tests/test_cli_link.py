@@ -207,6 +207,9 @@ _POSITIONALS = {
     "nmt": ["start"],
     "step": ["current"],
     "identify": ["--csv", "x.csv"],
+    "config": ["save", "x.dcf"],
+    "record": ["x.asc"],
+    "replay": ["x.asc"],
 }
 _BUS = ["--interface", "socketcan", "--channel", "vcan7", "--bitrate", "500000", "--node", "9"]
 _BUS += ["--sdo-timeout", "0.7", "--timeout", "2.5", "--json"]
