@@ -1,9 +1,10 @@
 """The tuning view's curves: Bode plot of the open loops and closed-loop poles (paper Figs. 4, 5,
 12), computed from a gain set before it is applied.
 
-Pure numpy on :mod:`drive_link.design`'s transfer functions, no GUI. Units: frequency Hz,
-magnitude dB, phase degrees (unwrapped), poles as complex z (Ts = 20 µs). A gain set is the
-dictionary of :func:`dashboard.tuning.read_gains` (``type``, ``L_c`` H, ``R_c`` Ω, ``k_p``/``k_i``
+A thin adapter of :mod:`drive_link.design`'s loop responses to uPlot's data layout, no GUI.
+Units: frequency Hz, magnitude dB, phase degrees (unwrapped), poles as complex z (Ts = 20 µs).
+A gain set is the dictionary of :func:`dashboard.tuning.read_gains` (``type``, ``L_c`` H,
+``R_c`` Ω, ``k_p``/``k_i``
 V/A, ``speed_k_p`` A/rpm, ``speed_k_i`` 1/sample, ``motor_R`` Ω, ``motor_L`` H).
 """
 
@@ -17,29 +18,23 @@ import numpy as np
 from drive_link import design
 
 __all__ = [
-    "F_MAX_HZ",
-    "F_MIN_HZ",
     "LoopView",
-    "current_loop",
     "frequency_grid",
     "loop_view",
-    "speed_loop",
     "unit_circle",
     "z_plane_data",
 ]
 
-F_MIN_HZ = 0.1  #: low end of the Bode plot (Hz): below the speed loop's crossover
-F_MAX_HZ = 24_900.0  #: high end (Hz): just under the Nyquist frequency fs/2 = 25 kHz
-N_POINTS = 400  #: frequencies on the log grid
+N_POINTS = 400  #: frequencies on the log grid (drive_link.design's response grid)
 
 
 @dataclass(frozen=True)
 class LoopView:
     """Bode curves and closed-loop poles of one gain set.
 
-    f_hz: log-spaced frequencies; current_db/current_deg: open current loop C(z)P(z);
-    speed_db/speed_deg: open speed loop (IP on G(z) = b/(z − a)); current_poles/speed_poles:
-    closed-loop poles (complex z).
+    f_hz: log-spaced frequencies (0 < f < fs/2); current_db/current_deg: open current loop
+    C(z)P(z); speed_db/speed_deg: open speed loop (IP on G(z) = b/(z − a), broken at the plant
+    input); current_poles/speed_poles: closed-loop poles (complex z).
     """
 
     f_hz: np.ndarray
@@ -51,22 +46,22 @@ class LoopView:
     speed_poles: np.ndarray
 
 
-def frequency_grid(n: int = N_POINTS) -> np.ndarray:
-    """``n`` log-spaced frequencies from F_MIN_HZ to F_MAX_HZ (Hz)."""
-    return np.geomspace(F_MIN_HZ, F_MAX_HZ, n)
+def frequency_grid() -> np.ndarray:
+    """The frequencies (Hz) every view is drawn on: drive_link.design's response grid."""
+    return design.speed_loop_response(0.5, 1.0, 0.1, 0.1, n_points=N_POINTS).f_hz
 
 
-def _bode(tf: design.DiscreteTF, f_hz: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    h = tf.freqresp(2 * np.pi * f_hz)
-    with np.errstate(divide="ignore"):
-        db = 20 * np.log10(np.abs(h))
-    deg = np.degrees(np.unwrap(np.angle(h)))
-    return np.where(np.isfinite(db), db, np.nan), deg
+def _finite(x: np.ndarray) -> np.ndarray:
+    return np.where(np.isfinite(x), x, np.nan)
 
 
-def current_loop(g: dict[str, Any]) -> design.DiscreteTF:
-    """Open current loop C(z)P(z) of gain set ``g`` on the drive's motor R, L."""
-    return design.current_loop_tf(
+def loop_view(g: dict[str, Any], a: float, b: float) -> LoopView:
+    """Bode curves and closed-loop poles of gain set ``g`` with speed model (a, b), from
+    drive_link.design's ``current_loop_response`` and ``speed_loop_response``.
+
+    :raises ValueError: a value the transfer functions cannot take (e.g. L_c ≤ 0).
+    """
+    cur = design.current_loop_response(
         g["type"],
         R=float(g["motor_R"]),
         L=float(g["motor_L"]),
@@ -74,29 +69,19 @@ def current_loop(g: dict[str, Any]) -> design.DiscreteTF:
         R_c=float(g["R_c"]),
         k_p=float(g["k_p"]),
         k_i=float(g["k_i"]),
+        n_points=N_POINTS,
     )
-
-
-def speed_loop(g: dict[str, Any], a: float, b: float) -> design.DiscreteTF:
-    """Open speed loop: IP feedback k_p (1 + k_i z/(z − 1)) times G(z) = b/(z − a)."""
-    kp, ki = float(g["speed_k_p"]), float(g["speed_k_i"])
-    G = design.DiscreteTF([b], [1.0, -a])
-    return design.DiscreteTF([kp * (1.0 + ki), -kp], [1.0, -1.0]) * G
-
-
-def loop_view(g: dict[str, Any], a: float, b: float, f_hz: np.ndarray | None = None) -> LoopView:
-    """Bode curves and closed-loop poles of gain set ``g`` with speed model (a, b).
-
-    :raises ValueError: a value the transfer functions cannot take (e.g. L_c ≤ 0).
-    """
-    f = frequency_grid() if f_hz is None else np.asarray(f_hz, dtype=float)
-    cur = current_loop(g)
-    spd = speed_loop(g, a, b)
-    c_db, c_deg = _bode(cur, f)
-    s_db, s_deg = _bode(spd, f)
-    cl_speed = design.ip_closed_loop(a, b, float(g["speed_k_p"]), float(g["speed_k_i"]))
+    spd = design.speed_loop_response(
+        a, b, float(g["speed_k_p"]), float(g["speed_k_i"]), n_points=N_POINTS
+    )
     return LoopView(
-        f, c_db, c_deg, s_db, s_deg, design.feedback(cur).poles(), np.asarray(cl_speed.poles())
+        cur.f_hz,
+        _finite(cur.magnitude_db),
+        _finite(cur.phase_deg),
+        _finite(spd.magnitude_db),
+        _finite(spd.phase_deg),
+        cur.poles,
+        spd.poles,
     )
 
 

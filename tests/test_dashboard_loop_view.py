@@ -1,6 +1,6 @@
-"""The tuning view's curves (dashboard.loop_view) against python-control (test-only oracle):
-Bode magnitude/phase of the open current and speed loops and the closed-loop poles, for each
-controller law, and the z-plane data layout uPlot needs (one ascending x array)."""
+"""The tuning view's curves (dashboard.loop_view on drive_link.design) against python-control
+(test-only oracle): Bode magnitude/phase of the open current and speed loops and the closed-loop
+poles, for each controller law, and the z-plane data layout uPlot needs (one ascending x array)."""
 
 from __future__ import annotations
 
@@ -33,12 +33,13 @@ def oracle_current(kind: str, L_c: float) -> ct.TransferFunction:
 @pytest.mark.parametrize(("kind", "ratio"), [("deadbeat", 1.0), ("deadbeat", 1.5), ("pi", 1.0)])
 def test_bode_and_poles_match_python_control(kind, ratio):
     g = dict(BASE, type=kind, L_c=ratio * L, motor_R=R, motor_L=L)
-    f = np.array([1.0, 50.0, 700.0, 4000.0, 20_000.0])
-    v = loop_view.loop_view(g, A, B, f)
+    v = loop_view.loop_view(g, A, B)
+    pick = np.searchsorted(v.f_hz, [1.0, 50.0, 700.0, 4000.0, 20_000.0])
+    f = v.f_hz[pick]
     loop = oracle_current(kind, ratio * L)
     h = ct.frequency_response(loop, 2 * np.pi * f).complex.ravel()
-    assert v.current_db == pytest.approx(20 * np.log10(np.abs(h)), abs=1e-6)
-    d = np.angle(np.exp(1j * np.radians(v.current_deg)) / h)  # same phase modulo 360°
+    assert v.current_db[pick] == pytest.approx(20 * np.log10(np.abs(h)), abs=1e-6)
+    d = np.angle(np.exp(1j * np.radians(v.current_deg[pick])) / h)  # same phase modulo 360°
     assert np.abs(d) == pytest.approx(0.0, abs=1e-6)
     want = np.sort_complex(ct.poles(ct.feedback(loop, 1)))
     assert np.sort_complex(v.current_poles) == pytest.approx(want, abs=1e-7)
@@ -46,14 +47,15 @@ def test_bode_and_poles_match_python_control(kind, ratio):
 
 def test_speed_loop_matches_python_control():
     g = dict(BASE, type="deadbeat", L_c=L, motor_R=R, motor_L=L)
-    f = np.array([0.1, 1.0, 10.0, 100.0])
-    v = loop_view.loop_view(g, A, B, f)
+    v = loop_view.loop_view(g, A, B)
+    pick = np.searchsorted(v.f_hz, [0.1, 1.0, 10.0, 100.0])
+    f = v.f_hz[pick]
     kp, ki = BASE["speed_k_p"], BASE["speed_k_i"]
     G = ct.tf([B], [1, -A], TS)
     # IP (paper eqs. 26-27): u = k_p (k_i/(1 − z⁻¹) e − ω); the loop seen at the plant input
     loop = ct.tf([kp * (1 + ki), -kp], [1, -1], TS) * G
     h = ct.frequency_response(loop, 2 * np.pi * f).complex.ravel()
-    assert v.speed_db == pytest.approx(20 * np.log10(np.abs(h)), abs=1e-6)
+    assert v.speed_db[pick] == pytest.approx(20 * np.log10(np.abs(h)), abs=1e-6)
     inner = ct.feedback(G, kp)  # the P part acts on the measured speed only
     cl = ct.feedback(ct.tf([kp * ki, 0], [1, -1], TS) * inner, 1)  # the I part on the error
     want = np.sort_complex(ct.poles(ct.minreal(cl, verbose=False)))

@@ -148,7 +148,7 @@ class PlotArea:
         nan = np.full(f.size, np.nan)
         log_x = {
             "x": uplot.Scale(
-                time=False, distr=3, log=10, range=(loop_view.F_MIN_HZ, loop_view.F_MAX_HZ)
+                time=False, distr=3, log=10, range=(float(f[0]), float(f[-1]))
             )
         }
         labels = ("current, typed", "current, applied", "speed, typed", "speed, applied")
@@ -207,7 +207,7 @@ class PlotArea:
         views = []
         for g in (typed, applied):
             try:
-                views.append(loop_view.loop_view(g, a, b, f) if g else None)
+                views.append(loop_view.loop_view(g, a, b) if g else None)
             except (ValueError, KeyError, ZeroDivisionError):
                 views.append(None)
         t, r = views
