@@ -249,11 +249,13 @@ def run_curses(
 
 
 def drive_state(drive: Drive) -> str:
-    """The 402 state for the status line ("?" if it cannot be read now)."""
-    try:
-        return str(drive.state)
-    except Exception:
-        return "state ?"
+    """NMT state and the 402 state from the statusword in the TPDOs (no SDO round trip, so a
+    silent drive cannot stall the view)."""
+    from .cia402 import state_from_statusword
+
+    sw = drive.live.latest().get("statusword", float("nan"))
+    state = state_from_statusword(int(sw)) if math.isfinite(sw) else "402 state ?"
+    return f"{drive.nmt_state}, {state}"
 
 
 def cmd_live_plot(args: argparse.Namespace, d: Drive) -> int:
