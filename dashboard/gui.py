@@ -4,9 +4,9 @@ the two background loops that keep every panel live.
 Layout: the plots are the main area, a wide per-browser panel docked left (tabs Live ·
 Capture · Loop, :mod:`dashboard.gui_tabs.plots`); the control panel is docked right (status,
 who controls, Take control, Drive buttons, progress/cancel of a long action, then tabs Speed ·
-Current · Tuning · Identify · Captures, one module each in :mod:`dashboard.gui_tabs`); the 3D
-rotor (:mod:`dashboard.gui_scene`, off with ``--no-3d``) gets the strip between them. Status
-texts: :mod:`dashboard.gui_status`.
+Current · Tuning · Identify · Captures · Config, one module each in
+:mod:`dashboard.gui_tabs`); the 3D rotor (:mod:`dashboard.gui_scene`, off with ``--no-3d``)
+gets the strip between them. Status texts: :mod:`dashboard.gui_status`.
 
 Streaming cannot die silently: the plot loop catches every failure of a tick (counted, shown),
 a watchdog in the status loop restarts a plot thread that died or stopped beating, and the page

@@ -9,7 +9,8 @@ control that caused them.
 
 Layout: the main area (plots, :mod:`dashboard.gui_tabs.plots`) is a wide panel docked left; the
 control panel (docked right) holds status, control, the drive buttons, progress, then the tabs
-Speed · Current · Tuning · Identify · Captures (one module each in :mod:`dashboard.gui_tabs`).
+Speed · Current · Tuning · Identify · Captures · Config (one module each in
+:mod:`dashboard.gui_tabs`).
 Units: rpm, A, µH, mΩ, V/A, A/rpm, 1/sample, N·m, s.
 """
 
@@ -28,6 +29,7 @@ from dashboard.fields import FieldError
 from dashboard.gui_field import CURRENT_COLORS, SPEED_COLORS, Field, fmt
 from dashboard.gui_tabs import (
     CapturesTab,
+    ConfigTab,
     CurrentTab,
     IdentifyTab,
     PlotArea,
@@ -45,7 +47,7 @@ _fmt = fmt  # older name
 __all__ = ["CURRENT_COLORS", "SPEED_COLORS", "Field", "Panel", "parse_sequence"]
 
 
-class Panel(PlotArea, SpeedTab, CurrentTab, TuningTab, IdentifyTab, CapturesTab):
+class Panel(PlotArea, SpeedTab, CurrentTab, TuningTab, IdentifyTab, CapturesTab, ConfigTab):
     """The GUI of one connected browser."""
 
     def __init__(self, owner: BenchGui, client: viser.ClientHandle) -> None:
@@ -160,6 +162,8 @@ class Panel(PlotArea, SpeedTab, CurrentTab, TuningTab, IdentifyTab, CapturesTab)
             self._build_identify_tab()
         with tabs.add_tab("Captures"):
             self._build_captures_tab()
+        with tabs.add_tab("Config"):
+            self._build_config_tab()
         self._build_plot_area()
         self.show_captures()
 

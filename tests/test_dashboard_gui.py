@@ -5,7 +5,10 @@ and every message viser queues goes through one lock.
 
 from __future__ import annotations
 
+import re
+import tempfile
 import time
+from pathlib import Path
 
 import httpx
 import msgspec
@@ -117,3 +120,93 @@ def test_with_a_token_the_gui_must_sign_in_before_it_changes_anything(app_client
         assert p._control(p.control_md) and p.holds_control()
     finally:
         cfg.token = None
+
+
+class _DownloadClient(_FakeClient):
+    """A browser stand-in that keeps what the panel sends it as file downloads."""
+
+    def __init__(self, gui, client_id: int) -> None:
+        super().__init__(gui, client_id)
+        self.files: dict[str, bytes] = {}
+
+    def send_file_download(self, name: str, data: bytes, **kw) -> None:
+        self.files[name] = data
+
+
+def _event(value):
+    from types import SimpleNamespace
+
+    return SimpleNamespace(target=SimpleNamespace(value=value))
+
+
+def test_config_tab_saves_a_dcf_canopen_reads_and_loads_it_back(app_client, tmp_path):
+    """Truths: canopen's own DCF import (values of the file) and the drive's read-back."""
+    import canopen
+    from viser._gui_handles import UploadedFile
+
+    from dashboard.gui_panel import Panel
+
+    gui = app_client.app.state.gui
+    drive = app_client.app.state.bench.drive
+    client = _DownloadClient(gui.server.gui, 991)
+    p = Panel(gui, client)
+    assert p._save_dcf(None).startswith("saved ")
+    (name, data), = client.files.items()
+    assert name.endswith(".dcf")
+    path = tmp_path / name
+    path.write_bytes(data)
+    od = canopen.objectdictionary.import_od(str(path), node_id=1)
+    R_c = drive.read("current_controller.R_c")
+    var = next(v for v in _od_vars(od) if v.name.endswith("R_c") and 0x2000 <= v.index)
+    assert float(var.value) == pytest.approx(R_c, rel=1e-6)  # the file holds the drive's value
+    text = data.decode()
+    text = re.sub(
+        rf"(\[{var.index:04X}sub{var.subindex:X}\][^\[]*?ParameterValue=)[^\r\n]*",
+        lambda m: m.group(1) + repr(R_c * 2),
+        text,
+        flags=re.IGNORECASE,
+    )
+    upload = UploadedFile(name, text.encode())
+    p.dcf_dry.value = True
+    msg = p._load_dcf(_event(upload))
+    assert "1 change(s) (dry run, nothing written)" in msg, msg
+    assert drive.read("current_controller.R_c") == pytest.approx(R_c)  # nothing written
+    p.dcf_dry.value = False
+    if app_client.app.state.bench.lease.holder is not None:
+        p._take_control(None)
+    msg = p._load_dcf(_event(upload))
+    assert "1 object(s) written" in msg, msg
+    assert drive.read("current_controller.R_c") == pytest.approx(R_c * 2, rel=1e-6)
+    p._load_dcf(_event(UploadedFile(name, data)))  # the saved file puts it back
+    assert drive.read("current_controller.R_c") == pytest.approx(R_c, rel=1e-6)
+
+
+def _od_vars(od):
+    import canopen
+
+    for obj in od.values():
+        if isinstance(obj, canopen.objectdictionary.ODVariable):
+            yield obj
+        else:
+            yield from obj.values()
+
+
+def test_config_tab_records_the_bus_for_other_can_tools(app_client):
+    """Truth: python-can's own reader opens the downloaded .asc and finds the drive's TPDOs."""
+    import can
+
+    from dashboard.gui_panel import Panel
+
+    gui = app_client.app.state.gui
+    client = _DownloadClient(gui.server.gui, 992)
+    p = Panel(gui, client)
+    p.rec_fmt.value = ".asc"
+    assert "recording the bus" in p._record_button(_event("Start recording"))
+    time.sleep(1.5)
+    msg = p._record_button(_event("Stop and download"))
+    (name, data), = client.files.items()
+    assert name.endswith(".asc") and "downloaded" in msg
+    path = Path(tempfile.mkdtemp()) / name
+    path.write_bytes(data)
+    ids = {m.arbitration_id for m in can.LogReader(str(path))}
+    assert 0x701 in ids or any(0x181 <= i <= 0x4FF for i in ids), ids  # heartbeat or TPDOs

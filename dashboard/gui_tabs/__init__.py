@@ -1,12 +1,13 @@
 """The viser GUI's tabs, one module each, as mixins of :class:`dashboard.gui_panel.Panel`.
 
 plots: the main area (Live, Capture, Loop), docked left and wide; speed, current, tuning,
-identify, captures: the control panel's tabs (docked right). Each module owns its widgets and
-their callbacks; the panel core (:mod:`dashboard.gui_panel`) owns the lease, notices and
+identify, captures, config: the control panel's tabs (docked right). Each module owns its
+widgets and their callbacks; the panel core (:mod:`dashboard.gui_panel`) owns the lease, notices and
 status.
 """
 
 from dashboard.gui_tabs.captures import CapturesTab
+from dashboard.gui_tabs.config import ConfigTab
 from dashboard.gui_tabs.current import CurrentTab
 from dashboard.gui_tabs.identify import IdentifyTab
 from dashboard.gui_tabs.plots import PlotArea
@@ -15,6 +16,7 @@ from dashboard.gui_tabs.tuning import TuningTab
 
 __all__ = [
     "CapturesTab",
+    "ConfigTab",
     "CurrentTab",
     "IdentifyTab",
     "PlotArea",
