@@ -289,3 +289,44 @@ def test_a_stalled_client_overruns_without_blocking_the_hub():
         b.shutdown()
         tx.close()
         stalled.close()
+
+
+def test_fast_frame_paths_agree_with_python_cans_own_encoder_and_parser():
+    """The hub's per-frame paths (parse_send_fields, frame_line) against python-can's socketcand
+    client functions (the truth of what clients send and read) and the full parse_send."""
+    import random
+
+    from can.interfaces.socketcand import socketcand as pc
+
+    from virtual_drive.hub_protocol import (
+        CommandSplitter,
+        ProtocolError,
+        frame_line,
+        parse_send,
+        parse_send_fields,
+    )
+
+    rng = random.Random(13)
+    splitter = CommandSplitter()
+    for _ in range(3000):
+        ext = rng.random() < 0.3
+        can_id = rng.randrange(1 << (29 if ext else 11))
+        data = bytes(rng.randrange(256) for _ in range(rng.randrange(9)))
+        msg = can.Message(arbitration_id=can_id, data=data, is_extended_id=ext)
+        (words,) = splitter.feed(pc.convert_can_message_to_ascii_message(msg).encode())
+        assert parse_send_fields(words) == (can_id, data, ext)
+        stamp = rng.uniform(0, 2e9)
+        line = frame_line(can_id, data, ext, stamp).decode()
+        back = pc.convert_ascii_message_to_can_message(line)
+        assert (back.arbitration_id, bytes(back.data), back.is_extended_id) == (can_id, data, ext)
+        assert back.timestamp == pytest.approx(stamp, abs=1e-6)
+    for bad in (
+        ["send"], ["send", "800", "0"], ["send", "1234", "0"], ["send", "12", "2", "1"],
+        ["send", "12", "1", "100"], ["send", "12", "9", *["0"] * 9], ["send", "g", "0"],
+        ["send", "12", "1", "+1"], ["send", "20000000", "0"],
+    ):  # fmt: skip
+        with pytest.raises(ProtocolError) as fast:
+            parse_send_fields(bad)
+        with pytest.raises(ProtocolError) as full:
+            parse_send(bad)
+        assert str(fast.value) == str(full.value)
