@@ -1,8 +1,32 @@
 """Host library for the BLDC drive: CANopen master (NMT, heartbeat, CiA 402, SDO, PDO streams,
 trace recorder), step tests, control design and the ``drive-link`` command.
 
->>> from drive_link import Drive, scan, DriveError
+>>> from drive_link import Drive, scan, DriveError, ModeOfOperation
+
+The public names are those of ``__all__``: the :class:`Drive` and what it returns, the errors,
+the enumerations of the object dictionary (IntEnums from :mod:`firmware_protocol.enums`), the
+gain facade (:func:`check_gains`, :func:`apply_gains`) and the design facade
+(:mod:`drive_link.design`). The gain and design names are imported on first use, so
+``import drive_link`` stays light.
 """
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+from firmware_protocol.enums import (
+    ControllerType,
+    GainSetApply,
+    ModeOfOperation,
+    SimFault,
+    SimModel,
+    StoreStatus,
+    TraceCommand,
+    TraceState,
+    TraceTriggerEdge,
+    TraceTriggerMode,
+)
 
 from .drive import Drive, Gains
 from .emcy import Emcy
@@ -16,23 +40,67 @@ from .errors import (
     StateError,
     UnknownObject,
 )
+from .jsonable import jsonable
 from .scan import NodeInfo, scan
+from .supervision import SupervisionError
 from .trace import Trace, Trigger
+
+#: Names loaded on first use: name → module (relative to this package).
+_LAZY = {
+    "design": ".design",
+    "GainCheck": ".gains",
+    "GainResult": ".gains",
+    "GainsRefused": ".gains",
+    "apply_gains": ".gains",
+    "check_gains": ".gains",
+}
 
 __all__ = [
     "BusError",
+    "ControllerType",
     "Drive",
     "DriveError",
     "DriveTimeout",
     "Emcy",
+    "GainCheck",
+    "GainResult",
+    "GainSetApply",
     "Gains",
+    "GainsRefused",
     "InvalidValue",
+    "ModeOfOperation",
     "NodeInfo",
     "NodeNotFound",
     "SdoAbort",
+    "SimFault",
+    "SimModel",
     "StateError",
+    "StoreStatus",
+    "SupervisionError",
     "Trace",
+    "TraceCommand",
+    "TraceState",
+    "TraceTriggerEdge",
+    "TraceTriggerMode",
     "Trigger",
     "UnknownObject",
+    "apply_gains",
+    "check_gains",
+    "design",
+    "jsonable",
     "scan",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'drive_link' has no attribute {name!r}")
+    mod = importlib.import_module(module, __name__)
+    value = mod if module == f".{name}" else getattr(mod, name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))
