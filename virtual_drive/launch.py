@@ -44,6 +44,18 @@ class BusSettings(dict):
     hub_process: HubProcess | None = None
     drives: dict[int, Any]
     stores: dict[int, Path]
+    _respawn: Any = None
+
+    def restart_drive(self, node_id: int) -> Any:
+        """Stop node ``node_id``'s ``virtual-drive run`` child (SIGTERM) and start it again on
+        the same parameter file; returns the new ``DriveProcess``. Raises RuntimeError if it
+        does not come up, KeyError for a node not started here, TypeError for in-process drives.
+        """
+        if self._respawn is None:
+            raise TypeError("only child-process drives can be restarted")
+        self.drives[node_id].stop()
+        self.drives[node_id] = self._respawn(node_id)
+        return self.drives[node_id]
 
     @property
     def port(self) -> int:
@@ -238,19 +250,24 @@ def _spawn_all(
     interpreter and imports: about 1 s idle, tens of s on a busy host)."""
     from virtual_drive.node.process import spawn_virtual_drive
 
+    def respawn(n: int) -> Any:
+        return spawn_virtual_drive(
+            drive_args,
+            port=settings.port,
+            channel=settings["channel"],
+            node_id=n,
+            store=settings.stores[n],
+            speed=speed,
+            timeout=timeout,
+        )
+
+    settings._respawn = respawn
+    stack.callback(_stop_drives, settings)  # SIGTERM each, then SIGKILL after 10 s
     results: dict[int, Any] = {}
 
     def spawn(n: int) -> None:
         try:
-            results[n] = spawn_virtual_drive(
-                drive_args,
-                port=settings.port,
-                channel=settings["channel"],
-                node_id=n,
-                store=settings.stores[n],
-                speed=speed,
-                timeout=timeout,
-            )
+            results[n] = respawn(n)
         except BaseException as exc:  # reported below, after every start has finished
             results[n] = exc
 
@@ -266,9 +283,20 @@ def _spawn_all(
             failures.append(f"node {n}: {r}")
         else:
             settings.drives[n] = r
-            stack.callback(r.stop)  # SIGTERM, then SIGKILL after 10 s
     if failures:
         raise RuntimeError("; ".join(failures))
+
+
+def _stop_drives(settings: BusSettings) -> None:
+    """Stop every child drive (each even if stopping another one failed)."""
+    errors = []
+    for proc in list(settings.drives.values()):
+        try:
+            proc.stop()
+        except Exception as exc:
+            errors.append(exc)
+    if errors:
+        raise errors[0]
 
 
 @contextlib.contextmanager
