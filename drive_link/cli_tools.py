@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-__all__ = ["register_tools"]
+__all__ = ["bus_settings", "register_tools"]
 
 
 def _lazy(module: str, fn: str) -> Any:
@@ -24,6 +24,17 @@ def _lazy(module: str, fn: str) -> Any:
 
     run.__name__ = fn
     return run
+
+
+def bus_settings(args: argparse.Namespace) -> dict[str, Any]:
+    """:meth:`Drive.connect` / :func:`drive_link.bus.open_bus` keywords from a command line's
+    bus options (:func:`drive_link.cli_connect.bus_settings_from_args` where it exists)."""
+    from . import cli_connect
+
+    shared = getattr(cli_connect, "bus_settings_from_args", None)
+    if shared is not None:
+        return dict(shared(args))
+    return {k: getattr(args, k, None) for k in ("interface", "channel", "bitrate", "host", "port")}
 
 
 def register_tools(sub: argparse._SubParsersAction, bus: argparse.ArgumentParser) -> None:

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import argparse
 import collections
-import contextlib
 import threading
 import time
 from dataclasses import dataclass, field
@@ -22,7 +21,7 @@ from typing import Any
 import can
 
 from .bus import open_bus
-from .errors import InvalidValue
+from .errors import DriveError, InvalidValue
 
 __all__ = ["RecordStats", "check_log_path", "cmd_record", "record_bus"]
 
@@ -132,7 +131,9 @@ def record_bus(
 
 
 def _bus_kwargs(args: argparse.Namespace) -> dict[str, Any]:
-    return {k: getattr(args, k, None) for k in ("interface", "channel", "bitrate", "host", "port")}
+    from .cli_tools import bus_settings
+
+    return bus_settings(args)
 
 
 def cmd_record(args: argparse.Namespace) -> int:
@@ -142,6 +143,7 @@ def cmd_record(args: argparse.Namespace) -> int:
     if args.seconds is not None and not 0 < args.seconds < 1e7:  # also nan and inf
         raise InvalidValue(f"--seconds {args.seconds}: must be a number of seconds > 0")
     stop = threading.Event()
+    done = threading.Event()
     box: dict[str, Any] = {}
 
     def worker() -> None:
@@ -149,6 +151,8 @@ def cmd_record(args: argparse.Namespace) -> int:
             box["stats"] = record_bus(_bus_kwargs(args), args.file, stop, args.seconds)
         except BaseException as exc:  # handed to the main thread
             box["error"] = exc
+        finally:
+            done.set()
 
     check_log_path(args.file)
     th = threading.Thread(target=worker, name="drive-link-record", daemon=True)
@@ -158,14 +162,17 @@ def cmd_record(args: argparse.Namespace) -> int:
 
         print(f"recording to {args.file} … Ctrl-C to stop", file=sys.stderr, flush=True)
     interrupted = False
-    try:
-        while th.is_alive():
-            th.join(0.2)
-    except KeyboardInterrupt:
-        interrupted = True
-    stop.set()
-    with contextlib.suppress(KeyboardInterrupt):
-        th.join(10.0)
+    deadline = None  # after the stop: how long the recorder may take to close the file
+    while not done.is_set():
+        try:
+            done.wait(0.2)
+        except KeyboardInterrupt:  # Ctrl-C ends the recording, not the command
+            interrupted = True
+        if interrupted and deadline is None:
+            stop.set()
+            deadline = time.monotonic() + 15.0
+        if deadline is not None and time.monotonic() > deadline:
+            raise DriveError("the recorder did not close the file within 15 s")
     if "error" in box:
         raise box["error"]
     stats = box["stats"]

@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import TextIO
 
 from . import cli
+from .cli_tools import bus_settings
 from .drive import Drive
 from .errors import DriveError, InvalidValue, SdoAbort
 
@@ -35,8 +36,9 @@ HISTORY_FILE = Path("~/.drive_link_history")
 HISTORY_LENGTH = 2000
 #: Words the shell handles itself.
 BUILTINS = ("help", "exit", "quit")
-#: Bus options that name the connection: a line may not point elsewhere than the shell's.
-_CONNECTION_OPTS = ("interface", "channel", "bitrate", "host", "port", "node")
+#: Bus options that do not name the connection (a line may give its own); every other bus
+#: option (interface, channel, bitrate, host, port, node …) must be the shell's.
+_PER_LINE_OPTS = ("sdo_timeout", "timeout", "json")
 #: Commands that make no sense inside a shell.
 _NOT_IN_SHELL = {"shell": "already in a shell"}
 #: Positional argument names that take an object name (completion offers the OD's names).
@@ -108,7 +110,7 @@ class Shell:
         for k, default in defaults.items():
             mine = getattr(self.args, k, default)
             given = getattr(args, k, default)
-            if k in _CONNECTION_OPTS:
+            if k not in _PER_LINE_OPTS:
                 if given != default and given != mine:
                     raise InvalidValue(
                         f"--{k.replace('_', '-')} {given}: this shell is connected to node "
@@ -312,11 +314,7 @@ def connect_session(args: argparse.Namespace) -> Drive:
     consumer set (so a dead shell stops the motor) unless ``--no-heartbeat``."""
     sdo_timeout = getattr(args, "sdo_timeout", None)
     d = Drive.connect(
-        interface=args.interface,
-        channel=args.channel,
-        bitrate=args.bitrate,
-        host=args.host,
-        port=args.port,
+        **bus_settings(args),
         node_id=args.node,
         heartbeat_ms=None if args.no_heartbeat else 100,
         **({} if sdo_timeout is None else {"sdo_timeout": sdo_timeout}),

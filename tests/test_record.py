@@ -274,3 +274,32 @@ def test_block_upload_reassembly_with_losses():
     assert len(f.uploads) == 1
     u = f.uploads[0]
     assert u.data == data and u.size == len(data) and u.crc_ok is True and u.complete
+
+
+def test_record_until_ctrl_c(hub_drive, tmp_path):
+    """Without --seconds the recording runs until Ctrl-C (SIGINT in the main thread), then
+    the file is closed properly and the summary printed (exit 0)."""
+    import _thread
+
+    path = tmp_path / "ctrl_c.log"
+    gone = threading.Event()
+
+    def ctrl_c_once_recording() -> None:
+        deadline = time.monotonic() + 60
+        while not path.exists() and not gone.is_set() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        if not gone.wait(1.5):
+            _thread.interrupt_main()
+
+    th = threading.Thread(target=ctrl_c_once_recording, daemon=True)
+    th.start()
+    try:
+        rc, out, err = run_here(hub_drive, "record", str(path), "--json")
+    finally:
+        gone.set()
+        th.join(5)
+    assert rc == 0, err
+    res = json.loads(out)
+    assert res["interrupted"] is True and 1.0 < res["seconds"] < 60
+    msgs = list(can.LogReader(path))
+    assert len(msgs) == res["frames"] and res["frames_per_id"]["0x701"] >= 5  # 100 ms heartbeat
