@@ -136,3 +136,15 @@ def test_no_copies_outside_firmware_protocol(what: str) -> None:
                 line = path.read_text(encoding="utf-8")[: m.start()].count("\n") + 1
                 hits.append(f"{rel}:{line}")
     assert not hits, f"{what} copied outside firmware_protocol: {hits}"
+
+
+def test_controller_name_literals_follow_the_enum() -> None:
+    """Static ``Literal`` annotations cannot import the map: they are pinned to it here."""
+    import typing
+
+    from dashboard.models import GainsIn
+    from drive_link import design
+
+    literal = next(a for a in typing.get_args(GainsIn.model_fields["type"].annotation) if a)
+    assert typing.get_args(literal) == tuple(CONTROLLER_TYPES)
+    assert tuple(design.CONTROLLERS) == tuple(CONTROLLER_TYPES)

@@ -1,0 +1,122 @@
+"""Setpoints of the next simulation chunk: profile ramps, current references, stop ramps.
+
+Profile velocity ramps the speed reference with 0x6083/0x6084 (halt: 0x6084 or 0x6085 per
+0x605D); profile torque ramps i_p* with 0x6087 toward 0x6071; mode -1 steps to 0x2030:1; all
+capped by 0x6073 x 0x6075. A stop ramp (quick stop, slow down, fault reaction) brakes in current
+mode (:func:`ramp_step`). Called by the pacing loop with the simulator lock held.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+from firmware_protocol.cia402 import CW_HALT
+
+from . import cia402 as sm
+from .od_maps import MODE_PROFILE_TORQUE, MODE_PROFILE_VELOCITY, SPEED_ZERO_RPM
+from .runner import TS
+
+if TYPE_CHECKING:
+    from .drive_node import VirtualDrive
+
+__all__ = ["current_ref", "prepare_chunk", "ramp_step", "ramp_towards", "set_sim_mode"]
+
+
+def set_sim_mode(d: VirtualDrive, mode: str) -> None:
+    """Switch the simulator to ``mode`` ("off", "speed", "current") if it is not in it."""
+    if mode != d._sim_mode:
+        d.sim.set_mode(mode)
+        d._sim_mode = mode
+
+
+def prepare_chunk(d: VirtualDrive, n: int) -> None:
+    """Mode and setpoints for the next ``n`` samples (sim lock held)."""
+    st = d.cia402
+    dt = n * TS
+    if not st.torque_enabled:
+        set_sim_mode(d, "off")
+        d._speed_ref = float(d.live.get("speed", 0.0))  # bumpless start
+        d._i_ref = 0.0
+        return
+    mode = d._mode
+    if st.ramp is not None:
+        ramp_step(d, dt)
+        return
+    halt = bool(st.controlword & CW_HALT)
+    if mode == MODE_PROFILE_VELOCITY:
+        set_sim_mode(d, "speed")
+        if halt:  # 0x605D: 1 slow-down ramp (0x6084), 2..4 quick-stop ramp (0x6085)
+            rate = d._value(0x6084) if d._value(0x605D) == 1 else d._value(0x6085)
+            d._speed_ref = ramp_towards(d._speed_ref, 0.0, rate, rate, dt)
+        else:
+            target = float(d._value(0x60FF))
+            d._speed_ref = ramp_towards(
+                d._speed_ref, target, d._value(0x6083), d._value(0x6084), dt
+            )
+        d.sim.set_speed_ref(d._speed_ref)
+    else:
+        set_sim_mode(d, "current")
+        d.sim.set_current_ref(current_ref(d, mode, halt, dt))
+
+
+def current_ref(d: VirtualDrive, mode: int, halt: bool = False, dt: float = 0.0) -> float:
+    """i_p* (A) of the current modes: profile torque follows 0x6087 (per mille of rated per s,
+    0 = step) toward target_torque, or toward 0 on halt; mode -1 steps to i_p_ref."""
+    rated = d._value(0x6075) / 1000.0
+    cap = d._value(0x6073) / 1000.0 * rated
+    if mode == MODE_PROFILE_TORQUE:
+        target = 0.0 if halt else d._value(0x6071) / 1000.0 * rated
+        slope = d._value(0x6087) / 1000.0 * rated  # A/s
+        target = max(-cap, min(cap, target))
+        d._i_ref = ramp_towards(d._i_ref, target, slope, slope, dt)
+    else:
+        target = 0.0 if halt else float(d._value(0x2030, 1))
+        target = max(-cap, min(cap, target))
+        d._i_ref = target
+    d._i_target = target
+    return max(-cap, min(cap, d._i_ref))
+
+
+def ramp_step(d: VirtualDrive, dt: float) -> None:
+    """Stop ramp of quick stop / slow down / fault reaction, in every mode.
+
+    The IP speed loop is far too slow to follow a stop ramp (its integral path has a time
+    constant of about a second with the paper's gains), so the drive brakes in current mode:
+    |i_p*| = J alpha / K_t for the deceleration alpha of 0x6085 (quick) or 0x6084 (slow; 0 = use
+    0x6085), capped by the current limit, until |speed| < 10 rpm; then the ramp ends.
+    """
+    st = d.cia402
+    speed = float(d.live["speed"])
+    set_sim_mode(d, "current")
+    if abs(speed) < SPEED_ZERO_RPM:
+        d.sim.set_current_ref(0.0)
+        d._speed_ref = 0.0
+        st.ramp_done()
+        return
+    decel = d._value(0x6084) if st.ramp == sm.RAMP_SLOW else 0
+    if decel == 0:
+        decel = d._value(0x6085)
+    alpha = decel * 2.0 * math.pi / 60.0  # rad/s^2
+    K_t = d._value(0x2000, 3) * 60.0 / (2.0 * math.pi)  # N m/A (i_p)
+    J = d._value(0x5000, 3)
+    rated = d._value(0x6075) / 1000.0
+    limit = min(d._value(0x2020, 3), d._value(0x6073) / 1000.0 * rated)
+    i_brake = min(limit, J * alpha / K_t) if decel > 0 else limit
+    d.sim.set_current_ref(-math.copysign(i_brake, speed))
+
+
+def ramp_towards(x: float, target: float, accel: float, decel: float, dt: float) -> float:
+    """Move ``x`` toward ``target`` at ``accel``/``decel`` (units/s; 0 = step) for ``dt`` s."""
+    if x == target:
+        return x
+    speeding_up = abs(target) > abs(x) and (
+        x == 0 or math.copysign(1, x) == math.copysign(1, target)
+    )
+    rate = accel if speeding_up else decel
+    if rate <= 0:
+        return target
+    step = rate * dt
+    if abs(target - x) <= step:
+        return target
+    return x + math.copysign(step, target - x)

@@ -1,0 +1,90 @@
+"""Writes of the trace configuration 0x2100 / channels 0x2101 and their copy into the recorder.
+
+Channels and the trigger source must be 0x2040 measurements of the right bit length (else abort
+0x06090030); while the recorder is armed or recording the configuration is frozen (0x08000022);
+the command 0x2100:9 stops, arms (after copying the objects into the recorder) or forces.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+from canopen.sdo import SdoAbortedError
+
+from firmware_protocol import abort_codes
+
+from .od_maps import MEASUREMENTS
+from .recorder import ARMED, CMD_ARM, CMD_FORCE, CMD_STOP, RECORDING, TraceConfigError
+
+if TYPE_CHECKING:
+    from .drive_node import VirtualDrive
+
+__all__ = ["check_trace_channel", "configure_recorder", "trace_config_write"]
+
+WriteResult = tuple[bool, Callable[[], None] | None]
+
+
+def trace_config_write(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+    """0x2100:``sub`` := ``value`` (already checked against the EDS): store it? follow-up?"""
+    rec = d.recorder
+    if sub == 9:
+        if value == CMD_STOP:
+            return True, rec.stop
+        configure_recorder(d)
+        if value == CMD_ARM:
+            try:
+                rec.arm()
+            except TraceConfigError as exc:
+                raise SdoAbortedError(abort_codes.INVALID_VALUE) from exc
+        elif value == CMD_FORCE:
+            rec.force()
+        return True, None
+    if rec.state in (ARMED, RECORDING):  # configuration is frozen
+        raise SdoAbortedError(abort_codes.DEVICE_STATE)
+    if sub == 5:
+        check_trace_channel(d, value, allow_zero=False)
+    return True, None
+
+
+def check_trace_channel(d: VirtualDrive, ref: int, allow_zero: bool = True) -> None:
+    """Abort 0x06090030 unless ``ref`` (index << 16 | sub << 8 | bits) is a 0x2040 measurement
+    with its bit length (0 = unused channel, when ``allow_zero``)."""
+    if ref == 0 and allow_zero:
+        return
+    index, sub, bits = (ref >> 16) & 0xFFFF, (ref >> 8) & 0xFF, ref & 0xFF
+    if index != 0x2040 or sub not in MEASUREMENTS:
+        raise SdoAbortedError(abort_codes.INVALID_VALUE)
+    if bits != len(d.node._find_object(index, sub)):
+        raise SdoAbortedError(abort_codes.INVALID_VALUE)
+
+
+def configure_recorder(d: VirtualDrive) -> None:
+    """Copy 0x2100/0x2101 into the recorder (before arming)."""
+    rec = d.recorder
+    count = d._value(0x2100, 1)
+    channels = []
+    for k in range(1, count + 1):
+        ref = d._value(0x2101, k)
+        sub = (ref >> 8) & 0xFF
+        if (ref >> 16) != 0x2040 or sub not in MEASUREMENTS:
+            raise SdoAbortedError(abort_codes.INVALID_VALUE)
+        channels.append(MEASUREMENTS[sub])
+    src = d._value(0x2100, 5)
+    if (src >> 16) != 0x2040 or ((src >> 8) & 0xFF) not in MEASUREMENTS:
+        raise SdoAbortedError(abort_codes.INVALID_VALUE)
+    length = d._value(0x2100, 3)
+    pre = d._value(0x2100, 4)
+    divider = d._value(0x2100, 2)
+    try:
+        rec.check(channels, length, pre, divider)
+    except TraceConfigError as exc:
+        raise SdoAbortedError(abort_codes.INVALID_VALUE) from exc
+    rec.channels = channels
+    rec.length = length
+    rec.pre_trigger = pre
+    rec.divider = divider
+    rec.trigger_source = MEASUREMENTS[(src >> 8) & 0xFF]
+    rec.trigger_level = float(d._value(0x2100, 6))
+    rec.trigger_edge = d._value(0x2100, 7)
+    rec.trigger_mode = d._value(0x2100, 8)

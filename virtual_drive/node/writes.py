@@ -1,0 +1,251 @@
+"""Every write to the drive's OD: checks, then a table of handlers by object index.
+
+:func:`before_write` decides, for one write, whether to store the value and what to do after
+storing it; raising :class:`canopen.sdo.SdoAbortedError` refuses it (nothing changes). The order:
+
+1. :data:`COMMANDS` (0x1003 clear history, 0x1010 save, 0x1011 load, 0x20F1 apply a gain set):
+   handled here, never stored;
+2. :data:`PRE_CHECKS` (0x6060 only in a supported mode and not while OPERATION ENABLED);
+3. a ``ConfigOnly`` object while the power stage is on: 0x08000022;
+4. PDO communication / mapping objects: the EDS check and the PDO engine's rules;
+5. the EDS check (limits, enumerations, cross-object and stability rules: :class:`.ParamChecker`);
+6. :data:`HANDLERS` by index (objects without a handler are simply stored).
+
+A handler is ``handler(drive, sub, value) -> (store, after)``: ``store`` says whether the LocalNode
+keeps the written bytes, ``after`` (or None) runs once they are stored.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Any
+
+from canopen import objectdictionary as odm
+from canopen.sdo import SdoAbortedError
+
+from firmware_protocol import abort_codes
+from firmware_protocol.cob_id import check_cob_id, check_heartbeat_consumers
+from firmware_protocol.entry import LimitError
+
+from . import cia402 as sm
+from . import gain_sets, parameters, plant, storage
+from .od_maps import SUPPORTED_MODES
+from .pdo import is_pdo_config
+from .trace_config import check_trace_channel, trace_config_write
+
+if TYPE_CHECKING:
+    from .drive_node import VirtualDrive
+
+__all__ = ["COMMANDS", "HANDLERS", "PRE_CHECKS", "Handler", "WriteResult", "before_write"]
+
+logger = logging.getLogger(__name__)
+
+WriteResult = tuple[bool, Callable[[], None] | None]
+"""(store the written bytes?, follow-up to run once they are stored)."""
+Handler = Callable[["VirtualDrive", int, Any], WriteResult]
+"""``handler(drive, sub, value)``; raises SdoAbortedError to refuse the write."""
+
+
+def before_write(
+    d: VirtualDrive, index: int, sub: int, obj: odm.ODVariable, data: bytes
+) -> WriteResult:
+    """Check a write of ``data`` to ``index:sub`` and say whether to store it and what to do
+    after storing. Raises SdoAbortedError to refuse it (nothing changes)."""
+    value: Any = data if obj.data_type not in odm.NUMBER_TYPES else obj.decode_raw(data)
+    command = COMMANDS.get(index)
+    if command is not None:
+        return command(d, sub, value)
+    pre_check = PRE_CHECKS.get(index)
+    if pre_check is not None:
+        pre_check(d, sub, value)
+    entry = d.checker.entry(index, sub)
+    if entry is not None and entry.config_only and d.cia402.torque_enabled:
+        raise SdoAbortedError(abort_codes.DEVICE_STATE)  # plant definition: power stage off only
+    if is_pdo_config(index):
+        d.checker.check(index, sub, value)
+        d.pdo.check_write(index, sub, value)
+        return True, d.pdo.configure
+    value = d.checker.check(index, sub, value)
+    handler = HANDLERS.get(index)
+    if handler is None:
+        return True, None
+    return handler(d, sub, value)
+
+
+# -- commands (never stored) ------------------------------------------------------------------
+def _clear_error_history(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+    """0x1003: only sub 0 := 0 (clear the pre-defined error field), CiA 301."""
+    if sub != 0 or value != 0:
+        raise SdoAbortedError(abort_codes.INVALID_VALUE)
+    return False, d.emcy.clear_history
+
+
+def _store_parameters(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+    """0x1010: "save" stores the persistent objects."""
+    if value != storage.SAVE_SIGNATURE:
+        raise SdoAbortedError(abort_codes.STORE)
+    parameters.save_parameters(d)
+    return False, None
+
+
+def _restore_defaults(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+    """0x1011: "load" restores the defaults (after the next reset)."""
+    if value != storage.LOAD_SIGNATURE:
+        raise SdoAbortedError(abort_codes.STORE)
+    parameters.restore_defaults(d)
+    return False, None
+
+
+def _apply_gain_set(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+    """0x20F1: apply the staged gain set 0x20F0 (1 current, 2 speed, 3 both)."""
+    d.checker.check(0x20F1, sub, value)
+    gain_sets.apply_gain_set(d, int(value))
+    return False, None
+
+
+COMMANDS: Mapping[int, Handler] = {
+    0x1003: _clear_error_history,
+    0x1010: _store_parameters,
+    0x1011: _restore_defaults,
+    0x20F1: _apply_gain_set,
+}
+"""Objects whose write is a command: handled before any value check, never stored."""
+
+
+# -- checks before the EDS check ------------------------------------------------------------
+def _check_mode(d: VirtualDrive, sub: int, value: Any) -> None:
+    """0x6060: not while OPERATION ENABLED (0x08000022); a supported mode (0x06090030)."""
+    if d.cia402.state == sm.OPERATION_ENABLED:
+        raise SdoAbortedError(abort_codes.DEVICE_STATE)
+    if value not in SUPPORTED_MODES:
+        raise SdoAbortedError(abort_codes.INVALID_VALUE)
+
+
+PRE_CHECKS: Mapping[int, Callable[[VirtualDrive, int, Any], None]] = {0x6060: _check_mode}
+"""Checks that precede the EDS check (their abort code wins)."""
+
+
+# -- handlers after the EDS check ----------------------------------------------------------
+def _limit_error_to_abort(fn: Callable[[], None]) -> None:
+    try:
+        fn()
+    except LimitError as exc:
+        raise SdoAbortedError(exc.abort_code) from exc
+
+
+def _heartbeat_consumers(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+    """0x1016: node-ID 1..127, one entry per node, reserved bits 0 (CiA 301)."""
+    entries = d._consumer_entries(sub, value)
+    _limit_error_to_abort(lambda: check_heartbeat_consumers(entries, own_node_id=d.node_id))
+    return True, lambda: d.hb_consumer.configure(entries)
+
+
+def _heartbeat_producer(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+    """0x1017: producer heartbeat time (ms), effective at once."""
+    return True, lambda: d.hb_producer.set_period(value, time.monotonic())
+
+
+def _emcy_cob_id(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+    """0x1014: EMCY COB-ID (CiA 301 rules: :func:`firmware_protocol.cob_id.check_cob_id`)."""
+    _limit_error_to_abort(lambda: check_cob_id("emcy", value, d._value(0x1014)))
+    return True, lambda: d.emcy.set_cob_id(value)
+
+
+def _sdo_server2(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+    """0x1201: the second SDO server's COB-IDs; rebinds it."""
+    if sub in (1, 2):
+        _limit_error_to_abort(lambda: check_cob_id("sdo", value, d._value(0x1201, sub)))
+    return True, d._bind_sdo2
+
+
+def _controlword(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+    """0x6040: the CiA 402 state machine."""
+    return True, lambda: d.cia402.write_controlword(value)
+
+
+def _mode(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+    """0x6060: the mode of operation, effective at the next chunk."""
+    return True, lambda: setattr(d, "_mode", int(value))
+
+
+def _current_limit(d: VirtualDrive, sub: int, value: Any, index: int) -> WriteResult:
+    """0x6073 / 0x6075: the speed loop's current limit follows."""
+    return True, gain_sets.after_limit_change(d, index, sub, value)
+
+
+def _plant(index: int) -> Handler:
+    """Handler of a plant/controller object ``index`` (:data:`plant.SETTERS`): the simulator
+    takes the value at a chunk boundary or refuses it (abort 0x06090030)."""
+
+    def handler(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+        with d.sim_lock:
+            try:
+                plant.apply(d.sim, index, sub, value)
+            except plant.PlantError as exc:
+                logger.info("0x%04X:%02X = %r refused: %s", index, sub, value, exc)
+                raise SdoAbortedError(abort_codes.INVALID_VALUE) from exc
+        return True, None
+
+    return handler
+
+
+def _speed_controller(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+    """0x2020: gains go to the simulator; sub 3 (current limit) also re-applies the limit."""
+    if sub == 3:
+        return _current_limit(d, sub, value, 0x2020)
+    return _plant(0x2020)(d, sub, value)
+
+
+def _trace_channel(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+    """0x2101: a trace channel is a 0x2040 measurement (or 0)."""
+    check_trace_channel(d, value)
+    return True, None
+
+
+def _sim_fault(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+    """0x5010: 1 inject (0 none, 1 overcurrent, 2 overvoltage, 3 undervoltage), 2 supply V."""
+    with d.sim_lock:
+        try:
+            if sub == 1:
+                d.sim.inject_fault(int(value))
+            elif sub == 2:
+                d.sim.set_supply_voltage(float(value))
+        except ValueError as exc:
+            raise SdoAbortedError(abort_codes.INVALID_VALUE) from exc
+    return True, None
+
+
+def _sim_info(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+    """0x5030:3: the simulation model (0 PWM-exact, 1 averaged), switched after the store."""
+    if sub != 3:
+        return True, None
+    fn = getattr(d.sim, "set_model", None)
+    if fn is None:
+        raise SdoAbortedError(abort_codes.DEVICE_STATE)
+
+    def after() -> None:
+        with d.sim_lock:
+            fn("pwm" if value == 0 else "averaged")
+
+    return True, after
+
+
+HANDLERS: Mapping[int, Handler] = {
+    **{index: _plant(index) for index in plant.SETTERS},
+    0x1014: _emcy_cob_id,
+    0x1016: _heartbeat_consumers,
+    0x1017: _heartbeat_producer,
+    0x1201: _sdo_server2,
+    0x2020: _speed_controller,
+    0x2100: lambda d, sub, value: trace_config_write(d, sub, value),
+    0x2101: _trace_channel,
+    0x5010: _sim_fault,
+    0x5030: _sim_info,
+    0x6040: _controlword,
+    0x6060: _mode,
+    0x6073: lambda d, sub, value: _current_limit(d, sub, value, 0x6073),
+    0x6075: lambda d, sub, value: _current_limit(d, sub, value, 0x6075),
+}
+"""Object index -> what a checked write does; objects not listed are only stored."""
