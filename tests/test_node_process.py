@@ -333,3 +333,49 @@ def test_drive_exits_when_its_parent_is_killed(hub):
         time.sleep(0.1)
     os.kill(child, signal.SIGKILL)
     pytest.fail("the drive outlived its killed parent")
+
+
+def test_nodes_1_to_3_in_one_process(hub, tmp_path):
+    """``--nodes 1-3``: three full CANopen nodes in one process, each with its own OD state and
+    parameter file; bad node lists fail with one line."""
+    store = tmp_path / "params.json"
+    with spawn_virtual_drive(port=hub.port, nodes="1-3", store=store) as proc:
+        assert "nodes 1,2,3 ready" in proc.ready_line, proc.ready_line
+        bus = can.Bus(**hub.join_kwargs())
+        net = canopen.Network(bus)
+        net.connect()
+        try:
+            nodes = {}
+            for nid in (1, 2, 3):
+                node = canopen.RemoteNode(nid, load_od(node_id=nid).canopen_od(nid))
+                net.add_node(node)
+                node.sdo.RESPONSE_TIMEOUT = 2.0
+                nodes[nid] = node
+            for nid, node in nodes.items():
+                assert node.sdo[0x1018][2].raw == 0x5048  # identity.product_code
+                assert node.sdo[0x1200][2].raw == 0x580 + nid  # its own SDO server COB-ID
+            nodes[2].sdo[0x6060].raw = 4  # profile torque on node 2 only
+            assert [nodes[n].sdo[0x6060].raw for n in (1, 2, 3)] == [3, 4, 3]
+            nodes[2].sdo[0x1010][1].raw = SAVE
+            assert (tmp_path / "params-node2.json").exists()
+            assert not (tmp_path / "params-node1.json").exists()
+            # every node produces its heartbeat (0x700 + node-ID)
+            seen: set[int] = set()
+
+            class Ids(can.Listener):
+                def on_message_received(self, msg: can.Message) -> None:
+                    seen.add(msg.arbitration_id)
+
+            net.notifier.add_listener(Ids())
+            end = time.monotonic() + 10
+            while not {0x701, 0x702, 0x703} <= seen and time.monotonic() < end:
+                time.sleep(0.1)
+            assert {0x701, 0x702, 0x703} <= seen
+        finally:
+            net.disconnect()
+    for bad in (["--nodes", "0-3"], ["--nodes", "1-2", "--node-id", "3"]):
+        r = subprocess.run(
+            [sys.executable, "-m", "virtual_drive.cli", "run", "--hub", *bad],
+            capture_output=True, text=True, timeout=30,
+        )  # fmt: skip
+        assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr

@@ -5,8 +5,18 @@ Bus selection follows python-can: options given on the command line are passed t
 (``can.util.load_config``), so ``virtual-drive run`` with no bus options uses the user's
 python-can default. ``--hub`` starts a loopback hub in this process and joins it.
 
-On start the process prints one line ``virtual-drive: node N ready on <bus>`` to stdout
-(tests and scripts wait for it); with ``--hub`` the line also gives the hub's join line.
+``--nodes 1-4`` serves several drives (node-IDs 1 to 4; also ``1,3,5`` or ``1-3,7``) from one
+process: each is a full CANopen node with its own object dictionary, parameter file and bus
+connection, and one pacing thread runs them all (:class:`virtual_drive.node.runner.Pacer`).
+
+A socketcand bus (``--interface socketcand``, the loopback hub) is opened with the drive's own
+lean client :class:`virtual_drive.node.hub_bus.HubBus` (same protocol as python-can's
+``socketcand`` interface; the TPDOs of a tick go out in one write and frames no node here
+listens to are dropped before they are parsed).
+
+On start the process prints one line ``virtual-drive: node N ready on <bus>`` (``nodes 1,2,3,4
+ready on <bus>`` with ``--nodes``) to stdout (tests and scripts wait for it); with ``--hub`` the
+line also gives the hub's join line.
 """
 
 from __future__ import annotations
@@ -19,10 +29,25 @@ import socket
 import sys
 import threading
 import time
+from pathlib import Path
 
 import can
 
+__all__ = [
+    "add_parser",
+    "add_run_arguments",
+    "bus_kwargs",
+    "bus_lost",
+    "open_bus",
+    "parse_nodes",
+    "run_command",
+    "socketcand_defaults",
+    "store_for",
+]
+
 logger = logging.getLogger("virtual_drive.run")
+
+MAX_NODES = 16  #: drives one ``virtual-drive run --nodes`` process serves at most
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -51,8 +76,20 @@ def add_run_arguments(p: argparse.ArgumentParser) -> None:
         help="start a loopback hub in this process (127.0.0.1, --hub-port) and join it",
     )
     bus.add_argument("--hub-port", type=int, default=0, help="port of --hub (0 = any free)")
-    p.add_argument("-n", "--node-id", type=int, default=1, help="CANopen node-ID 1..127")
-    p.add_argument("--store", metavar="FILE", help="parameter file for 0x1010/0x1011")
+    p.add_argument(
+        "-n", "--node-id", type=int, default=None, help="CANopen node-ID 1..127 (default 1)"
+    )
+    p.add_argument(
+        "--nodes",
+        metavar="IDS",
+        help="serve several drives from this process, e.g. 1-4 or 1,3,5 (one pacing loop)",
+    )
+    p.add_argument(
+        "--store",
+        metavar="FILE",
+        help="parameter file for 0x1010/0x1011; with --nodes '{node}' in FILE is the node-ID, "
+        "else FILE gets '-node<N>' before its suffix",
+    )
     p.add_argument(
         "--speed", type=float, default=1.0, help="simulated seconds per wall-clock second"
     )
@@ -78,6 +115,52 @@ def socketcand_defaults(cfg: dict) -> dict:
     return cfg
 
 
+def parse_nodes(text: str) -> list[int]:
+    """Node-IDs from ``1-4``, ``1,3,5`` or ``1-3,7`` (each 1..127, no repeats, at most
+    :data:`MAX_NODES`); raises ValueError with a one-line reason."""
+    ids: list[int] = []
+    for part in text.split(","):
+        part = part.strip()
+        lo, sep, hi = part.partition("-")
+        try:
+            a = int(lo)
+            b = int(hi) if sep else a
+        except ValueError:
+            raise ValueError(f"--nodes: {part!r} is not a node-ID or range like 1-4") from None
+        if not (1 <= a <= 127 and 1 <= b <= 127) or b < a:
+            raise ValueError(f"--nodes: {part!r} is not within 1..127 (low-high)")
+        ids.extend(range(a, b + 1))
+    if len(set(ids)) != len(ids):
+        raise ValueError(f"--nodes: {text!r} names a node twice")
+    if not 1 <= len(ids) <= MAX_NODES:
+        raise ValueError(f"--nodes: 1..{MAX_NODES} drives per process, got {len(ids)}")
+    return ids
+
+
+def store_for(store: str | None, node_id: int, several: bool) -> Path | None:
+    """The parameter file of ``node_id``: ``{node}`` in ``store`` is replaced by the node-ID;
+    else with several nodes ``params.json`` becomes ``params-node2.json``."""
+    if store is None:
+        return None
+    if "{node}" in store:
+        return Path(store.replace("{node}", str(node_id)))
+    path = Path(store)
+    if not several:
+        return path
+    return path.with_name(f"{path.stem}-node{node_id}{path.suffix}")
+
+
+def open_bus(cfg: dict) -> can.BusABC:
+    """``can.Bus(**cfg)``, except that a socketcand bus uses the lean
+    :class:`~virtual_drive.node.hub_bus.HubBus` (same protocol, batched sends)."""
+    if cfg.get("interface") == "socketcand":
+        from virtual_drive.node.hub_bus import HubBus
+
+        kw = {k: v for k, v in cfg.items() if k != "interface"}
+        return HubBus(**kw)
+    return can.Bus(**cfg)
+
+
 def bus_lost(bus: can.BusABC, drive) -> str | None:
     """Why the bus is gone, or None while it works.
 
@@ -85,6 +168,11 @@ def bus_lost(bus: can.BusABC, drive) -> str | None:
     then spins on the dead socket), so the socket is peeked for end-of-file; on any bus, sends
     failing for more than 2 s also count as a lost bus.
     """
+    lost = getattr(bus, "lost", None)
+    if callable(lost):
+        reason = lost()
+        if reason is not None:
+            return reason
     sock = getattr(bus, "_SocketCanDaemonBus__socket", None)
     if sock is not None:
         try:
@@ -111,8 +199,17 @@ def run_command(args: argparse.Namespace) -> int:
         format="%(asctime)s %(levelname)s %(name)s: %(message)s",
         stream=sys.stderr,
     )
-    if not 1 <= args.node_id <= 127:
-        return _fail(f"--node-id must be 1..127, got {args.node_id}", 2)
+    if args.nodes is not None:
+        if args.node_id is not None:
+            return _fail("give --node-id or --nodes, not both", 2)
+        try:
+            node_ids = parse_nodes(args.nodes)
+        except ValueError as exc:
+            return _fail(str(exc), 2)
+    else:
+        node_ids = [1 if args.node_id is None else args.node_id]
+        if not 1 <= node_ids[0] <= 127:
+            return _fail(f"--node-id must be 1..127, got {node_ids[0]}", 2)
     if not args.speed > 0:
         return _fail(f"--speed must be > 0, got {args.speed}", 2)
     hub = None
@@ -147,15 +244,20 @@ def run_command(args: argparse.Namespace) -> int:
             return _fail(
                 f"cannot open the CAN bus ({shown}): {getattr(exc, 'strerror', None) or exc}"
             )
+    buses: list[can.BusABC] = []
     try:
-        bus = can.Bus(**cfg)
+        for _ in node_ids:  # one connection per node: each sees the others' frames
+            buses.append(open_bus(cfg))
     except Exception as exc:  # python-can raises many types (CanError, OSError, ValueError...)
+        for bus in buses:
+            bus.shutdown()
         if hub is not None:
             hub.stop()
         reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         return _fail(f"cannot open the CAN bus ({shown}): {reason}")
 
     from virtual_drive.node.drive_node import VirtualDrive
+    from virtual_drive.node.runner import Pacer
 
     stop = threading.Event()
 
@@ -163,21 +265,40 @@ def run_command(args: argparse.Namespace) -> int:
         stop.set()
 
     previous = {s: signal.signal(s, _on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
-    # The drive process runs three Python threads (notifier, pacing loop, TPDO timer): hand the
-    # GIL over every 0.5 ms instead of 5 ms so a due TPDO or an SDO request does not wait for
-    # the pacing loop (median 2 ms-inhibit gap 2.6 -> 2.2 ms measured at load 25).
+    # The drive process runs a pacing thread (simulation chunks and TPDOs of all nodes) and a
+    # receive thread per node: hand the GIL over every 0.5 ms instead of 5 ms so an SDO request
+    # or a TPDO due on its exact time does not wait for another thread's Python work
+    # (median 2 ms-inhibit gap 2.6 -> 2.2 ms measured at load 25).
     sys.setswitchinterval(0.0005)
-    drive = None
+    pacer = Pacer()
+    drives: list = []
+    several = len(node_ids) > 1
     try:
-        try:
-            drive = VirtualDrive(bus, node_id=args.node_id, store_path=args.store, speed=args.speed)
-        except Exception as exc:
-            return _fail(f"cannot start the drive: {exc}")
-        if drive.store_error:
-            logger.error("parameter file: %s (defaults used)", drive.store_error)
-        drive.start()
-        where = bus.channel_info
-        line = f"virtual-drive: node {args.node_id} ready on {where}"
+        for node_id, bus in zip(node_ids, buses, strict=True):
+            try:
+                drive = VirtualDrive(
+                    bus,
+                    node_id=node_id,
+                    store_path=store_for(args.store, node_id, several),
+                    speed=args.speed,
+                )
+            except Exception as exc:
+                return _fail(f"cannot start the drive (node {node_id}): {exc}")
+            if drive.store_error:
+                logger.error(
+                    "node %d parameter file: %s (defaults used)", node_id, drive.store_error
+                )
+            pacer.adopt(drive.runner)  # one pacing thread for all nodes
+            if hasattr(bus, "rx_wanted"):
+                bus.rx_wanted = drive.network.subscribers  # drop frames this node ignores
+            drives.append(drive)
+        for drive in drives:
+            drive.start()
+        where = buses[0].channel_info
+        if several:
+            line = f"virtual-drive: nodes {','.join(map(str, node_ids))} ready on {where}"
+        else:
+            line = f"virtual-drive: node {node_ids[0]} ready on {where}"
         if hub is not None:
             line += f"; hub: {hub.join_line()}"
         print(line, flush=True)
@@ -185,17 +306,21 @@ def run_command(args: argparse.Namespace) -> int:
         while not stop.wait(0.2):
             if parent and parent.isdigit() and os.getppid() != int(parent):
                 return _fail(f"parent process {parent} is gone")
-            if drive.runner.error is not None:
-                return _fail(f"simulation loop stopped: {drive.runner.error}")
-            lost = bus_lost(bus, drive)
-            if lost is not None:
-                return _fail(f"CAN bus lost: {lost}")
+            for drive in drives:
+                prefix = f"node {drive.node_id}: " if several else ""
+                if drive.runner.error is not None:
+                    return _fail(f"{prefix}simulation loop stopped: {drive.runner.error}")
+                lost = bus_lost(drive.bus, drive)
+                if lost is not None:
+                    return _fail(f"{prefix}CAN bus lost: {lost}")
         logger.info("signal received, shutting down")
         return 0
     finally:
-        if drive is not None:
+        for drive in drives:
             drive.stop()
-        bus.shutdown()
+        pacer.stop()
+        for bus in buses:
+            bus.shutdown()
         if hub is not None:
             hub.stop()
         for s, handler in previous.items():

@@ -68,6 +68,7 @@ from .reads import make_live_getters
 from .recorder import ARMED, RECORDING, TraceRecorder
 from .runner import Runner
 from .sdo_block import BlockSdoServer
+from .tx import make_send_many
 
 __all__ = [
     "CURRENT_WINDOW_A",
@@ -168,11 +169,16 @@ class VirtualDrive:
             lambda i, s: self._live_getters.get((i, s)),
             report=self.emcy.raise_error,
             clear=self.emcy.clear_error,
+            send_many=make_send_many(self),
+            align=lambda t: self.runner.align(t),
         )
         self.cia402 = Cia402StateMachine(self._options, self._reset_fault)
         self.recorder = TraceRecorder()
         self.checker = ParamChecker(self.view, self._current_by_name)
-        self.runner = Runner(self._step, self._periodic, speed=self.speed, period=period)
+        # the pacing thread also sends the event-driven TPDOs (one wake-up per tick)
+        self.runner = Runner(
+            self._step, self._periodic, speed=self.speed, period=period, timer=self.pdo.tick
+        )
         self._live_getters = make_live_getters(self)
         # control state (touched by the runner between chunks)
         self._mode = MODE_PROFILE_VELOCITY
@@ -204,7 +210,6 @@ class VirtualDrive:
         self._started = True
         self.network.notifier = can.Notifier(self.bus, self.network.listeners, 0.2)
         self.nmt.boot()
-        self.pdo.start()
         self.runner.start()
         logger.info(
             "virtual drive node %d up (speed x%g, store %s)",

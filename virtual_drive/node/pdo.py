@@ -10,8 +10,9 @@ canopen's LocalNode keeps PDOs apart from its OD; this engine reads the communic
   abort code). Extra bytes beyond the mapping are ignored. The next RPDO processed in full
   clears both errors (error-reset EMCY when none is left);
 - TPDO: encodes the mapped objects' live values and sends them on the event timer (transmission
-  type 0xFE/0xFF, sub 5 in ms) or every n-th SYNC (types 1–240). Event-driven TPDOs run on
-  their own timer thread that sleeps until the exact due time (not on the 1 ms pacing tick), so
+  type 0xFE/0xFF, sub 5 in ms) or every n-th SYNC (types 1–240). Event-driven TPDOs are sent
+  by :meth:`PdoEngine.tick`, run by the drive's pacing thread (or by :meth:`PdoEngine.start`'s
+  own thread), which sleeps until the exact due time (not only the 1 ms pacing tick), so
   an inhibit time (sub 3, 100 µs units) of 2 ms gives 500 Hz, not the next tick: a frame is
   never sent before ``last transmission + inhibit`` nor before its event-timer grid point. A
   frame that is late by whole event periods is sent once (no burst); the periods passed
@@ -113,6 +114,10 @@ class PdoEngine:
     :param nmt_state: returns the NMT state code (0x7F pre-operational).
     :param fast_getter: ``(index, sub) → callable`` returning the live value, or None to read
         through ``node.get_data`` (slower).
+    :param send_many: ``send_many([(cob_id, data), ...])`` puts the TPDOs due at one instant
+        on the bus at once (one socket write on the hub client); default: ``send`` each.
+    :param align: ``align(t)`` → the first pacing tick at or after ``t``: event timers start
+        there, so the frames are sent in the tick's wake-up (no second wake-up per period).
     """
 
     def __init__(
@@ -126,9 +131,13 @@ class PdoEngine:
         fast_getter: Callable[[int, int], Callable[[], float | int] | None] = lambda i, s: None,
         report: Callable[[int, bytes], object] = lambda code, data: None,
         clear: Callable[[int], object] = lambda code: None,
+        send_many: Callable[[list[tuple[int, bytes]]], None] | None = None,
+        align: Callable[[float], float] = lambda t: t,
     ) -> None:
         self.node = node
         self._send = send
+        self._send_many = send_many
+        self._align = align
         self._subscribe = subscribe
         self._unsubscribe = unsubscribe
         self._allowed = allowed
@@ -201,7 +210,7 @@ class PdoEngine:
                     inhibit_s=self._u(TPDO_COMM + k, 3) * 100e-6,
                     pack=struct.Struct(fmt).pack,
                     getters=getters,
-                    next_due=now + event_ms / 1000.0,
+                    next_due=self._align(now + event_ms / 1000.0),
                 )
             )
         self.tpdos = tpdos
@@ -335,26 +344,31 @@ class PdoEngine:
 
         A TPDO is due at its event-timer grid point, but never before its last transmission
         plus the inhibit time (CiA 301: minimum spacing). Lateness by whole event periods is
-        counted in :attr:`missed` and the grid is kept (one frame, no burst).
+        counted in :attr:`missed` and the grid is kept (one frame, no burst). The frames due
+        together go out in one ``send_many``.
         """
         idle = 0.05
         if not self._allowed():
             return idle
-        earliest = now + idle
+        due: list[tuple[_Tpdo, int]] = []
         for t in self.tpdos:
-            if t.event_s <= 0 or t.trans_type < 0xFE:
-                continue
-            if now >= t.next_due:
+            if t.event_s > 0 and t.trans_type >= 0xFE and now >= t.next_due:
                 periods = int((now - t.next_due) // t.event_s)
                 if periods:
                     self.missed[t.number - 1] = (self.missed[t.number - 1] + periods) & 0xFFFFFFFF
-                self._send_tpdo(t, now)
+                due.append((t, periods))
+        if due:
+            self._send_tpdos([t for t, _ in due], now)
+            # the inhibit time counts from the end of this send: on a busy host the send
+            # itself may be delayed, and the next frame must still be inhibit_s later
+            done = time.monotonic()
+            for t, periods in due:
                 grid = t.next_due + (periods + 1) * t.event_s
-                # the inhibit time counts from the end of this send: on a busy host the send
-                # itself may be delayed, and the next frame must still be inhibit_s later
-                done = time.monotonic() if t.inhibit_s > 0 else now
-                t.next_due = max(grid, done + t.inhibit_s)
-            earliest = min(earliest, t.next_due)
+                t.next_due = max(grid, done + t.inhibit_s) if t.inhibit_s > 0 else grid
+        earliest = now + idle
+        for t in self.tpdos:
+            if t.event_s > 0 and t.trans_type >= 0xFE and t.next_due < earliest:
+                earliest = t.next_due
         return max(0.0, earliest - time.monotonic())
 
     def on_sync(self, can_id: int, data: bytes, timestamp: float) -> None:
@@ -369,12 +383,32 @@ class PdoEngine:
                     t.sync_count = 0
                     self._send_tpdo(t, now)
 
-    def _send_tpdo(self, t: _Tpdo, now: float) -> None:
+    def _payload(self, t: _Tpdo) -> bytes | None:
         try:
-            payload = t.pack(*[g() for g in t.getters])
+            return t.pack(*[g() for g in t.getters])
         except (struct.error, SdoAbortedError) as exc:
             logger.warning("TPDO%d not sent: %s", t.number, exc)
+            return None
+
+    def _send_tpdo(self, t: _Tpdo, now: float) -> None:
+        payload = self._payload(t)
+        if payload is None:
             return
         self._send(t.cob_id, payload)
         t.last_sent = now
         self.sent += 1
+
+    def _send_tpdos(self, tpdos: list[_Tpdo], now: float) -> None:
+        if self._send_many is None or len(tpdos) == 1:
+            for t in tpdos:
+                self._send_tpdo(t, now)
+            return
+        frames = []
+        for t in tpdos:
+            payload = self._payload(t)
+            if payload is not None:
+                frames.append((t.cob_id, payload))
+                t.last_sent = now
+        if frames:
+            self._send_many(frames)
+            self.sent += len(frames)

@@ -12,6 +12,8 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
+__all__ = ["PARENT_ENV", "DriveProcess", "spawn_virtual_drive"]
+
 #: Environment variable naming the parent PID; ``virtual-drive run`` exits when it is gone.
 PARENT_ENV = "VIRTUAL_DRIVE_PARENT_PID"
 
@@ -83,6 +85,7 @@ def spawn_virtual_drive(
     port: int | None = None,
     channel: str | None = "vcan0",
     node_id: int = 1,
+    nodes: str | None = None,
     store: str | Path | None = None,
     speed: float = 1.0,
     timeout: float = 60.0,
@@ -91,6 +94,8 @@ def spawn_virtual_drive(
     """Start ``python -m virtual_drive run ...`` and wait for its ready line.
 
     :param port: socketcand port of the loopback hub (required for socketcand).
+    :param nodes: several drives in the child, e.g. ``"1-4"`` (``--nodes``; replaces
+        ``node_id``).
     :param timeout: s to wait for the ready line; the interpreter start and imports took up
         to 40 s on this 2-core machine at load average 20 (about 1 s idle).
     :raises RuntimeError: the child exited or stayed silent for ``timeout`` s (its stderr is
@@ -105,7 +110,11 @@ def spawn_virtual_drive(
             cmd += ["--host", host, "--port", str(port)]
     if channel is not None:
         cmd += ["--channel", channel]
-    cmd += ["--node-id", str(node_id), "--speed", repr(float(speed))]
+    if nodes is not None:
+        cmd += ["--nodes", nodes]
+    else:
+        cmd += ["--node-id", str(node_id)]
+    cmd += ["--speed", repr(float(speed))]
     if store is not None:
         cmd += ["--store", str(store)]
     cmd += list(args)

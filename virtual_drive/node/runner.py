@@ -3,7 +3,12 @@
 Every ``period`` (1 ms) of wall-clock time the loop asks for the samples that bring the
 simulation to ``speed × elapsed wall time`` (50 samples at speed 1, 500 at speed 10), runs them
 in one call (``step(n)``), then runs the periodic services (``periodic(now)``: heartbeats,
-TPDO event timers, consumer timeouts). The simulation never runs per sample in Python.
+consumer timeouts) and the ``timer`` (the TPDO engine: sends what is due, in one batch, and says
+when the next frame is due). The thread sleeps until the next tick or the next due frame,
+whichever comes first, so an event-driven TPDO with an inhibit time goes out on its exact time
+and not on the next tick; with the default rates (multiples of 1 ms, aligned to the tick grid
+by :meth:`Runner.align`) it wakes once per millisecond. The simulation never runs per sample
+in Python.
 
 After a stall (the process was not scheduled) the loop catches up the backlog without sleeping,
 in chunks of at most ``max_chunk`` (5 ms of simulated time) with the periodic services run
@@ -13,6 +18,11 @@ end; only a backlog longer than ``max_lag`` (30 s) is dropped and counted in
 per chunk (e.g. a stop ramp ends when |speed| < 10 rpm), so a 0.1 s chunk let a quick stop at
 the 100 A limit brake through zero to −141 rpm; 5 ms bounds that to about 13 rpm, and catch-up
 still runs at about 80× real time (250-sample chunks; 140× with 0.1 s chunks, measured here).
+
+Several drives in one process share one :class:`Pacer` (one thread, one wake-up per tick for
+all of them): ``Runner(..., pacer=shared)``, or :meth:`Pacer.adopt` for a drive's own runner
+before it starts. Each runner keeps its own start time, sample count and statistics; an
+exception in one drive's step stops that runner (:attr:`Runner.error`), not the others.
 """
 
 from __future__ import annotations
@@ -23,6 +33,8 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+
+__all__ = ["TS", "Pacer", "Runner", "RunnerStats"]
 
 logger = logging.getLogger(__name__)
 
@@ -42,14 +54,17 @@ class RunnerStats:
 
 
 class Runner:
-    """Thread that paces ``step`` to wall-clock time.
+    """Paces ``step`` to wall-clock time (on its own :class:`Pacer` thread unless given one).
 
     :param step: runs ``n`` simulation samples (all chunk work: sim, recorder, faults).
     :param periodic: called with ``time.monotonic()`` after each chunk.
     :param speed: simulated seconds per wall-clock second.
-    :param period: wall-clock loop period (s).
+    :param period: wall-clock loop period (s) of the runner's own pacer.
     :param max_lag: largest backlog of simulated time caught up after a stall (s).
     :param max_chunk: most simulated time run in one call (s).
+    :param timer: ``timer(now) -> seconds until it is due again``, called after the periodic
+        services and whenever that time comes (the TPDO engine's ``tick``).
+    :param pacer: a shared :class:`Pacer` (several drives, one thread).
     """
 
     def __init__(
@@ -60,25 +75,157 @@ class Runner:
         period: float = 1e-3,
         max_lag: float = 30.0,
         max_chunk: float = 0.005,
+        timer: Callable[[float], float] | None = None,
+        pacer: Pacer | None = None,
     ) -> None:
         if not speed > 0:
             raise ValueError("speed must be > 0")
         self._step = step
         self._periodic = periodic
+        self.timer = timer
         self.speed = float(speed)
         self.period = float(period)
         self.max_lag = float(max_lag)
         self.max_chunk = float(max_chunk)
         self.stats = RunnerStats()
+        self.error: BaseException | None = None
+        self._pacer = pacer
+        self._own_pacer = pacer is None
+        self._active = False
+        self._t0 = 0.0
+        self._done = 0
+        self._max_n = 1
+        self._chunk_n = 1
+        self._timer_due = 0.0  #: monotonic time the timer wants to run next
+
+    # -- lifecycle ------------------------------------------------------------------------
+    def start(self) -> None:
+        if self._active:
+            return
+        if self._pacer is None:
+            self._pacer = Pacer(self.period)
+            self._own_pacer = True
+        self.error = None
+        self._t0 = time.monotonic()
+        self._done = 0  # samples run since t0 (plus dropped ones)
+        self._max_n = max(1, round(self.max_lag / TS))
+        # at least 4 loop periods' worth, so a high --speed never outruns the chunk limit
+        self._chunk_n = max(
+            round(self.max_chunk / TS), math.ceil(4 * self._pacer.period * self.speed / TS)
+        )
+        self._timer_due = 0.0
+        self._active = True
+        self._pacer.add(self)
+        self._pacer.start()
+
+    def stop(self, timeout: float = 5.0) -> None:
+        if self._pacer is None:
+            return
+        self._active = False
+        self._pacer.remove(self, timeout)
+        if self._own_pacer:
+            self._pacer.stop(timeout)
+
+    @property
+    def running(self) -> bool:
+        return self._active and self._pacer is not None and self._pacer.running
+
+    def align(self, t: float) -> float:
+        """The first tick of this runner's pacer at or after ``t`` (monotonic s); ``t`` itself
+        when not running. TPDO event timers start on it, so they share the tick's wake-up."""
+        pacer = self._pacer
+        return t if pacer is None or not pacer.running else pacer.align(t)
+
+    # -- one tick (pacer thread) ----------------------------------------------------------
+    def _tick(self, now: float) -> None:
+        stats = self.stats
+        target = int((now - self._t0) * self.speed / TS)
+        n = target - self._done
+        if n > self._max_n:
+            skipped = n - self._max_n
+            stats.dropped_s += skipped * TS
+            self._done += skipped
+            n = self._max_n
+            logger.warning(
+                "pacing loop behind: %.1f ms of simulated time dropped", skipped * TS * 1e3
+            )
+        n = min(n, self._chunk_n)
+        if n > 0:
+            self._step(n)
+            self._done += n
+            stats.samples += n
+            stats.max_chunk = max(stats.max_chunk, n)
+        after = time.monotonic()
+        lag = (after - self._t0) * self.speed - self._done * TS
+        stats.last_lag_s = lag
+        if abs(lag) > stats.max_lag_s and stats.iterations > 0:
+            stats.max_lag_s = abs(lag)
+        self._periodic(after)
+        stats.iterations += 1
+
+    def _behind(self, now: float) -> bool:
+        """More than one chunk of backlog (catch-up: no sleeping)."""
+        return (now - self._t0) * self.speed / TS - self._done > self._chunk_n
+
+    def _service_timer(self, now: float) -> float:
+        """Run the timer (it sends what is due); returns when it is due next (monotonic s)."""
+        if self.timer is None:
+            return math.inf
+        return time.monotonic() + self.timer(now)
+
+    def _fail(self, exc: BaseException) -> None:
+        self.error = exc
+        self._active = False
+        logger.exception("pacing loop stopped")
+
+
+class Pacer:
+    """One thread that ticks every ``period`` s and runs the chunks of all its runners.
+
+    :param period: wall-clock loop period (s).
+    """
+
+    def __init__(self, period: float = 1e-3) -> None:
+        if not period > 0:
+            raise ValueError("period must be > 0")
+        self.period = float(period)
+        self._runners: list[Runner] = []
+        self._lock = threading.Lock()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
-        self.error: BaseException | None = None
+        self._t0 = 0.0
+        self._k = 0
+
+    def adopt(self, runner: Runner) -> Runner:
+        """Let ``runner`` (not started yet) run on this pacer when it starts."""
+        if runner._active:
+            raise RuntimeError("adopt a runner before it starts")
+        runner._pacer = self
+        runner._own_pacer = False
+        return runner
+
+    def add(self, runner: Runner) -> None:
+        with self._lock:
+            if runner not in self._runners:
+                self._runners = [*self._runners, runner]
+
+    def remove(self, runner: Runner, timeout: float = 5.0) -> None:
+        with self._lock:
+            self._runners = [r for r in self._runners if r is not runner]
+        # a chunk of this runner may be running right now: wait for the tick to end
+        if self._thread is not None and self._thread is not threading.current_thread():
+            end = time.monotonic() + timeout
+            seen = self._k
+            while self._thread.is_alive() and self._k == seen and time.monotonic() < end:
+                time.sleep(self.period / 4)
 
     def start(self) -> None:
-        if self._thread is not None:
+        if self._thread is not None and self._thread.is_alive():
             return
         self._stop.clear()
-        self._thread = threading.Thread(target=self._run, name="virtual-drive-runner", daemon=True)
+        self._t0 = time.monotonic()
+        self._k = 0
+        self._thread = threading.Thread(target=self._run, name="virtual-drive-pacer", daemon=True)
         self._thread.start()
 
     def stop(self, timeout: float = 5.0) -> None:
@@ -91,50 +238,68 @@ class Runner:
     def running(self) -> bool:
         return self._thread is not None and self._thread.is_alive()
 
+    def align(self, t: float) -> float:
+        """First tick time at or after ``t`` (monotonic s)."""
+        k = math.ceil((t - self._t0) / self.period - 1e-9)
+        return self._t0 + k * self.period
+
     def _run(self) -> None:
         try:
             self._loop()
-        except BaseException as exc:  # report, never die silently
-            self.error = exc
-            logger.exception("pacing loop stopped")
+        except BaseException:  # report, never die silently
+            logger.exception("pacer stopped")
+            for r in self._runners:
+                r.error = r.error or RuntimeError("pacer stopped")
 
     def _loop(self) -> None:
-        stats = self.stats
-        t0 = time.monotonic()
-        done = 0  # samples run since t0 (plus dropped ones)
-        max_n = max(1, round(self.max_lag / TS))
-        # at least 4 loop periods' worth, so a high --speed never outruns the chunk limit
-        chunk_n = max(round(self.max_chunk / TS), math.ceil(4 * self.period * self.speed / TS))
-        k = 0
+        period = self.period
+        next_tick = self._t0
         while not self._stop.is_set():
+            runners = self._runners
             now = time.monotonic()
-            target = int((now - t0) * self.speed / TS)
-            n = target - done
-            if n > max_n:
-                skipped = n - max_n
-                stats.dropped_s += skipped * TS
-                done += skipped
-                n = max_n
-                logger.warning(
-                    "pacing loop behind: %.1f ms of simulated time dropped", skipped * TS * 1e3
-                )
-            n = min(n, chunk_n)
-            if n > 0:
-                self._step(n)
-                done += n
-                stats.samples += n
-                stats.max_chunk = max(stats.max_chunk, n)
-            after = time.monotonic()
-            lag = (after - t0) * self.speed - done * TS
-            stats.last_lag_s = lag
-            if abs(lag) > stats.max_lag_s and stats.iterations > 0:
-                stats.max_lag_s = abs(lag)
-            self._periodic(after)
-            stats.iterations += 1
-            k += 1
-            next_t = t0 + k * self.period
-            delay = next_t - time.monotonic()
+            wake = math.inf
+            # frames due now go first (with the values of the last chunk): a frame due on
+            # its exact time (inhibit) never waits for a simulation chunk
+            for r in runners:
+                if r._active and r.timer is not None and now >= r._timer_due:
+                    wake = min(wake, self._service(r, now))
+            if now >= next_tick:
+                behind = False
+                for r in runners:
+                    if not r._active:
+                        continue
+                    try:
+                        r._tick(now)
+                        behind = behind or r._behind(time.monotonic())
+                    except BaseException as exc:
+                        r._fail(exc)
+                self._k += 1
+                if not behind:
+                    next_tick += period
+                    if next_tick < time.monotonic() - period * 10:
+                        # re-align after a stall
+                        k = int((time.monotonic() - self._t0) / period) + 1
+                        next_tick = self._t0 + k * period
+                # once per tick: what fell due during the chunks, and when the next is due
+                # (a reconfigured TPDO is seen within one tick)
+                now = time.monotonic()
+                wake = math.inf
+                for r in runners:
+                    if r._active and r.timer is not None:
+                        wake = min(wake, self._service(r, now))
+            else:
+                for r in runners:
+                    if r._active and r.timer is not None:
+                        wake = min(wake, r._timer_due)
+            delay = min(wake, next_tick) - time.monotonic()
             if delay > 0:
                 self._stop.wait(delay) if delay > 0.02 else time.sleep(delay)
-            elif delay < -self.period * 10:
-                k = int((time.monotonic() - t0) / self.period)  # re-align after a stall
+
+    @staticmethod
+    def _service(r: Runner, now: float) -> float:
+        try:
+            r._timer_due = r._service_timer(now)
+        except Exception:  # the timer never dies: log, retry in 10 ms
+            logger.exception("pacer timer")
+            r._timer_due = now + 0.01
+        return r._timer_due
