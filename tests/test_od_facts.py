@@ -148,3 +148,18 @@ def test_controller_name_literals_follow_the_enum() -> None:
     literal = next(a for a in typing.get_args(GainsIn.model_fields["type"].annotation) if a)
     assert typing.get_args(literal) == tuple(CONTROLLER_TYPES)
     assert tuple(design.CONTROLLERS) == tuple(CONTROLLER_TYPES)
+
+
+def test_simulator_fault_kinds_follow_the_sim_fault_enum() -> None:
+    """0x5010:1 codes 0..3 select the simulator's fault kinds in SimFault's order and EMCY code."""
+    from firmware_protocol.enums import SimFault
+    from virtual_drive.sim.simulator import FAULT_KINDS
+
+    assert list(FAULT_KINDS.values()) == [
+        0,
+        emcy_codes.OVERCURRENT,
+        emcy_codes.DC_OVERVOLTAGE,
+        emcy_codes.DC_UNDERVOLTAGE,
+    ]
+    names = ["NONE", "OVERCURRENT", "DC_OVERVOLTAGE", "DC_UNDERVOLTAGE"]
+    assert [m.name for m in SimFault] == names

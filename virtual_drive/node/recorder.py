@@ -25,12 +25,14 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from firmware_protocol.enums import TraceCommand, TraceState, TraceTriggerEdge, TraceTriggerMode
+
 logger = logging.getLogger(__name__)
 
-IDLE, ARMED, RECORDING, DONE = 0, 1, 2, 3
-MODE_IMMEDIATE, MODE_CROSSING, MODE_STEP, MODE_FAULT = 0, 1, 2, 3
-EDGE_RISING, EDGE_FALLING, EDGE_EITHER = 0, 1, 2
-CMD_STOP, CMD_ARM, CMD_FORCE = 0, 1, 2
+IDLE, ARMED, RECORDING, DONE = (int(s) for s in TraceState)
+MODE_IMMEDIATE, MODE_CROSSING, MODE_STEP, MODE_FAULT = (int(m) for m in TraceTriggerMode)
+EDGE_RISING, EDGE_FALLING, EDGE_EITHER = (int(e) for e in TraceTriggerEdge)
+CMD_STOP, CMD_ARM, CMD_FORCE = (int(c) for c in TraceCommand)
 
 #: REAL32 samples for all channels together (64 KiB of external SRAM on the DSP).
 CAPACITY = 16384
