@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import importlib.util
 import os
+import shutil
 import sys
 from pathlib import Path
 
@@ -71,6 +72,8 @@ def test_socketcan_lane():
         pytest.skip("SOCKETCAN_LANE=off")
     d = start_lane()  # already running when the whole suite runs (tests/conftest.py)
     res = lane.wait(d, LANE_TIMEOUT + 120)
+    if res is not None:
+        shutil.rmtree(d, ignore_errors=True)
     load = Path("/proc/loadavg").read_text().split()[0]
     if res is None:
         log = (d / "runner.log").read_text(errors="replace")[-300:] if d else ""
