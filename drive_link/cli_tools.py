@@ -37,6 +37,17 @@ def bus_settings(args: argparse.Namespace) -> dict[str, Any]:
     return {k: getattr(args, k, None) for k in ("interface", "channel", "bitrate", "host", "port")}
 
 
+def _unit(unit: str, integer: bool = False) -> Any:
+    """argparse ``type=`` taking a value with a unit (``2min``, ``500ms``, ``20Hz``) through
+    cli's units parser where it exists, else a plain number in ``unit``."""
+    from . import cli
+
+    q = getattr(cli, "quantity", None)
+    if q is not None:
+        return q(unit, integer=integer)
+    return int if integer else float
+
+
 def register_tools(sub: argparse._SubParsersAction, bus: argparse.ArgumentParser) -> None:
     """Add ``shell``, ``record``, ``replay`` to ``sub`` and ``--plot`` to its ``live`` command.
 
@@ -79,7 +90,10 @@ def register_tools(sub: argparse._SubParsersAction, bus: argparse.ArgumentParser
     )
     p.add_argument("file", metavar="FILE", help="log file (.asc, .blf, .log, .csv, .trc, .mf4)")
     p.add_argument(
-        "--seconds", type=float, default=None, help="recording length, s (default: until Ctrl-C)"
+        "--seconds",
+        type=_unit("s"),
+        default=None,
+        help="recording length, s (10, 2min; default: until Ctrl-C)",
     )
 
     p = add(
@@ -123,7 +137,7 @@ def _add_live_plot(p: argparse.ArgumentParser) -> None:
         help="plot these TPDO signals live (i_p, speed, i_p_ref, speed_ref, v_L, e_L …); keys: "
         "space quick stop, q quick stop and quit, x quit",
     )
-    g.add_argument("--window", type=float, default=5.0, help="time span shown, s (default 5)")
+    g.add_argument("--window", type=_unit("s"), default=5.0, help="time span shown, s (default 5)")
     g.add_argument("--fps", type=float, default=10.0, help="redraws per second (default 10)")
     g.add_argument(
         "--frames",
