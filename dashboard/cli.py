@@ -9,6 +9,7 @@ GUI stays on 127.0.0.1: viser has no authentication; reach it through an SSH tun
 from __future__ import annotations
 
 import argparse
+import logging
 import os
 import socket
 import sys
@@ -86,6 +87,12 @@ def _port_free(host: str, port: int) -> bool:
             return False
     return True
 
+def _no_startup_traceback(record: logging.LogRecord) -> bool:
+    """Drop uvicorn's lifespan traceback and its "startup failed" line (main prints one line)."""
+    msg = record.getMessage()
+    return not (msg.startswith("Traceback") or msg.startswith("Application startup failed"))
+
+
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
@@ -142,7 +149,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         api = f"http://{_url_host(config.host)}:{config.api_port}"
         print(f"open http://127.0.0.1:{gui.port}/", flush=True)
         print(
-            f"  (REST API {api}/api, docs {api}/docs; bus: {app.state.bench.description}; "
+            f"  (REST API {api}/api/state, docs {api}/docs; bus: {app.state.bench.description}; "
             "Ctrl-C stops)",
             flush=True,
         )
@@ -158,9 +165,13 @@ def main(argv: Sequence[str] | None = None) -> int:
             lifespan="on",
         )
     )
+    # a bench that cannot open (e.g. --join-hub with no hub) is one line below, not a traceback
+    logging.getLogger("uvicorn.error").addFilter(_no_startup_traceback)
     try:
         server.run()
     except KeyboardInterrupt:
+        pass
+    except SystemExit:  # uvicorn exits 3 when the lifespan failed: reported below
         pass
     if not getattr(server, "started", False):
         reason = getattr(app.state, "startup_error", None) or "could not start"

@@ -15,7 +15,6 @@ from __future__ import annotations
 import argparse
 import json
 import logging
-import math
 import os
 import re
 import sys
@@ -38,6 +37,7 @@ from .errors import (
     SdoAbort,
     StateError,
 )
+from .jsonable import jsonable as _jsonable
 from .restore import leave_as_found
 
 __all__ = [
@@ -70,20 +70,6 @@ class Failed(DriveError):  # noqa: N818
 
 
 # --------------------------------------------------------------------------- output helpers
-def _jsonable(x: Any) -> Any:
-    if isinstance(x, dict):
-        return {str(k): _jsonable(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, float) and not math.isfinite(x):
-        return None
-    if hasattr(x, "item") and callable(x.item):
-        return _jsonable(x.item())
-    if isinstance(x, bytes):
-        return x.hex()
-    return x
-
-
 def _emit(args: argparse.Namespace, data: Any, text: str | Callable[[], str]) -> None:
     if args.json:
         print(json.dumps(_jsonable(data)))
@@ -92,23 +78,36 @@ def _emit(args: argparse.Namespace, data: Any, text: str | Callable[[], str]) ->
 
 
 def _progress_bar(args: argparse.Namespace) -> Callable[[int, int | None], None] | None:
+    """A tqdm bar on stderr for an upload (a terminal, or ``--progress``); None with --json."""
     if args.json or (not sys.stderr.isatty() and not getattr(args, "progress", False)):
         return None
+    from tqdm import tqdm
 
-    def bar(done: int, total: int | None) -> None:
-        if total:
-            frac = done / total
-            n = int(30 * frac)
-            sys.stderr.write(
-                f"\rupload [{'#' * n}{'.' * (30 - n)}] {100 * frac:5.1f} % {done / 1024:7.1f} KiB"
+    bars: list[tqdm] = []
+
+    def update(done: int, total: int | None) -> None:
+        if not bars:  # made at the first report, when the size is known (or not)
+            shape = "[{bar:30}] {percentage:5.1f} % " if total else ""
+            bar_format = "{desc} " + shape + "{n_fmt}B"
+            bars.append(
+                tqdm(
+                    desc="upload",
+                    total=total or None,
+                    unit="B",
+                    unit_scale=True,
+                    unit_divisor=1024,
+                    file=sys.stderr,
+                    ascii=" #",
+                    mininterval=0.1,
+                    bar_format=bar_format,
+                )
             )
-        else:
-            sys.stderr.write(f"\rupload {done / 1024:7.1f} KiB")
+        bar = bars[0]
+        bar.update(done - bar.n)
         if total and done >= total:
-            sys.stderr.write("\n")
-        sys.stderr.flush()
+            bar.close()
 
-    return bar
+    return update
 
 
 def _parse_value(text: str) -> float | int | str:
@@ -931,7 +930,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--pre-trigger", type=int, default=0, help="samples kept before the trigger (default 0)"
     )
     p.add_argument(
-        "--trigger", default="immediate", choices=["immediate", "signal", "setpoint_step", "fault"]
+        "--trigger",
+        default="immediate",
+        choices=["immediate", "signal", "setpoint_step", "fault"],
+        help="what starts the recording (default immediate)",
     )
     p.add_argument("--source", default="measurements.i_p", help="signal trigger source")
     p.add_argument(
@@ -940,7 +942,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="signal trigger level in the source's unit (A for i_p, rpm for speed), or with "
         "a unit (5A)",
     )
-    p.add_argument("--edge", default="rising", choices=["rising", "falling", "either"])
+    p.add_argument(
+        "--edge",
+        default="rising",
+        choices=["rising", "falling", "either"],
+        help="signal trigger: crossing of --level (default rising)",
+    )
     p.add_argument(
         "--wait", type=quantity("s"), default=None, help="seconds to wait for the trigger"
     )
@@ -1111,7 +1118,10 @@ def main(argv: list[str] | None = None) -> int:
 
 def _main(argv: list[str]) -> int:
     ap = build_parser()
-    args = ap.parse_args(argv)
+    try:
+        args = ap.parse_args(argv)
+    except SystemExit as exc:  # usage error (printed) or --help: the exit code, no raise
+        return exc.code if isinstance(exc.code, int) else 2
     _merge_bus(args)
     # Library log lines (canopen, python-can) would break the one-line-error rule.
     logging.getLogger().addHandler(logging.NullHandler())

@@ -6,12 +6,20 @@ import json
 import math
 import shutil
 import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy import signal
 
 from drive_link.cli_design import run_cli
+
+#: the console script of this interpreter's environment (pytest does not put the venv's bin on
+#: PATH: it sits next to sys.executable)
+DRIVE_LINK = shutil.which("drive-link", path=str(Path(sys.executable).parent)) or shutil.which(
+    "drive-link"
+)
 
 pytestmark = pytest.mark.timeout(120)
 
@@ -201,11 +209,11 @@ def test_identify_missing_file(tmp_path, capsys):
 
 
 @pytest.mark.skipif(
-    shutil.which("drive-link") is None, reason="drive-link console script not installed"
+    DRIVE_LINK is None, reason="drive-link console script not installed"
 )
 def test_console_script(tmp_path):
     p = subprocess.run(
-        ["drive-link", "design", "--Lc", repr(1.5 * L), "--json"],
+        [DRIVE_LINK, "design", "--Lc", repr(1.5 * L), "--json"],
         capture_output=True,
         text=True,
         timeout=60,
@@ -216,7 +224,7 @@ def test_console_script(tmp_path):
     assert d["gain_margin_db"] == pytest.approx(2.5, abs=0.1)
     assert math.isfinite(d["overshoot_pct"])
     bad = subprocess.run(
-        ["drive-link", "design", "--L", "-1"],
+        [DRIVE_LINK, "design", "--L", "-1"],
         capture_output=True,
         text=True,
         timeout=60,
@@ -227,7 +235,7 @@ def test_console_script(tmp_path):
     f = tmp_path / "trace.csv"
     _write_trace(f, D=50, n=1200)
     ok = subprocess.run(
-        ["drive-link", "identify", "--csv", str(f), "--json"],
+        [DRIVE_LINK, "identify", "--csv", str(f), "--json"],
         capture_output=True,
         text=True,
         timeout=60,

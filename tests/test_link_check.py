@@ -88,7 +88,7 @@ def test_check_starts_from_an_enabled_drive_in_current_mode(virtual_node, capsys
     _, ch = virtual_node
     bus = ["--interface", "virtual", "--channel", ch, "--node", "4"]
     assert cli.main(["nmt", "start", *bus]) == 0
-    assert cli.main(["set-current", "10", *bus]) == 0
+    assert cli.main(["set-current", "10", "--enable", *bus]) == 0  # refused while disabled
     assert cli.main(["enable", *bus]) == 0
     assert "OPERATION ENABLED" in capsys.readouterr().out
     rc = cli.main(["check", *bus, "--only", "cia402,modes", "--json"])
