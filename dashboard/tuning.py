@@ -16,10 +16,10 @@ from dashboard.bench import LIVE_NAMES, Bench, as_dict
 from dashboard.models import TYPE_NAMES
 from drive_link import design
 from drive_link import gains as link_gains
+from firmware_protocol import paper
 
 #: The paper's identified speed model (Section V), used until an identification has been run.
-A_PAPER = 0.9999785
-B_PAPER = 3.33715e-4
+A_PAPER, B_PAPER = paper.SPEED_MODEL
 
 
 def motor_RL(bench: Bench) -> tuple[float, float]:

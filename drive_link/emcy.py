@@ -5,44 +5,16 @@ from __future__ import annotations
 import struct
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import canopen
 
-#: EMCY error codes the drive uses (CiA 301 table 21, CiA 402), with their meaning.
-EMCY_CODES: dict[int, str] = {
-    0x0000: "error reset / no error",
-    0x1000: "generic error",
-    0x2310: "continuous overcurrent",
-    0x2320: "short circuit / instantaneous overcurrent",
-    0x3210: "DC-link overvoltage",
-    0x3220: "DC-link undervoltage",
-    0x4210: "excess temperature device",
-    0x4310: "excess temperature drive",
-    0x5000: "device hardware",
-    0x6000: "device software",
-    0x6300: "data set",
-    0x6310: "loss of parameters (stored parameters unusable: defaults in use)",
-    0x8100: "communication",
-    0x8110: "CAN overrun (objects lost)",
-    0x8120: "CAN in error passive mode",
-    0x8130: "life guard / heartbeat error",
-    0x8140: "recovered from bus off",
-    0x8210: "PDO not processed due to length error",
-    0x8220: "PDO length exceeded",
-    0xFF00: "device specific",
-}
+from firmware_protocol import emcy_codes
 
-
-def describe(code: int) -> str:
-    """Meaning of an EMCY error code (exact code, else its class)."""
-    if code in EMCY_CODES:
-        return EMCY_CODES[code]
-    for mask in (0xFFF0, 0xFF00, 0xF000):
-        if code & mask in EMCY_CODES:
-            return EMCY_CODES[code & mask]
-    return "unknown"
+EMCY_CODES: Mapping[int, str] = emcy_codes.MEANINGS
+"""EMCY error code -> meaning (CiA 301 table 21, CiA 402): :mod:`firmware_protocol.emcy_codes`."""
+describe = emcy_codes.describe
 
 
 @dataclass(frozen=True)
