@@ -2377,7 +2377,7 @@
 #define OD_SIM_FAULT__INJECT_OVERCURRENT                         1u
 #define OD_SIM_FAULT__INJECT_DC_OVERVOLTAGE                      2u
 #define OD_SIM_FAULT__INJECT_DC_UNDERVOLTAGE                     3u
-/* 0x5010:02 sim_fault.V_dc_supply REAL32 rw [V] - virtual DC supply voltage */
+/* 0x5010:02 sim_fault.V_dc_supply REAL32 rw [V] - virtual DC supply voltage (at least 1 V: the modulation index is normalised by it) */
 #define OD_SIM_FAULT__V_DC_SUPPLY_INDEX                          0x5010u
 #define OD_SIM_FAULT__V_DC_SUPPLY_SUB                            0x02u
 #define OD_SIM_FAULT__V_DC_SUPPLY_TYPE                           OD_TYPE_REAL32
@@ -2385,7 +2385,7 @@
 #define OD_SIM_FAULT__V_DC_SUPPLY_ACCESS                         OD_ACCESS_RW
 #define OD_SIM_FAULT__V_DC_SUPPLY_PDO                            0u
 #define OD_SIM_FAULT__V_DC_SUPPLY_DEFAULT                        48.0f /* V */
-#define OD_SIM_FAULT__V_DC_SUPPLY_MIN                            0.0f /* V */
+#define OD_SIM_FAULT__V_DC_SUPPLY_MIN                            1.0f /* V */
 #define OD_SIM_FAULT__V_DC_SUPPLY_MAX                            100.0f /* V */
 #define OD_SIM_FAULT__V_DC_SUPPLY_REF                            0x50100220UL
 

@@ -153,3 +153,16 @@ def test_sim_params_defaults_pass_their_own_checks() -> None:
     for name in {k.split(".")[0] for k in sim_params.OD_LIMITS}:
         cls = getattr(sim_params, name)
         assert dataclasses.asdict(cls())  # constructing runs every check
+
+
+def test_sim_supply_voltage_takes_the_objects_range() -> None:
+    """0x5010:2 sim_fault.V_dc_supply: the simulator takes every value the EDS allows (it once
+    allowed 0 V, which the simulator refused with 0x06090030 instead of 0x06090032)."""
+    from virtual_drive.sim import Simulator
+
+    low, high, _, _ = EDS["sim_fault.V_dc_supply"]
+    assert low is not None and low > 0 and high is not None
+    sim = Simulator()
+    for v in (low, high):
+        sim.set_supply_voltage(v)
+        assert sim.supply_voltage == v
