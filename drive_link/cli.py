@@ -635,7 +635,7 @@ def cmd_config(args: argparse.Namespace, d: Drive) -> int:
 
         _emit(args, out, text)
         return 0
-    out = config_dcf.load(d, args.file, dry_run=args.dry_run)
+    out = config_dcf.load(d, args.file, dry_run=args.dry_run, force=args.force)
     n = len(out["changes"])
     verb = "would write" if args.dry_run else "wrote"
     _emit(
@@ -664,6 +664,11 @@ def _config_parsers(add: Callable[..., argparse.ArgumentParser]) -> None:
     p.add_argument("file", type=Path, metavar="FILE.dcf", help="the DCF file")
     p.add_argument(
         "--dry-run", action="store_true", help="load: check and show the changes, write nothing"
+    )
+    p.add_argument(
+        "--force",
+        action="store_true",
+        help="load: apply a gain set with poor stability margins (an unstable one never)",
     )
 
 

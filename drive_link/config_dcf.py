@@ -295,13 +295,17 @@ def diff(drive: Drive, path: str | Path) -> ConfigDiff:
     return ConfigDiff(changes, same, dcf.ignored, dcf.node_id)
 
 
-def load(drive: Drive, path: str | Path, *, dry_run: bool = False) -> dict[str, Any]:
+def load(
+    drive: Drive, path: str | Path, *, dry_run: bool = False, force: bool = False
+) -> dict[str, Any]:
     """Apply the DCF at ``path`` to ``drive`` all-or-nothing (see the module doc); with
-    ``dry_run`` check everything and write nothing. Returns ``{"changes", "written",
-    "dry_run", "ignored", "node_id"}``."""
+    ``dry_run`` check everything and write nothing. A gain set with poor margins (a warning of
+    :func:`drive_link.gains.check_gains`) is refused unless ``force``; an unstable one always.
+    Returns ``{"changes", "written", "dry_run", "ignored", "node_id"}``."""
     d = diff(drive, path)
     changes = {c.name: c.file for c in d.changes}
     _check_rules(drive, changes)
+    _check_gain_set(drive, changes, force)
     needs_off = [n for n in changes if drive.table[n].entry.config_only]
     if needs_off and drive.state == "OPERATION ENABLED":
         raise StateError(
@@ -320,7 +324,7 @@ def load(drive: Drive, path: str | Path, *, dry_run: bool = False) -> dict[str, 
     }
     if dry_run or not changes:
         return result
-    _apply(drive, changes, {c.name: c.drive for c in d.changes})
+    _apply(drive, changes, {c.name: c.drive for c in d.changes}, force)
     result["written"] = len(changes)
     return result
 
@@ -338,8 +342,39 @@ def _check_rules(drive: Drive, changes: dict[str, float | int]) -> None:
         raise InvalidValue(f"nothing written: {exc}") from None
 
 
+def _check_gain_set(drive: Drive, changes: dict[str, float | int], force: bool) -> None:
+    """The gain policy of :func:`drive_link.gains.check_gains` on the final gain set and motor
+    (nothing written when it refuses)."""
+    names = _gain_objects()
+    gain_changes = {names[n]: v for n, v in changes.items() if n in names}
+    if not gain_changes:
+        return
+    from firmware_protocol.current_stability import MOTOR_KEYS
+
+    from . import gains as _gains
+
+    merged = {**drive.read_gains().to_dict(), **gain_changes}
+    motor = {
+        k: float(changes[f"motor.{k}"] if f"motor.{k}" in changes else drive.read(f"motor.{k}"))
+        for k in MOTOR_KEYS
+    }
+    check = _gains.check_gains(
+        merged,
+        motor["R"],
+        motor["L"],
+        rated_current=motor.get("rated_current"),
+        V_dc_nominal=motor.get("V_dc_nominal"),
+    )
+    if not check.allowed(force):
+        hint = "" if check.refusals else " (--force loads it anyway)"
+        raise InvalidValue(f"nothing written: gain set refused: {'; '.join(check.problems)}{hint}")
+
+
 def _apply(
-    drive: Drive, changes: dict[str, float | int], before: dict[str, float | int]
+    drive: Drive,
+    changes: dict[str, float | int],
+    before: dict[str, float | int],
+    force: bool = False,
 ) -> None:
     """Write ``changes``: plain objects first, then the gains as one set; roll back on error."""
     gains = _gain_objects()
@@ -351,16 +386,18 @@ def _apply(
             drive.write(n, changes[n])
             done.append(n)
         if gain_changes:
-            _apply_gains(drive, gain_changes)
+            _apply_gains(drive, gain_changes, force)
     except (DriveError, KeyboardInterrupt):
         _rollback(drive, done, before)
         raise
 
 
-def _apply_gains(drive: Drive, gain_changes: dict[str, float | int]) -> None:
-    """The gain-set path: stage the set in 0x20F0, apply with 0x20F1, read back
-    (:meth:`Drive.apply_gains`; the drive checks the set as a whole)."""
-    drive.apply_gains(**gain_changes)
+def _apply_gains(drive: Drive, gain_changes: dict[str, float | int], force: bool) -> None:
+    """The gain-set path :func:`drive_link.gains.apply_gains`: one check, stage the set in
+    0x20F0, apply with 0x20F1, read back (the drive checks the set as a whole)."""
+    from . import gains as _gains
+
+    _gains.apply_gains(drive, gain_changes, force=force)
 
 
 def _rollback(drive: Drive, done: Iterable[str], before: dict[str, float | int]) -> None:

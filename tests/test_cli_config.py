@@ -110,6 +110,28 @@ def test_config_load_checks_first_then_writes_all(node, capsys, tmp_path):
     assert dl(node, capsys, "config", "diff", str(f))[1]["changes"] == []
 
 
+def test_config_load_gains_follow_the_gain_policy(node, capsys, tmp_path):
+    """L_c = 1.6 L has poor margins (drive_link.gains: refused without --force, exit 8 in
+    set-gains); a DCF with it is refused the same way, nothing written, and loads with --force
+    through the gain set."""
+    f = tmp_path / "g.dcf"
+    assert dl(node, capsys, "config", "save", str(f))[0] == 0
+    L = dl(node, capsys, "read", "motor.L")[1]["motor.L"]
+    set_param(f, 0x2010, 2, repr(1.6 * L))
+    set_param(f, 0x606D, 0, "0x0021")  # velocity_window: not written either when refused
+    before = dl(node, capsys, "read", "current_controller.L_c", "velocity_window")[1]
+    rc, err = dl(node, capsys, "config", "load", str(f), json_out=False)
+    assert rc == 7 and "--force" in err and err.count("\n") == 1, err
+    assert dl(node, capsys, "read", "current_controller.L_c", "velocity_window")[1] == before
+    try:
+        rc, out = dl(node, capsys, "config", "load", str(f), "--force")
+        assert rc == 0 and out["written"] == 2, out
+        got = dl(node, capsys, "read", "current_controller.L_c")[1]["current_controller.L_c"]
+        assert got == pytest.approx(1.6 * L, rel=1e-6)
+    finally:
+        dl(node, capsys, "write", "current_controller.L_c", repr(before["current_controller.L_c"]))
+
+
 def test_config_load_of_motor_data_needs_the_power_stage_off(node, capsys, tmp_path):
     f = tmp_path / "m.dcf"
     assert dl(node, capsys, "config", "save", str(f))[0] == 0
