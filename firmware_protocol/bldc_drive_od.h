@@ -2400,7 +2400,7 @@
 #define OD_SIM_INVERTER__HIGHEST_SUB_INDEX_PDO                   0u
 #define OD_SIM_INVERTER__HIGHEST_SUB_INDEX_DEFAULT               4u
 #define OD_SIM_INVERTER__HIGHEST_SUB_INDEX_REF                   0x50200008UL
-/* 0x5020:01 sim_inverter.T_BT REAL32 rw [s] - virtual inverter blanking time */
+/* 0x5020:01 sim_inverter.T_BT REAL32 rw [s] - virtual inverter blanking time (at most Ts/4: each blanking interval within a quarter PWM period) */
 #define OD_SIM_INVERTER__T_BT_INDEX                              0x5020u
 #define OD_SIM_INVERTER__T_BT_SUB                                0x01u
 #define OD_SIM_INVERTER__T_BT_TYPE                               OD_TYPE_REAL32
@@ -2409,7 +2409,7 @@
 #define OD_SIM_INVERTER__T_BT_PDO                                0u
 #define OD_SIM_INVERTER__T_BT_DEFAULT                            0.0f /* s */
 #define OD_SIM_INVERTER__T_BT_MIN                                0.0f /* s */
-#define OD_SIM_INVERTER__T_BT_MAX                                2e-05f /* s */
+#define OD_SIM_INVERTER__T_BT_MAX                                5e-06f /* s */
 #define OD_SIM_INVERTER__T_BT_CONFIG_ONLY                        1u /* write only with the power stage off, else 0x08000022 */
 #define OD_SIM_INVERTER__T_BT_REF                                0x50200120UL
 /* 0x5020:02 sim_inverter.T_DD REAL32 rw [s] - virtual inverter driver delay */

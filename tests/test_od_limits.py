@@ -102,7 +102,6 @@ def test_gains_in_accepts_the_eds_range_only(field, ok, bad) -> None:
 
 #: simulator checks that physics narrows below the object's range, with the effective bound
 PHYSICS_HIGH = {
-    "InverterParams.T_BT": sim_params.Ts / 4.0,  # each blanking interval in a quarter period
     "InverterParams.T_DD": None,  # T_DD + T_SD < Ts/2 (open): checked together
     "InverterParams.T_SD": None,
 }

@@ -90,8 +90,8 @@ OD_LIMITS: dict[str, str] = {
 These limits are read from the EDS (:func:`firmware_protocol.load_od`), never copied, so the
 simulator accepts exactly what the drive's object accepts (``MinNonZero`` excepted: the C
 controllers must survive any value the OD path could not give them). Physics may narrow a
-range further (the blanking time ``InverterParams.T_BT <= Ts/4``, ``T_DD + T_SD < Ts/2``);
-that is stated at the check."""
+range further (``T_DD + T_SD < Ts/2``, which the EDS cannot express); that is stated at the
+check."""
 
 
 def _od_check(owner: str, name: str, value: float) -> float:
@@ -209,9 +209,8 @@ class InverterParams:
         self.V_dc = _check(o, "V_dc", self.V_dc, lo=0.0, lo_open=True, hi=1000.0, unit="V")
         for n in ("T_BT", "T_DD", "T_SD"):
             setattr(self, n, _od_check(o, n, getattr(self, n)))
-        # physics: the PWM model needs each blanking interval inside a quarter period and the
-        # delayed, sampled pattern inside half a period
-        self.T_BT = _check(o, "T_BT", self.T_BT, hi=Ts / 4.0, unit="s")
+        # physics the EDS limits cannot say: the delayed, sampled pattern inside half a period
+        # (T_BT <= Ts/4 is the object's HighLimit)
         self.T_DD = _check(o, "T_DD", self.T_DD, hi=Ts / 2.0, hi_open=True, unit="s")
         self.T_SD = _check(o, "T_SD", self.T_SD, hi=Ts / 2.0, hi_open=True, unit="s")
         if self.T_DD + self.T_SD >= Ts / 2.0:
