@@ -121,6 +121,19 @@ def _parse_value(text: str) -> float | int | str:
         return text
 
 
+def _gain_value(name: str, text: str) -> float | int | str:
+    """A typed gain (``L_c=20uH``, ``speed_current_limit=50A``) in its object's unit
+    (:func:`drive_link.units.parse_value`); text that is no number passes through for
+    ``type`` (``type=pi``)."""
+    from .drive import _GAIN_OBJECTS
+    from .objects import default_table
+
+    obj = default_table()[_GAIN_OBJECTS[name][1]]
+    if name == "type" and _parse_value(text) == text:
+        return text
+    return units.parse_value(text, obj.unit, integer=not obj.is_float, name=name)
+
+
 # --------------------------------------------------------------------------- commands
 def cmd_scan(args: argparse.Namespace) -> int:
     from .scan import scan
@@ -332,7 +345,7 @@ def cmd_gains_set(args: argparse.Namespace, d: Drive) -> int:
         k, v = item.split("=", 1)
         if k not in GAIN_FIELDS:
             raise InvalidValue(f"unknown gain {k!r}; known: {', '.join(GAIN_FIELDS)}")
-        val = _parse_value(v)
+        val = _gain_value(k, v)  # units: L_c=20uH
         if isinstance(val, str) and k != "type":  # type=pi as well as type=1
             raise InvalidValue(f"{k}: {v!r} is not a number")
         changes[k] = val

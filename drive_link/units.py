@@ -139,7 +139,8 @@ def parse_value(
                     "rps or rad/s"
                 )
             try:
-                value = (q / target).to("dimensionless").magnitude
+                # 15 significant digits: 20uH is 2e-05, not pint's 1.9999999999999998e-05
+                value = float(f"{(q / target).to('dimensionless').magnitude:.15g}")
             except _errors():
                 raise InvalidValue(
                     f"{who}{s!r} has the wrong dimension: {q.units:~} is not convertible to {unit}"

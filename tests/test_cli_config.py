@@ -176,3 +176,16 @@ def test_read_write_by_index_with_units_and_json_errors(node, capsys):
     # a usage error with --json is JSON too
     rc, out = dl(node, capsys, "set-speed", "nan")
     assert rc == 2 and out["exit_code"] == 2 and "nan and inf are refused" in out["error"]
+
+
+def test_set_gains_takes_units(node, capsys):
+    before = dl(node, capsys, "gains")[1]
+    try:
+        rc, out = dl(node, capsys, "set-gains", "L_c=20uH", "R_c=5 mOhm")
+        assert rc == 0, out
+        assert out["gains"]["L_c"] == pytest.approx(20e-6, rel=1e-7)
+        assert out["gains"]["R_c"] == pytest.approx(5e-3, rel=1e-7)
+        rc, out = dl(node, capsys, "set-gains", "L_c=5A")
+        assert rc == 7 and "wrong dimension" in out["error"]
+    finally:
+        dl(node, capsys, "set-gains", f"L_c={before['L_c']!r}", f"R_c={before['R_c']!r}")
