@@ -304,6 +304,7 @@ def test_fast_frame_paths_agree_with_python_cans_own_encoder_and_parser():
         frame_line,
         parse_send,
         parse_send_fields,
+        scan_sends,
     )
 
     rng = random.Random(13)
@@ -320,6 +321,23 @@ def test_fast_frame_paths_agree_with_python_cans_own_encoder_and_parser():
         back = pc.convert_ascii_message_to_can_message(line)
         assert (back.arbitration_id, bytes(back.data), back.is_extended_id) == (can_id, data, ext)
         assert back.timestamp == pytest.approx(stamp, abs=1e-6)
+    # scan_sends (bulk path over a received chunk) = the splitter + parse_send on every prefix
+    for _ in range(1000):
+        msgs = []
+        for _ in range(rng.randrange(1, 5)):
+            ext = rng.random() < 0.3
+            can_id = rng.randrange(1 << (29 if ext else 11))
+            data = bytes(rng.randrange(256) for _ in range(rng.randrange(9)))
+            msgs.append(can.Message(arbitration_id=can_id, data=data, is_extended_id=ext))
+        chunk = b"".join(pc.convert_can_message_to_ascii_message(m).encode() for m in msgs)
+        chunk = chunk[: rng.randrange(len(chunk) + 1)]
+        frames, used = scan_sends(chunk)
+        ref = CommandSplitter()
+        full = [parse_send(w) for w in ref.feed(chunk)]
+        assert frames == [(f.arbitration_id, f.data, f.is_extended) for f in full]
+        assert used == len(chunk) - ref.pending_bytes
+    for odd in (b"< send 800 0  >", b"< send 181 1 1 2 >", b"< echo >< send 181 0  >"):
+        assert scan_sends(odd) == ([], 0)  # left to the full path and its error messages
     for bad in (
         ["send"], ["send", "800", "0"], ["send", "1234", "0"], ["send", "12", "2", "1"],
         ["send", "12", "1", "100"], ["send", "12", "9", *["0"] * 9], ["send", "g", "0"],

@@ -41,6 +41,7 @@ from virtual_drive.hub_protocol import (
     frame_line,
     parse_channel,
     parse_send_fields,
+    scan_sends,
 )
 
 __all__ = ["DEFAULT_PORT", "Hub", "HubStats"]
@@ -390,6 +391,9 @@ class Hub:
         """Delivery time of a frame that completed on the bus at ``end`` (monotonic s) when the
         previous frame on its bus is due at ``last_due``: end + delay_s + U(−jitter_s, jitter_s),
         never before ``end`` nor before ``last_due`` (CAN keeps the order of frames)."""
+        if self._jitter_s == 0.0:
+            due = end + self._delay_s
+            return due if due > last_due else last_due
         delay = self._delay_s
         if self._jitter_s > 0.0:
             delay = max(0.0, delay + self._jitter_rng.uniform(-self._jitter_s, self._jitter_s))
@@ -512,6 +516,11 @@ class Hub:
                 client.sock.setsockopt(socket.IPPROTO_TCP, _QUICKACK, 1)
             except OSError:
                 pass
+        if client.state == _RAW and not client.splitter.pending_bytes:
+            frames, used = scan_sends(chunk)  # the common case: only well-formed sends
+            if frames:
+                self._enqueue(client, frames, now)
+                chunk = chunk[used:]
         for item in client.splitter.feed(chunk):
             if isinstance(item, ProtocolError):
                 self._reject(client, str(item), now)
@@ -528,25 +537,34 @@ class Hub:
             return
         self._flush(client, now)
 
-    def _handle(self, client: _Client, words: list[str], now: float) -> None:
-        cmd = words[0]
-        if client.state == _RAW and cmd == "send":
-            can_id, data, ext = parse_send_fields(words)
-            if not client.queue:
-                client.bus.senders.append(client)
-            self._seq += 1
-            client.queue.append(
+    def _enqueue(
+        self, client: _Client, frames: list[tuple[int, bytes, bool]], now: float
+    ) -> None:
+        """Queue ``frames`` (id, data, is_extended) of ``client`` for the bus, arrived ``now``."""
+        queue = client.queue
+        if not queue:
+            client.bus.senders.append(client)
+        seq = self._seq
+        for can_id, data, ext in frames:
+            seq += 1
+            queue.append(
                 (
                     now,
                     arbitration_key(can_id, ext),
-                    self._seq,
+                    seq,
                     can_id,
                     data,
                     ext,
                     frame_bits_fast(can_id, data, ext),
                 )
             )
-            self._n_received += 1
+        self._seq = seq
+        self._n_received += len(frames)
+
+    def _handle(self, client: _Client, words: list[str], now: float) -> None:
+        cmd = words[0]
+        if client.state == _RAW and cmd == "send":
+            self._enqueue(client, [parse_send_fields(words)], now)
         elif cmd == "echo":
             client.outbuf += b"< echo >"
         elif client.state == _WAIT_OPEN:
@@ -624,10 +642,16 @@ class Hub:
     def _advance(self, bus: _Bus, now: float) -> None:
         """Run the bus up to ``now``: arbitrate, occupy, schedule delivery, deliver what is due."""
         senders = bus.senders
+        deliveries = bus.deliveries
+        if not senders and (not deliveries or deliveries[0][0] > now):
+            return  # most wakes: nothing on this bus to do
+        bitrate = self._bitrate
         while senders:
             if len(senders) == 1:  # the usual case: no arbitration to decide
                 winner = senders[0]
-                start = max(bus.free_at, winner.queue[0][0])
+                start = winner.queue[0][0]
+                if start < bus.free_at:
+                    start = bus.free_at
                 if start > now:
                     break
             else:
@@ -644,7 +668,7 @@ class Hub:
             _, _, _, can_id, data, ext, bits = winner.queue.popleft()
             if not winner.queue:
                 senders.remove(winner)
-            duration = bits / self._bitrate
+            duration = bits / bitrate
             end = start + duration
             bus.free_at = end
             self._busy_s += duration
@@ -653,21 +677,24 @@ class Hub:
                 continue
             due = self._delivery_due(end, bus.last_due)
             bus.last_due = due
-            bus.deliveries.append((due, winner, can_id, data, ext))
-        deliveries = bus.deliveries
+            deliveries.append((due, winner, can_id, data, ext))
         touched: list[_Client] = []
+        wall_offset = self._wall0 - self._mono0
+        max_outbuf = self.max_outbuf_bytes
+        receivers = bus.receivers
         while deliveries and deliveries[0][0] <= now:
             due, sender, can_id, data, ext = deliveries.popleft()
-            line = frame_line(can_id, data, ext, self._wall(due))
-            for c in bus.receivers:
+            line = frame_line(can_id, data, ext, due + wall_offset)
+            for c in receivers:
                 if c is sender:
                     continue
-                if len(c.outbuf) >= self.max_outbuf_bytes:
+                outbuf = c.outbuf
+                if not outbuf:
+                    touched.append(c)
+                elif len(outbuf) >= max_outbuf:
                     self._n_overrun += 1
                     continue
-                if not c.outbuf:
-                    touched.append(c)
-                c.outbuf += line
+                outbuf += line
             self._n_forwarded += 1
         for c in touched:
             self._flush(c, now)

@@ -15,6 +15,7 @@ Pure functions only (no I/O), so they can be tested and reused on their own.
 
 from __future__ import annotations
 
+import re
 from binascii import b2a_hex
 from dataclasses import dataclass
 from itertools import product
@@ -33,6 +34,7 @@ __all__ = [
     "parse_channel",
     "parse_send",
     "parse_send_fields",
+    "scan_sends",
 ]
 
 #: SocketCAN error-frame flag and "protocol violation" error class (linux/can/error.h).
@@ -190,6 +192,45 @@ def parse_send_fields(words: list[str]) -> tuple[int, bytes, bool]:
         pass
     frame = parse_send(words)  # anything unusual: the full check and its precise message
     return frame.arbitration_id, frame.data, frame.is_extended
+
+
+# One ``send`` element exactly as python-can's client writes it: 3- or 8-digit id, one-digit
+# length, 1-2 digit bytes, one or two spaces before ">" (two when there is no data).
+_SEND_ELEMENT = re.compile(
+    rb"< send ([0-9A-Fa-f]{3}|[0-9A-Fa-f]{8}) ([0-8])((?: [0-9A-Fa-f]{1,2})*)  ?>"
+)
+_BYTE_VALUES = {w.encode(): v for w, v in _BYTE_WORDS.items()}
+
+
+def scan_sends(chunk: bytes) -> tuple[list[tuple[int, bytes, bool]], int]:
+    """The leading well-formed ``send`` elements of ``chunk`` as ``(id, data, is_extended)``,
+    and how many bytes they took. Stops at the first element that is anything else (or has an
+    id out of range, or a length that differs from its bytes): the caller hands the rest to
+    :class:`CommandSplitter` and :func:`parse_send`, which give the precise answer. The hub's
+    fast path for the frames python-can sends."""
+    frames: list[tuple[int, bytes, bool]] = []
+    pos = 0
+    match = _SEND_ELEMENT.match
+    get = _BYTE_VALUES.__getitem__
+    while True:
+        m = match(chunk, pos)
+        if m is None:
+            break
+        id_word, length, byte_words = m.groups()
+        can_id = int(id_word, 16)
+        data = bytes(map(get, byte_words.split()))
+        if len(data) != int(length):
+            break
+        if len(id_word) == 3:
+            if can_id > 0x7FF:
+                break
+            frames.append((can_id, data, False))
+        else:
+            if can_id > 0x1FFFFFFF:
+                break
+            frames.append((can_id, data, True))
+        pos = m.end()
+    return frames, pos
 
 
 def parse_channel(words: list[str]) -> str:
