@@ -66,6 +66,13 @@ def _fmt(v: float) -> str:
     return "nan" if not math.isfinite(v) else f"{v:.4g}"
 
 
+def _axis(v: float, span: float) -> str:
+    """An axis label with the digits the span needs (two significant ones of the span)."""
+    dec = max(0, min(6, 1 - math.floor(math.log10(span)))) if span > 0 else 0
+    text = f"{v:.{dec}f}"
+    return text if len(text) <= 10 else f"{v:.3g}"
+
+
 def _panel(
     t: np.ndarray,
     y: np.ndarray,
@@ -87,9 +94,12 @@ def _panel(
     if not len(y):
         return [head + "  (no frames yet)"] + [" " * label_w + "|"] * height
     lo, hi = float(y.min()), float(y.max())
-    if hi - lo < 1e-9 * max(1.0, abs(hi)):  # flat line: centre it
-        pad = max(abs(hi) * 0.05, 1e-3)
-        lo, hi = lo - pad, hi + pad
+    # at least 2 % of the value's size (5 % for a flat line), so that noise of a steady signal
+    # (1200 ± 0.3 rpm) stays a line instead of filling the panel
+    least = max(abs(lo), abs(hi)) * (0.02 if hi > lo else 0.1) or 1e-3
+    if hi - lo < least:
+        mid = (hi + lo) / 2
+        lo, hi = mid - least / 2, mid + least / 2
     head += f"  min {_fmt(float(y.min()))}  max {_fmt(float(y.max()))}"
     grid = [[" "] * cols for _ in range(height)]
     col = np.clip(((t - (t_end - seconds)) / seconds * cols).astype(int), 0, cols - 1)
@@ -105,7 +115,7 @@ def _panel(
         grid[int(last)][c] = _MARK
     lines = [head]
     for r in range(height):
-        label = _fmt(hi) if r == 0 else _fmt(lo) if r == height - 1 else ""
+        label = _axis(hi, hi - lo) if r == 0 else _axis(lo, hi - lo) if r == height - 1 else ""
         lines.append(f"{label:>{label_w}}|" + "".join(grid[r]))
     return lines
 
