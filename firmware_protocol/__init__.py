@@ -9,6 +9,15 @@ rules in :mod:`firmware_protocol.cob_id`, the EMCY codes in :mod:`firmware_proto
 (all rendered into ``OD.md`` and the header). Custom EDS keys: ``ConfigOnly=1`` (write only
 with the power stage off, abort 0x08000022), ``MinNonZero=`` (0 or at least this).
 
+This package is the one home of every protocol fact; other packages import, never copy:
+:mod:`~firmware_protocol.abort_codes` (SDO abort codes and meanings, on canopen's table),
+:mod:`~firmware_protocol.emcy_codes` (EMCY codes sent and their meanings),
+:mod:`~firmware_protocol.enums` (enumerated object values, the controller-type names),
+:mod:`~firmware_protocol.cia402` (statusword/controlword), :mod:`~firmware_protocol.paper`
+(Table 2 motor, Ts, the speed model a/b, the paper's gains) and the objects' limits
+(``load_od().entry(name).low/.high``: the dashboard's pydantic models and the simulator's
+parameter checks read them).
+
 >>> from firmware_protocol import load_od
 >>> od = load_od()
 >>> od.entry("current_controller.L_c").unit
@@ -17,9 +26,12 @@ with the power stage off, abort 0x08000022), ``MinNonZero=`` (0 or at least this
 '0x20400120'
 """
 
+from . import abort_codes, emcy_codes, paper
 from .constraints import CONSTRAINTS, Constraint
 from .entry import LimitError
 from .enums import (
+    CONTROLLER_NAMES,
+    CONTROLLER_TYPES,
     ControllerType,
     GainSetApply,
     ModeOfOperation,
@@ -35,6 +47,8 @@ from .od import EDS_PATH, Entry, ObjectDictionaryView, load_od
 
 __all__ = [
     "CONSTRAINTS",
+    "CONTROLLER_NAMES",
+    "CONTROLLER_TYPES",
     "EDS_PATH",
     "Constraint",
     "ControllerType",
@@ -50,5 +64,8 @@ __all__ = [
     "TraceState",
     "TraceTriggerEdge",
     "TraceTriggerMode",
+    "abort_codes",
+    "emcy_codes",
     "load_od",
+    "paper",
 ]
