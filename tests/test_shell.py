@@ -21,7 +21,7 @@ from drive_link import cli
 from drive_link.drive import Drive
 from drive_link.shell import Shell
 
-pytestmark = pytest.mark.timeout(120)
+pytestmark = pytest.mark.timeout(200)
 
 #: CiA 301 0x1016 entry the session sets: host node-ID 0x7F in bits 23..16, 1000 ms in 15..0.
 CONSUMER_ENTRY = (0x7F << 16) | 1000
