@@ -100,6 +100,9 @@ def test_mode_change_while_enabled_is_explained_or_done(hub):
     assert rc == 1 and "disable" in one_line(err) and "--re-enable" in err
     rc, out, err = dl(hub, "set-current", "2A")
     assert rc == 1 and "--switch-mode" in one_line(err)
+    # any write the drive refuses in its state (abort 0x08000022) names the fix
+    rc, out, err = dl(hub, "write", "motor.L", "15uH")
+    assert rc == 6 and "0x08000022" in one_line(err) and "`drive-link disable` first" in err
     w = where(hub)
     assert (w["mode"], w["state"], w["setpoints.i_p_ref"]) == ("speed", "OPERATION ENABLED", 0.0)
     rc, out, err = dl(hub, "set-current", "2A", "--switch-mode", "--json")
@@ -150,3 +153,6 @@ def test_ctrl_c_during_a_step_restores(hub):
             p.kill()
     assert p.returncode == 130 and "interrupted" in one_line(err), err
     assert where(hub) == before
+    rc, out, err = dl(hub, "read", "trace_config.state", "--json")
+    assert rc == 0, err
+    assert json.loads(out)["trace_config.state"] not in (1, 2)  # not left armed / recording
