@@ -53,6 +53,7 @@ BRAND_COLOR = (31, 97, 141)  #: steel blue: buttons, tabs, sliders
 CONTROL_WIDTH_PX = 380  #: requested width of the control panel (docked right, px)
 LEASE_GRACE_S = 10.0  #: a browser whose WebSocket closed loses control after this (s)
 PLOT_BUCKETS = 80  #: time buckets per live plot (≤ 3 points each sent: min, max, last)
+IDLE_WAIT_S = 1.0  #: with no browser the plot thread wakes this often (s), for the watchdog
 WATCHDOG_S = 3.0  #: a plot thread silent for this long is replaced (s)
 
 # re-exported for tests and older imports
@@ -149,6 +150,7 @@ class BenchGui:
         panel = Panel(self, client)
         with self._panels_lock:
             self.panels[client.client_id] = panel
+        self._wake.set()  # the plot thread starts ticking for this browser
         with contextlib.suppress(Exception):
             panel.load_gains()
         self.refresh_status()
@@ -214,6 +216,10 @@ class BenchGui:
         next_t = time.monotonic()
         while not self._stop.is_set() and generation == self._plot_generation:
             self._plot_beat = time.monotonic()
+            if not self.panels:  # nobody watches: no ticks (a connect or a setpoint wakes us)
+                self._wake.wait(IDLE_WAIT_S)
+                next_t = time.monotonic()
+                continue
             try:
                 if self._wake.wait(max(0.0, next_t - time.monotonic())):
                     self._wake.clear()

@@ -30,21 +30,26 @@ def decimate(
     starts = np.flatnonzero(np.r_[True, b[1:] != b[:-1]])
     ends = np.r_[starts[1:], n]
     keep = [np.array([0, n - 1]), ends - 1]
+    seg = np.repeat(np.arange(len(starts)), ends - starts)
     for c in cols:
-        finite = np.where(np.isfinite(c), c, np.nanmean(c) if np.isfinite(c).any() else 0.0)
-        keep.append(starts + _argext(finite, starts, ends, np.minimum))
-        keep.append(starts + _argext(finite, starts, ends, np.maximum))
-    idx = np.unique(np.concatenate(keep))
+        ok = np.isfinite(c)
+        finite = c if ok.all() else np.where(ok, c, np.nanmean(c) if ok.any() else 0.0)
+        keep.append(starts + _argext(finite, starts, seg, np.minimum))
+        keep.append(starts + _argext(finite, starts, seg, np.maximum))
+    mask = np.zeros(n, dtype=bool)  # sorted and unique, without np.unique's sort
+    mask[np.concatenate(keep)] = True
+    idx = np.flatnonzero(mask)
     return t[idx], [c[idx] for c in cols]
 
 
-def _argext(v: np.ndarray, starts: np.ndarray, ends: np.ndarray, ufunc) -> np.ndarray:
-    """Per segment [starts[i], ends[i]) the index of its first min (ufunc=np.minimum) or max,
-    relative to its start (vectorised: no Python loop over the segments)."""
+def _argext(v: np.ndarray, starts: np.ndarray, seg: np.ndarray, ufunc) -> np.ndarray:
+    """Per segment (``seg``: each sample's segment number, segments starting at ``starts``) the
+    index of its first min (ufunc=np.minimum) or max, relative to its start (vectorised: no
+    Python loop over the segments; every segment holds its extremum, so each has a hit)."""
     ext = ufunc.reduceat(v, starts)
-    seg = np.repeat(np.arange(len(starts)), ends - starts)
     hits = np.flatnonzero(v == ext[seg])
-    _, first = np.unique(seg[hits], return_index=True)
+    s = seg[hits]
+    first = np.r_[True, s[1:] != s[:-1]]
     return hits[first] - starts
 
 
