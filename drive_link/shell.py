@@ -92,7 +92,10 @@ class Shell:
         for n in self.commands:
             if n in BUILTINS:
                 continue
-            lines.append(f"  {n:<16} {helps.get(n, '')}")
+            text = helps.get(n, "")
+            if len(text) > 62:  # one line each: the first part (help CMD has the rest)
+                text = text[:61].rsplit(" ", 1)[0] + " …"
+            lines.append(f"  {n:<16} {text}")
         lines += [
             "  help [CMD]       this list / one command's options",
             "  exit [CODE]      end the session (also quit, Ctrl-D)",
