@@ -1,10 +1,23 @@
-"""Step tests: a current step or a speed step recorded by the drive's trace recorder, triggered by
-the step itself (trigger_mode "on setpoint step"), with metrics (:mod:`drive_link.metrics`) and
-the response the model predicts (:mod:`drive_link.design`) for the drive's present parameters.
+"""Step tests and the speed-model identification, recorded by the drive's trace recorder and
+triggered by the step itself (trigger_mode "on setpoint step"), with metrics
+(:mod:`drive_link.metrics`), the response the model predicts (:mod:`drive_link.design`) for the
+drive's present parameters, and the least-squares fit of ``G(z) = b/(z - a)``
+(:mod:`drive_link.identify`). ``drive-link step``/``identify-drive`` and the dashboard both run
+these; the dashboard passes :class:`Hooks` to show progress and to cancel.
+
+Current steps record the Hall sector too: a commutation (a sector change) disturbs i_p from
+8-25 loop samples before the sector changes (the back-EMF's trapezoid slope; measured at 130-300
+rpm on the virtual drive) and the disturbance then decays with the plant's L/R, so a record with a
+sector change before the step or in the first ``CLEAN_FRACTION`` after it is repeated
+(``commutation_retries`` times, the least disturbed record is kept) and the metrics and the model
+error are taken up to ``COMMUTATION_MARGIN`` loop samples before it
+(``StepResult.commutation_at_s``). The model prediction uses the back-EMF e_L measured before
+the step.
 """
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -15,12 +28,38 @@ import numpy as np
 
 from firmware_protocol import enums, paper
 
-from . import design, metrics
+from . import design, identify, metrics
 from .errors import DriveTimeout, InvalidValue, StateError
 from .trace import TS, Trace, Trigger
 
 if TYPE_CHECKING:
     from .drive import Drive
+
+__all__ = [
+    "CLEAN_FRACTION",
+    "COMMUTATION_MARGIN",
+    "COMMUTATION_RETRIES",
+    "SPEED_MODEL_PAPER",
+    "Hooks",
+    "Identification",
+    "StepResult",
+    "current_step",
+    "first_commutation",
+    "identification_record",
+    "identify_speed_model",
+    "record",
+    "record_setpoint_step",
+    "sector_changes",
+    "speed_step",
+]
+
+COMMUTATION_RETRIES = 4
+"""Current-step records taken at most while a commutation disturbs the early part."""
+CLEAN_FRACTION = 0.8
+"""A current-step record is clean when no commutation falls in this share after the step."""
+COMMUTATION_MARGIN = 30
+"""Loop samples before a Hall sector change already disturbed by the commutation (8-25 measured
+at 130-300 rpm on the virtual drive: e_L leaves its flat top before the sector changes)."""
 
 #: Speed model G(z) = b/(z − a) of the paper (eq. 26) at Ts = 20 µs: a (1), b (rpm/A per sample).
 SPEED_MODEL_PAPER: tuple[float, float] = paper.SPEED_MODEL
@@ -46,9 +85,12 @@ class StepResult:
     metrics: metrics.StepMetrics
     predicted: dict[str, np.ndarray]
     params: dict[str, Any] = field(default_factory=dict)
+    commutation_at_s: float | None = None
+    model_rms_error: float = math.nan
+    attempts: int = 1
 
     def summary(self) -> dict[str, Any]:
-        """JSON-friendly summary (metrics, setpoints, parameters)."""
+        """JSON-friendly summary (metrics, setpoints, parameters, model error, commutation)."""
         unit = self.trace.units.get(self.signal, "")
         return {
             "kind": self.kind,
@@ -58,7 +100,20 @@ class StepResult:
             "to": self.y_to,
             "metrics": self.metrics.as_dict(),
             "params": self.params,
+            "model_rms_error": self.model_rms_error,
+            "commutation_at_s": self.commutation_at_s,
+            "attempts": self.attempts,
         }
+
+    def model_column(self) -> np.ndarray:
+        """The model prediction on the whole trace time base (y_from before the step)."""
+        tr = self.trace
+        out = np.full(len(tr.t), float(self.y_from))
+        k0 = tr.trigger_index
+        p = np.asarray(self.predicted[self.signal], dtype=float)
+        n = min(len(p), len(tr.t) - k0)
+        out[k0 : k0 + n] = p[:n]
+        return out
 
     def to_csv(self, path: str | Path) -> Path:
         """The trace plus a ``predicted`` column (NaN before the step) as CSV."""
@@ -105,6 +160,83 @@ def _require_enabled(drive: Drive, enable: bool) -> None:
     drive.enable()
 
 
+@dataclass
+class Hooks:
+    """How a long recording reports and waits: ``progress(fraction 0..1, text)`` and
+    ``sleep(seconds)``; either may raise to cancel (the dashboard's long actions do, on Cancel
+    or past their deadline). Defaults: no report, :func:`time.sleep`."""
+
+    progress: Callable[[float, str], None] | None = None
+    sleep: Callable[[float], None] = time.sleep
+
+    def report(self, fraction: float, text: str) -> None:
+        if self.progress is not None:
+            self.progress(fraction, text)
+
+    def note(self, fraction: float, text: str) -> None:
+        """Report without letting a cancel interrupt (used inside an SDO block upload)."""
+        try:
+            self.report(fraction, text)
+        except Exception:  # the next report() raises it again, outside the upload
+            pass
+
+
+def _wait_done(drive: Drive, timeout: float, hooks: Hooks, poll_s: float = 0.02) -> None:
+    """Like ``Recorder.wait`` but sleeping through ``hooks`` (cancellable)."""
+    deadline = time.monotonic() + timeout
+    state = drive.trace.state
+    while state != "done":
+        if state == "idle":
+            raise StateError(
+                "trace recorder went idle before it was done (stopped or reconfigured)"
+            )
+        if time.monotonic() >= deadline:
+            raise DriveTimeout(f"trace not done after {timeout:g} s (recorder {state})")
+        hooks.sleep(poll_s)
+        state = drive.trace.state
+
+
+def _upload(drive: Drive, hooks: Hooks) -> Trace:
+    def progress(done: int, total: int | None) -> None:
+        if total:
+            hooks.note(0.6 + 0.3 * done / total, f"uploading the trace ({done}/{total} bytes)")
+
+    hooks.report(0.6, "uploading the trace")
+    return drive.trace.upload(progress=progress if hooks.progress is not None else None)
+
+
+def record(
+    drive: Drive,
+    channels: list[str],
+    *,
+    divider: int = 1,
+    length: int | None = None,
+    pre_trigger: int = 0,
+    trigger: Trigger | str | None = None,
+    action: Callable[[], None] | None = None,
+    timeout: float | None = None,
+    hooks: Hooks | None = None,
+) -> Trace:
+    """One recording: configure (``divider`` loop samples per trace sample, ``length`` samples,
+    ``pre_trigger`` before the trigger), arm, let the pre-trigger part fill, run ``action``
+    (e.g. a setpoint step), wait (``timeout`` s, default 1 s + 3 × the recording) and upload,
+    under the trace lock. Waits and progress go through ``hooks``."""
+    h = hooks or Hooks()
+    with drive.trace.lock:
+        drive.trace.configure(channels, divider, length, pre_trigger, trigger)
+        n = int(drive.read("trace_config.length")) if length is None else int(length)
+        if timeout is None:
+            timeout = 1.0 + 3.0 * n * divider * TS
+        drive.trace.arm()
+        if action is not None:
+            if pre_trigger:
+                h.sleep(3.0 * pre_trigger * divider * TS + 0.02)
+            action()
+        h.report(0.3, "recording")
+        _wait_done(drive, timeout, h)
+        return _upload(drive, h)
+
+
 def record_setpoint_step(
     drive: Drive,
     channels: list[str],
@@ -115,6 +247,7 @@ def record_setpoint_step(
     pre_trigger: int,
     timeout: float | None,
     attempts: int = 3,
+    hooks: Hooks | None = None,
 ) -> Trace:
     """Record ``channels`` around a setpoint step made by ``set_after``.
 
@@ -124,8 +257,9 @@ def record_setpoint_step(
     under the trace lock. The recorder ignores a step while its pre-trigger part is still
     filling (state "armed" either way), so the wait is ``3 × pre-trigger time + 20 ms``; if
     the step was still too early ``set_before`` puts the setpoint back and the step is
-    repeated (``attempts`` times).
+    repeated (``attempts`` times). Waits and progress go through ``hooks``.
     """
+    h = hooks or Hooks()
     pre_s = pre_trigger * divider * TS
     record_s = length * divider * TS
     if timeout is None:
@@ -135,18 +269,53 @@ def record_setpoint_step(
         drive.trace.configure(channels, divider, length, pre_trigger, Trigger("setpoint_step"))
         for attempt in range(attempts):
             drive.trace.arm()
-            time.sleep(wait_pre * (attempt + 1))
+            h.sleep(wait_pre * (attempt + 1))
             set_after()
+            h.report(0.3, "recording")
             try:
-                drive.trace.wait(timeout)
-                return drive.trace.upload()
+                _wait_done(drive, timeout, h)
             except DriveTimeout:
                 if attempt + 1 == attempts or drive.trace.state != "armed":
                     raise
                 drive.trace.stop()
                 set_before()
-                time.sleep(wait_pre)
+                h.sleep(wait_pre)
+                continue
+            return _upload(drive, h)
     raise AssertionError("unreachable")
+
+
+def first_commutation(t: np.ndarray, i_abc: np.ndarray) -> float | None:
+    """Time [s] of the first change of the non-conducting phase at t >= 0, or None.
+
+    ``i_abc``: phase currents [A], shape (n, 3). In six-step operation two phases conduct; the
+    third (smallest |i|) changes at every commutation, which disturbs i_p for a few samples.
+    (:func:`current_step` uses the recorded Hall sector instead: one channel, no lag.)
+    """
+    t = np.asarray(t, dtype=float)
+    idle = np.argmin(np.abs(np.asarray(i_abc, dtype=float)), axis=1)
+    k0 = int(np.searchsorted(t, 0.0))
+    change = np.flatnonzero(idle[k0 + 1 :] != idle[k0:-1])
+    return float(t[k0 + 1 + change[0]]) if change.size else None
+
+
+def sector_changes(t: np.ndarray, hall_sector: np.ndarray) -> np.ndarray:
+    """Times [s] at which the Hall sector changes (commutations), over the whole record."""
+    h = np.asarray(hall_sector)
+    return np.asarray(t, dtype=float)[1:][h[1:] != h[:-1]]
+
+
+def _settled(pre: np.ndarray, tol: float = 0.02) -> bool:
+    """True if the pre-step samples show no drift: the means of their halves agree within
+    ``tol`` [A] (a decaying disturbance shows as a trend; switching ripple averages out)."""
+    if pre.size < 4:
+        return True
+    h = pre.size // 2
+    return bool(abs(float(np.mean(pre[:h])) - float(np.mean(pre[h:]))) <= tol)
+
+
+def _column(tr: Trace, name: str) -> np.ndarray:
+    return np.asarray(tr.signals[f"measurements.{name}"], dtype=float)
 
 
 def current_step(
@@ -160,37 +329,81 @@ def current_step(
     enable: bool = True,
     timeout: float | None = None,
     extra: tuple[str, ...] = (),
+    *,
+    commutation_retries: int = COMMUTATION_RETRIES,
+    average_samples: int = 1,
+    hooks: Hooks | None = None,
 ) -> StepResult:
     """Pseudo-current step i_from → i_to (A) in "current" mode.
 
     Sets the mode and i_from, enables (if ``enable``), waits ``settle_s`` s, arms the recorder
-    (channels i_p, i_p_ref, v_L, e_L and ``extra``, e.g. "hall_sector"; ``divider`` loop
-    samples per trace sample, ``length`` samples, ``pre_trigger`` before the step) on
-    "setpoint step", writes i_to and uploads.
+    (channels i_p, i_p_ref, v_L, e_L, hall_sector unless ``commutation_retries`` is 0, and
+    ``extra``; ``divider`` loop samples per trace sample, ``length`` samples, ``pre_trigger``
+    before the step) on "setpoint step", writes i_to and uploads. A record with a Hall sector
+    change before the step or in its first :data:`CLEAN_FRACTION` after it is taken again
+    (i_from, settle, step), as is one whose i_p still drifts before the step, up to
+    ``commutation_retries`` times; the least disturbed one is kept.
+
     The prediction is :func:`drive_link.design.predicted_step` for the drive's controller type,
-    L_c, R_c, k_p, k_i and motor R, L, with the back-EMF e_L measured just before the step.
+    L_c, R_c, k_p, k_i and motor R, L, with the back-EMF e_L measured just before the step. The
+    metrics (of i_p averaged over ``average_samples``) and the model's RMS error [A] are taken
+    up to :data:`COMMUTATION_MARGIN` loop samples before the first sector change after the step
+    when at least 10 samples precede it.
     """
     if i_from == i_to:
         raise InvalidValue("current step needs i_from != i_to")
+    h = hooks or Hooks()
+    channels = ["i_p", "i_p_ref", "v_L", "e_L", *extra]
+    hall = commutation_retries > 0 or "hall_sector" in extra
+    if hall and "hall_sector" not in channels:
+        channels.append("hall_sector")
+    capacity = drive.trace.capacity
+    if len(channels) * length > capacity:
+        raise InvalidValue(
+            f"{len(channels)} channels x {length} samples exceed the recorder's {capacity} "
+            "samples: shorten the record"
+        )
     _ensure_mode(drive, "current")
     drive.set_current(i_from)
     _require_enabled(drive, enable)
-    time.sleep(settle_s)
-    tr = record_setpoint_step(
-        drive,
-        ["i_p", "i_p_ref", "v_L", "e_L", *extra],
-        lambda: drive.set_current(i_from),
-        lambda: drive.set_current(i_to),
-        divider,
-        length,
-        pre_trigger,
-        timeout,
-    )
+    tries = max(1, commutation_retries)
+    best: tuple[tuple[bool, float], Trace, float | None] | None = None
+    attempt = 0
+    for attempt in range(1, tries + 1):
+        h.report(0.2 * (attempt - 1) / tries, f"step {attempt}: settling at {i_from:g} A")
+        if attempt > 1:
+            drive.set_current(i_from)
+        h.sleep(settle_s)
+        tr = record_setpoint_step(
+            drive,
+            channels,
+            lambda: drive.set_current(i_from),
+            lambda: drive.set_current(i_to),
+            divider,
+            length,
+            pre_trigger,
+            timeout,
+            hooks=h,
+        )
+        changes = sector_changes(tr.t, _column(tr, "hall_sector")) if hall else np.zeros(0)
+        # a sector change before the step (or before the record: i_p still drifting back to
+        # i_from) leaves a disturbance decaying over L/R into the step
+        settled = not np.any(changes <= 0.0) and _settled(_column(tr, "i_p")[: tr.trigger_index])
+        after = changes[changes > 0.0]
+        t_comm = float(after[0]) if after.size else None
+        score = (settled, math.inf if t_comm is None else t_comm)
+        if best is None or score > best[0]:
+            best = (score, tr, t_comm)
+        if commutation_retries <= 0 or (settled and score[1] >= CLEAN_FRACTION * tr.t[-1]):
+            break
+    assert best is not None
+    _, tr, t_comm = best
+    h.report(0.95, "model and metrics")
     g = drive.read_gains()
     R = float(drive.read("motor.R"))
     L = float(drive.read("motor.L"))
     k0 = tr.trigger_index
-    i_p = tr.signals["measurements.i_p"].astype(float)
+    i_p = _column(tr, "i_p")
     e_L = float(np.mean(tr.signals["measurements.e_L"][: max(k0, 1)]))
     controller = CONTROLLER_NAMES.get(int(g.type), "deadbeat")
     n_after = len(tr.t) - k0
@@ -208,7 +421,17 @@ def current_step(
         e_L=e_L,
     )
     y_pred = pred.i_p[::divider][:n_after]
-    m = metrics.step_metrics(tr.t, i_p, reference=i_to, t_step=0.0, y_initial=float(i_from))
+    avg = metrics.moving_average(i_p, average_samples)
+    use = np.ones(len(tr.t), dtype=bool)
+    if t_comm is not None:
+        clean = tr.t < t_comm - COMMUTATION_MARGIN * TS
+        if np.sum(clean & (tr.t >= 0)) >= 10:
+            use = clean
+    m = metrics.step_metrics(
+        tr.t[use], avg[use], reference=i_to, t_step=0.0, y_initial=float(i_from)
+    )
+    post = use[k0:]
+    rms = float(np.sqrt(np.mean((avg[k0:][post] - y_pred[post]) ** 2)))
     params = {
         "controller": controller,
         "R": R,
@@ -219,7 +442,9 @@ def current_step(
         "k_i": g.k_i,
         "e_L": e_L,
         "divider": divider,
+        "average_samples": average_samples,
         "Ts": TS,
+        "model_stable": bool(pred.stable),
     }
     return StepResult(
         "current",
@@ -230,6 +455,9 @@ def current_step(
         m,
         {"t": tr.t[k0:], "measurements.i_p": y_pred},
         params,
+        commutation_at_s=t_comm,
+        model_rms_error=rms,
+        attempts=attempt,
     )
 
 
@@ -244,6 +472,8 @@ def speed_step(
     enable: bool = True,
     model: tuple[float, float] | None = None,
     timeout: float | None = None,
+    *,
+    hooks: Hooks | None = None,
 ) -> StepResult:
     """Speed step of ``delta_rpm`` (rpm) from ``start_rpm`` (default: the present target) in
     "speed" mode, recorded with channels speed, speed_ref, i_p_ref, i_p.
@@ -259,7 +489,8 @@ def speed_step(
     w1 = w0 + float(delta_rpm)
     drive.set_speed(w0)
     _require_enabled(drive, enable)
-    time.sleep(settle_s)
+    h = hooks or Hooks()
+    h.sleep(settle_s)
     tr = record_setpoint_step(
         drive,
         ["speed", "speed_ref", "i_p_ref", "i_p"],
@@ -269,6 +500,7 @@ def speed_step(
         length,
         pre_trigger,
         timeout,
+        hooks=h,
     )
     g = drive.read_gains()
     a, b = model or SPEED_MODEL_PAPER
@@ -305,3 +537,88 @@ def speed_step(
         {"t": tr.t[k0:], "measurements.speed": pred.speed[:n_after]},
         params,
     )
+
+
+@dataclass
+class Identification:
+    """A speed-model identification (Fig. 16): the recorded current step ``trace`` (i_p A,
+    speed rpm), the least-squares ``fit`` of ``G(z) = b/(z - a)`` at the loop rate
+    (:class:`drive_link.identify.FirstOrderFit`) and ``model``: the identified model's free-run
+    speed [rpm] on the trace's time base, driven by the measured i_p."""
+
+    trace: Trace
+    fit: identify.FirstOrderFit
+    model: np.ndarray
+    i_from: float
+    i_to: float
+
+    def summary(self) -> dict[str, Any]:
+        """JSON-friendly: the fit (a, b, R², RMS, time constant, DC gain ...) and the step."""
+        return {"fit": self.fit.as_dict(), "from": self.i_from, "to": self.i_to}
+
+
+def identification_record(duration_s: float) -> tuple[int, int, int]:
+    """(divider, length, pre_trigger) recording ``duration_s`` [s] after the step in at most
+    8000 samples per channel, with 5 % (at least 10 samples) before it."""
+    if not (math.isfinite(duration_s) and duration_s > 0):
+        raise InvalidValue(f"duration must be a finite time > 0 s (got {duration_s!r})")
+    divider = max(1, math.ceil(duration_s / (8000 * TS)))
+    n_post = round(duration_s / (divider * TS))
+    pre = max(10, n_post // 20)
+    return divider, min(8192, pre + n_post), pre
+
+
+def identify_speed_model(
+    drive: Drive,
+    i_from: float = 15.0,
+    i_to: float = 30.0,
+    *,
+    duration_s: float | None = 1.0,
+    divider: int | None = None,
+    length: int | None = None,
+    pre_trigger: int | None = None,
+    settle_s: float = 0.1,
+    enable: bool = True,
+    timeout: float | None = None,
+    hooks: Hooks | None = None,
+) -> Identification:
+    """Current step i_from → i_to (A) in "current" mode with i_p and speed recorded, then the
+    fit of ``G(z) = b/(z - a)`` (eq. 26) at the loop rate.
+
+    The record covers ``duration_s`` s after the step (:func:`identification_record`), or is
+    given as ``divider``/``length``/``pre_trigger``. Sets the mode and i_from, enables (if
+    ``enable``), waits ``settle_s`` s, steps, and puts i_from back afterwards (also on error).
+    """
+    if i_from == i_to:
+        raise InvalidValue("identification needs i_from != i_to")
+    if divider is None or length is None or pre_trigger is None:
+        d0, n0, p0 = identification_record(1.0 if duration_s is None else float(duration_s))
+        divider = d0 if divider is None else divider
+        length = n0 if length is None else length
+        pre_trigger = p0 if pre_trigger is None else pre_trigger
+    h = hooks or Hooks()
+    _ensure_mode(drive, "current")
+    drive.set_current(i_from)
+    _require_enabled(drive, enable)
+    h.report(0.05, f"settling at {i_from:g} A")
+    try:
+        h.sleep(settle_s)
+        tr = record_setpoint_step(
+            drive,
+            ["i_p", "speed"],
+            lambda: drive.set_current(i_from),
+            lambda: drive.set_current(i_to),
+            divider,
+            length,
+            pre_trigger,
+            timeout,
+            hooks=h,
+        )
+    finally:
+        drive.set_current(i_from)
+    h.report(0.95, "fitting")
+    i_p = _column(tr, "i_p")
+    speed = _column(tr, "speed")
+    fit = identify.fit_first_order(i_p, speed, Ts=divider * TS)
+    model = identify.simulate_first_order(fit.a_D, fit.b_D, i_p, speed[0], fit.offset)
+    return Identification(tr, fit, model, float(i_from), float(i_to))
