@@ -472,14 +472,12 @@ class VirtualDrive:
             ramps.prepare_chunk(self, n)
             rec = self.sim.run(n, record=need_rec)
             fault = self.sim.fault
-            last = None if need_rec else self.sim.state
+            if not need_rec:
+                self.sim.update_state(self.live)  # the last values, no dict built or copied
         live = self.live
         if need_rec:
             for name in MEASUREMENTS.values():
                 live[name] = float(rec[name][-1])
-        else:
-            for name in MEASUREMENTS.values():
-                live[name] = last[name]
         statusword.update_windows(self)
         if fault is not None and fault != self._last_fault:
             self._last_fault = fault

@@ -147,6 +147,10 @@ class PdoEngine:
         self._clear = clear
         self._rx_error = False
         self.tpdos: list[_Tpdo] = []
+        # tick's cache: the earliest due time of the table it last saw (configure() makes a
+        # new table, so a changed configuration is never missed)
+        self._earliest = 0.0
+        self._tpdos_seen: list[_Tpdo] | None = None
         self.rpdos: dict[int, _Rpdo] = {}
         self.missed = [0] * N_TPDO  #: 0x2070: event periods without a frame, per TPDO
         self._wake = threading.Event()
@@ -350,6 +354,8 @@ class PdoEngine:
         idle = 0.05
         if not self._allowed():
             return idle
+        if now < self._earliest and self._tpdos_seen is self.tpdos:
+            return self._earliest - now  # nothing due and nothing reconfigured: no work
         due: list[tuple[_Tpdo, int]] = []
         for t in self.tpdos:
             if t.event_s > 0 and t.trans_type >= 0xFE and now >= t.next_due:
@@ -366,9 +372,11 @@ class PdoEngine:
                 grid = t.next_due + (periods + 1) * t.event_s
                 t.next_due = max(grid, done + t.inhibit_s) if t.inhibit_s > 0 else grid
         earliest = now + idle
-        for t in self.tpdos:
+        tpdos = self.tpdos
+        for t in tpdos:
             if t.event_s > 0 and t.trans_type >= 0xFE and t.next_due < earliest:
                 earliest = t.next_due
+        self._earliest, self._tpdos_seen = earliest, tpdos
         return max(0.0, earliest - time.monotonic())
 
     def on_sync(self, can_id: int, data: bytes, timestamp: float) -> None:

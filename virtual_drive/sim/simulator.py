@@ -103,7 +103,9 @@ class Simulator:
         self._apply_protection()
         self.set_model(model)
         lib.loop_init(L)
-        self._refresh_last()
+        self._last: dict[str, float] | None = None
+        #: float32 view of the C loop's latest values (SIGNALS order), read without a copy
+        self._last_view = np.frombuffer(ffi.buffer(ffi.addressof(L, "last")), dtype=np.float32)
 
     @classmethod
     def from_defaults(cls, model: str = "pwm") -> Simulator:
@@ -376,6 +378,12 @@ class Simulator:
         os_n = int(oversample)
         if os_n != 0 and not 2 <= os_n <= 64:
             raise ValueError(f"oversample must be 0 or 2..64, got {oversample!r}")
+        if not record and not os_n and n <= 1 << 20:
+            # the pacing loop's path: one C call, nothing built (state is made when asked)
+            with self._lock:
+                lib.loop_run(self._L, n, ffi.NULL, ffi.NULL)
+                self._last = None
+            return {}
         with self._lock:
             L = self._L
             if record:
@@ -432,20 +440,31 @@ class Simulator:
         return self.run(round(v / Ts), **kw)
 
     def _refresh_last(self) -> None:
-        L = self._L
-        self._last = {name: float(L.last[j]) for j, name in enumerate(SIGNALS)}
-        self._last["hall_sector"] = round(self._last["hall_sector"])
-        self._last["t"] = float(L.t) - Ts if L.k > 0 else 0.0
+        self._last = None  # built by the next ``state``
 
     @property
     def state(self) -> dict[str, float]:
         """Latest recorded value of every signal (and "t", s)."""
         with self._lock:
+            if self._last is None:
+                L = self._L
+                last = dict(zip(SIGNALS, self._last_view.tolist(), strict=True))
+                last["hall_sector"] = round(last["hall_sector"])
+                last["t"] = float(L.t) - Ts if L.k > 0 else 0.0
+                self._last = last
             return dict(self._last)
+
+    def update_state(self, out: dict[str, float]) -> None:
+        """Write the latest value of every signal (SIGNALS names, float; hall_sector too) into
+        ``out``: the per-chunk path of the node, without building or copying a dict."""
+        with self._lock:
+            out.update(zip(SIGNALS, self._last_view.tolist(), strict=True))
 
     @property
     def fault(self) -> Fault | None:
         """None, or the active trip."""
+        if self._L.fault_code == 0:  # one int read: no lock needed on the no-fault path
+            return None
         with self._lock:
             L = self._L
             if L.fault_code == 0:
