@@ -37,6 +37,7 @@ __all__ = [
     "SpeedStepIn",
     "Strict",
     "TraceIn",
+    "field_bounds",
     "od_field",
     "od_fields",
 ]
@@ -65,6 +66,18 @@ def od_field(
         description=f"{unit}{description or od_name}",
         json_schema_extra={OD_KEY: od_name},
     )
+
+
+def field_bounds(model: type[BaseModel], field: str, scale: float = 1.0) -> tuple[float, float]:
+    """(low, high) of a bounded field times ``scale`` (e.g. 1e6 for a GUI field in µH): the
+    GUI's number fields take the API's bounds, which are the EDS's (:func:`od_field`)."""
+    low = high = None
+    for m in model.model_fields[field].metadata:
+        low = getattr(m, "ge", getattr(m, "gt", low))
+        high = getattr(m, "le", getattr(m, "lt", high))
+    if low is None or high is None:
+        raise ValueError(f"{model.__name__}.{field} has no lower and upper bound")
+    return low * scale, high * scale
 
 
 def od_fields(model: type[BaseModel]) -> dict[str, str]:

@@ -11,7 +11,7 @@ from typing import Any
 from dashboard import experiments
 from dashboard.fields import NumberSpec
 from dashboard.gui_field import Field
-from dashboard.models import TraceIn
+from dashboard.models import TraceIn, field_bounds
 
 __all__ = ["CapturesTab"]
 
@@ -32,7 +32,9 @@ class CapturesTab:
         dl.on_click(self.action(self._download, self.cap_md, needs_control=False))
         with gui.add_folder("Trace (i_p at 50 kHz)"):
             self.tr_len = Field(self, NumberSpec("Length (samples)", 2, 8192, integer=True), 1000)
-            self.tr_div = Field(self, NumberSpec("Divider", 1, 5000, integer=True), 1)
+            self.tr_div = Field(
+                self, NumberSpec("Divider", *field_bounds(TraceIn, "divider"), integer=True), 1
+            )
             gui.add_button("Capture now").on_click(self.action(self._capture_now, self.cap_md))
 
     def _capture_now(self, event: Any) -> str:

@@ -11,7 +11,7 @@ from typing import Any
 from dashboard import experiments
 from dashboard.fields import NumberSpec
 from dashboard.gui_field import Field, fmt
-from dashboard.models import IdentifyIn
+from dashboard.models import IdentifyIn, field_bounds
 
 __all__ = ["IdentifyTab"]
 
@@ -28,8 +28,12 @@ class IdentifyTab:
             "Current step in current mode; fit G(z) = b/(z − a) to the speed (Fig. 16). "
             "The drive is put back as found afterwards."
         )
-        self.id_from = Field(self, NumberSpec("Identify from (A)", -200, 200), 15.0)
-        self.id_to = Field(self, NumberSpec("Identify to (A)", -200, 200), 30.0)
+        self.id_from = Field(
+            self, NumberSpec("Identify from (A)", *field_bounds(IdentifyIn, "from_A")), 15.0
+        )
+        self.id_to = Field(
+            self, NumberSpec("Identify to (A)", *field_bounds(IdentifyIn, "to_A")), 30.0
+        )
         self.id_dur = Field(self, NumberSpec("Duration (s)", 0.0, 20.0, lo_open=True), 1.0)
         self.id_btns = gui.add_button_group("Identification", ("Run", "Use a, b in IP design"))
         self.id_md = gui.add_markdown("", visible=False)

@@ -9,6 +9,7 @@ from typing import Any
 
 from dashboard.fields import FieldError, NumberSpec
 from dashboard.gui_field import Field
+from dashboard.models import LoadIn, SequenceStep, SpeedIn, SpeedStepIn, field_bounds
 
 __all__ = ["SpeedTab", "parse_sequence"]
 
@@ -21,11 +22,15 @@ class SpeedTab:
 
     def _build_speed_tab(self) -> None:
         gui = self.gui
-        self.speed_in = Field(self, NumberSpec("Speed setpoint (rpm)", -4000, 4000), 0.0)
+        self.speed_in = Field(
+            self, NumberSpec("Speed setpoint (rpm)", *field_bounds(SpeedIn, "rpm")), 0.0
+        )
         btn = gui.add_button("Set speed")
         self.speed_md = self.md()
         btn.on_click(self.action(self._set_speed, self.speed_md))
-        self.step_size = Field(self, NumberSpec("Step size (rpm)", 1, 4000), 500.0)
+        self.step_size = Field(
+            self, NumberSpec("Step size (rpm)", 1, field_bounds(SpeedStepIn, "delta_rpm")[1]), 500.0
+        )
         self.step_btns = gui.add_button_group("Step", ("+ step", "− step"))
         self.stepbtn_md = self.md()
         self.step_btns.on_click(self.action(self._step, self.stepbtn_md))
@@ -37,7 +42,9 @@ class SpeedTab:
         seq = gui.add_button_group("Sequence", ("Run sequence", "Stop sequence"))
         self.seq_md = self.md()
         seq.on_click(self.action(self._sequence_button, self.seq_md))
-        self.load_in = Field(self, NumberSpec("Load torque (N·m)", -20, 20), 0.0)
+        self.load_in = Field(
+            self, NumberSpec("Load torque (N·m)", *field_bounds(LoadIn, "T_load")), 0.0
+        )
         b = gui.add_button(
             "Apply load step",
             disabled=not self.bench.virtual,
@@ -68,8 +75,8 @@ class SpeedTab:
 
 def parse_sequence(text: str) -> list[tuple[float, float]]:
     """``"0:1000, 3:1500"`` → [(0.0, 1000.0), (3.0, 1500.0)] (s, rpm); FieldError otherwise."""
-    t_spec = NumberSpec("sequence time (s)", 0, 600)
-    rpm_spec = NumberSpec("sequence setpoint (rpm)", -4000, 4000)
+    t_spec = NumberSpec("sequence time (s)", *field_bounds(SequenceStep, "at_s"))
+    rpm_spec = NumberSpec("sequence setpoint (rpm)", *field_bounds(SequenceStep, "rpm"))
     steps = []
     for part in str(text).split(","):
         if not part.strip():

@@ -14,7 +14,7 @@ from typing import Any
 from dashboard import tuning
 from dashboard.fields import FieldError, NumberSpec
 from dashboard.gui_field import Field
-from dashboard.models import CONTROLLER_TYPES
+from dashboard.models import CONTROLLER_TYPES, GainsIn, field_bounds
 from firmware_protocol import paper
 
 __all__ = ["TuningTab"]
@@ -44,13 +44,17 @@ class TuningTab:
         self.type_in = gui.add_dropdown(
             "Current controller", tuple(CONTROLLER_TYPES), initial_value="deadbeat"
         )
-        self.Lc_uH = Field(self, NumberSpec("L_c (µH)", 0.0, 2000.0, lo_open=True), 14.8)
+        self.Lc_uH = Field(self, NumberSpec("L_c (µH)", *field_bounds(GainsIn, "L_c", 1e6)), 14.8)
         self.Lc_ratio = Field(self, NumberSpec("L_c / L", 0.0, 3.0, lo_open=True), 1.0)
-        self.Rc_mOhm = Field(self, NumberSpec("R_c (mΩ)", 0.0, 1000.0), 6.2)
-        self.kp_i = Field(self, NumberSpec("PI k_p (V/A)", 0.0, 100.0), 0.4647)
-        self.ki_i = Field(self, NumberSpec("PI k_i (V/A)", 0.0, 100.0), 0.0492)
-        self.kp_w = Field(self, NumberSpec("IP k_p (A/rpm)", 0.0, 100.0), 0.2113)
-        self.ki_w = Field(self, NumberSpec("IP k_i (1/sample)", 0.0, 1.0), 2.9994e-5)
+        self.Rc_mOhm = Field(self, NumberSpec("R_c (mΩ)", *field_bounds(GainsIn, "R_c", 1e3)), 6.2)
+        self.kp_i = Field(self, NumberSpec("PI k_p (V/A)", *field_bounds(GainsIn, "k_p")), 0.4647)
+        self.ki_i = Field(self, NumberSpec("PI k_i (V/A)", *field_bounds(GainsIn, "k_i")), 0.0492)
+        self.kp_w = Field(
+            self, NumberSpec("IP k_p (A/rpm)", *field_bounds(GainsIn, "speed_k_p")), 0.2113
+        )
+        self.ki_w = Field(
+            self, NumberSpec("IP k_i (1/sample)", *field_bounds(GainsIn, "speed_k_i")), 2.9994e-5
+        )
         with gui.add_folder("IP design from ξ, ω_n (eqs. 28–31)", expand_by_default=False):
             self.xi_in = Field(self, NumberSpec("ξ", 0.0, 10.0, lo_open=True), 1.0)
             self.wn_in = Field(self, NumberSpec("ω_n (rad/s)", 0.0, 1000.0, lo_open=True), 2.3)
