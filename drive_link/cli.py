@@ -544,11 +544,8 @@ def _run_step(args: argparse.Namespace, d: Drive, steps: Any) -> Any:
 
 
 def cmd_identify(args: argparse.Namespace, d: Drive) -> int:
-    import time
-
-    from . import design, identify
-    from .steps import record_setpoint_step
-    from .trace import TS
+    from . import design
+    from .steps import identify_speed_model
 
     for v in (args.i_from, args.i_to):
         d.table["setpoints.i_p_ref"].check(v)
@@ -560,20 +557,17 @@ def cmd_identify(args: argparse.Namespace, d: Drive) -> int:
         d.set_current(args.i_from)
         if d.state != OPERATION_ENABLED:
             d.enable(timeout=_timeout(args, 3.0))
-        time.sleep(args.settle)
-        tr = record_setpoint_step(
+        ident = identify_speed_model(  # the dashboard's identification too
             d,
-            ["i_p", "speed"],
-            lambda: d.set_current(args.i_from),
-            lambda: d.set_current(args.i_to),
-            args.divider,
-            args.length,
-            args.pre_trigger,
-            None,
+            args.i_from,
+            args.i_to,
+            divider=args.divider,
+            length=args.length,
+            pre_trigger=args.pre_trigger,
+            settle_s=args.settle,
+            enable=False,
         )
-    fit = identify.fit_first_order(
-        tr.signals["measurements.i_p"], tr.signals["measurements.speed"], args.divider * TS
-    )
+    tr, fit = ident.trace, ident.fit
     k_p, k_i = design.ip_gains(fit.a, fit.b, xi=args.xi, omega_n=args.omega_n)
     out = {
         "fit": fit.as_dict(),
