@@ -14,7 +14,7 @@ import pytest
 from test_node_process import HubProcess
 
 from virtual_drive.node.cli_run import parse_nodes, store_for
-from virtual_drive.node.hub_bus import HubBus
+from virtual_drive.node.hub_bus import HubBus, HubConnection
 from virtual_drive.node.runner import TS, Pacer, Runner
 
 pytestmark = pytest.mark.timeout(60)
@@ -82,6 +82,36 @@ def test_registered_as_python_can_interface_and_clear_errors(hub):
         bus.shutdown()
     with pytest.raises(can.CanInitializationError, match="cannot connect"):
         HubBus(channel="vcan0", host="127.0.0.1", port=1, connect_timeout=2.0)
+
+
+def test_shared_connection_delivers_like_one_bus(hub):
+    """Ports of one HubConnection: a frame a port sends reaches the hub's other clients once
+    and the sibling ports that want it; frames from the hub reach the ports that want them;
+    frames sent on the batching thread wait for flush()."""
+    peer = can.Bus(**hub.join_kwargs())
+    conn = HubConnection(channel="vcan0", host="127.0.0.1", port=hub.port)
+    a, b = conn.port(), conn.port()
+    try:
+        time.sleep(0.2)
+        a.rx_wanted, b.rx_wanted = {0x601}, {0x701, 0x602}
+        a.send(can.Message(arbitration_id=0x701, data=b"\x05", is_extended_id=False))
+        assert [(m.arbitration_id, bytes(m.data)) for m in _recv_all(b, 1)] == [(0x701, b"\x05")]
+        assert a.recv(0.1) is None  # a port does not hear itself
+        assert [m.arbitration_id for m in _recv_all(peer, 1)] == [0x701]  # the hub got it
+        peer.send(can.Message(arbitration_id=0x601, data=b"\x40", is_extended_id=False))
+        peer.send(can.Message(arbitration_id=0x602, data=b"\x41", is_extended_id=False))
+        assert [m.arbitration_id for m in _recv_all(a, 1)] == [0x601]
+        assert [m.arbitration_id for m in _recv_all(b, 1)] == [0x602]
+        conn.batch_on(threading.get_ident())
+        a.send_many([(0x181, b"\x01"), (0x281, b"\x02")])
+        assert peer.recv(0.3) is None  # held
+        conn.flush()
+        assert [m.arbitration_id for m in _recv_all(peer, 2)] == [0x181, 0x281]
+        assert peer.recv(0.3) is None  # each frame once
+    finally:
+        a.shutdown()
+        b.shutdown()
+        peer.shutdown()
 
 
 def test_parse_nodes_and_store_names():

@@ -76,9 +76,10 @@ def add_run_arguments(p: argparse.ArgumentParser) -> None:
         help="start a loopback hub in this process (127.0.0.1, --hub-port) and join it",
     )
     bus.add_argument("--hub-port", type=int, default=0, help="port of --hub (0 = any free)")
-    p.add_argument(
-        "-n", "--node-id", type=int, default=None, help="CANopen node-ID 1..127 (default 1)"
-    )
+    # one spelling with drive-link/drive-dashboard (drive_link.cli_connect; not imported here:
+    # virtual_drive does not depend on the host package); -n/--node-id stay as hidden aliases
+    p.add_argument("--node", dest="node_id", type=int, help="CANopen node-ID 1..127 (default 1)")
+    p.add_argument("-n", "--node-id", dest="node_id", type=int, help=argparse.SUPPRESS)
     p.add_argument(
         "--nodes",
         metavar="IDS",
@@ -245,12 +246,22 @@ def run_command(args: argparse.Namespace) -> int:
                 f"cannot open the CAN bus ({shown}): {getattr(exc, 'strerror', None) or exc}"
             )
     buses: list[can.BusABC] = []
+    conn = None
     try:
-        for _ in node_ids:  # one connection per node: each sees the others' frames
-            buses.append(open_bus(cfg))
+        if len(node_ids) > 1 and cfg.get("interface") == "socketcand":
+            # one hub connection for all nodes: each frame crosses the socket once
+            from virtual_drive.node.hub_bus import HubConnection
+
+            conn = HubConnection(**{k: v for k, v in cfg.items() if k != "interface"})
+            buses = [conn.port() for _ in node_ids]
+        else:
+            for _ in node_ids:  # one connection per node: each sees the others' frames
+                buses.append(open_bus(cfg))
     except Exception as exc:  # python-can raises many types (CanError, OSError, ValueError...)
         for bus in buses:
             bus.shutdown()
+        if conn is not None:
+            conn.close()
         if hub is not None:
             hub.stop()
         reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
@@ -292,8 +303,12 @@ def run_command(args: argparse.Namespace) -> int:
             if hasattr(bus, "rx_wanted"):
                 bus.rx_wanted = drive.network.subscribers  # drop frames this node ignores
             drives.append(drive)
+        if conn is not None:
+            pacer.flush_hooks.append(conn.flush)
         for drive in drives:
             drive.start()
+        if conn is not None:  # the nodes' frames of one pacer wake-up in one write
+            conn.batch_on(pacer.thread_ident)
         where = buses[0].channel_info
         if several:
             line = f"virtual-drive: nodes {','.join(map(str, node_ids))} ready on {where}"
@@ -321,6 +336,8 @@ def run_command(args: argparse.Namespace) -> int:
         pacer.stop()
         for bus in buses:
             bus.shutdown()
+        if conn is not None:
+            conn.close()
         if hub is not None:
             hub.stop()
         for s, handler in previous.items():

@@ -30,7 +30,7 @@ from collections.abc import Container, Iterable
 
 import can
 
-__all__ = ["HubBus", "format_send"]
+__all__ = ["HubBus", "HubConnection", "HubPort", "format_send"]
 
 logger = logging.getLogger(__name__)
 
@@ -255,3 +255,160 @@ class HubBus(can.BusABC):
         except OSError:
             pass
         self._sock.close()
+
+
+class HubConnection:
+    """One socketcand connection shared by several nodes of this process (``--nodes``).
+
+    Each node gets a :class:`HubPort` (a python-can bus of its own, ``port()``). Frames from the
+    server are read by one thread and handed to the ports whose ``rx_wanted`` has their ID;
+    frames a port sends go to the server and, as on a real bus, to the other ports that want
+    them. The hub then forwards each drive frame once (to the other clients) instead of to every
+    drive connection, and no drive parses the others' PDOs. Frames sent on the thread named by
+    :meth:`batch_on` (the pacing thread) are collected and written in one ``sendall`` at
+    :meth:`flush` (the pacer calls it after its TPDO passes and at the end of each wake-up).
+
+    Parameters as :class:`HubBus`.
+    """
+
+    def __init__(
+        self,
+        channel: str = "vcan0",
+        host: str = "127.0.0.1",
+        port: int | None = None,
+        tcp_tune: bool = True,
+        connect_timeout: float = 10.0,
+        **kwargs,
+    ) -> None:
+        self._bus = HubBus(channel, host, port, tcp_tune, connect_timeout=connect_timeout)
+        self.channel_info = self._bus.channel_info
+        self.channel = channel
+        self._ports: list[HubPort] = []
+        self._lock = threading.Lock()
+        self._held: list[bytes] = []
+        self._batch_ident: int | None = None
+        self._closed = False
+        self._reader = threading.Thread(target=self._read, name="hub-connection", daemon=True)
+        self._reader.start()
+
+    def port(self) -> HubPort:
+        """A new node-side bus on this connection."""
+        p = HubPort(self)
+        with self._lock:
+            self._ports = [*self._ports, p]
+        return p
+
+    def batch_on(self, ident: int | None) -> None:
+        """Collect the frames sent by thread ``ident`` until :meth:`flush` (None: never)."""
+        self._batch_ident = ident
+
+    def flush(self) -> None:
+        """Write the collected frames in one ``sendall``."""
+        if self._held:
+            held, self._held = self._held, []
+            data = b"".join(held)
+            with self._bus._send_lock:
+                self._bus._sock.sendall(data)
+
+    def _send_from(self, src: HubPort, frames: list[tuple[int, bytes, bool]]) -> None:
+        lines = [format_send(cob_id, data, ext) for cob_id, data, ext in frames]
+        if threading.get_ident() == self._batch_ident:
+            self._held.extend(lines)
+        else:
+            with self._bus._send_lock:
+                self._bus._sock.sendall(b"".join(lines))
+        ports = self._ports
+        if len(ports) > 1:  # local delivery: the other nodes of this process see them too
+            stamp = time.time()
+            for p in ports:
+                if p is src:
+                    continue
+                wanted = p.rx_wanted
+                for cob_id, data, ext in frames:
+                    if wanted is None or cob_id in wanted:
+                        msg = can.Message(
+                            timestamp=stamp,
+                            arbitration_id=cob_id,
+                            data=data,
+                            is_extended_id=ext,
+                            is_rx=True,
+                            channel=self.channel,
+                        )
+                        p._deliver(msg)
+
+    def _read(self) -> None:
+        bus = self._bus
+        while not self._closed:
+            try:
+                msg = bus.recv(0.2)
+            except can.CanError:
+                if self._closed:
+                    return
+                time.sleep(0.05)
+                continue
+            if msg is None:
+                continue
+            cob_id = msg.arbitration_id
+            for p in self._ports:
+                wanted = p.rx_wanted
+                if wanted is None or cob_id in wanted or msg.is_error_frame:
+                    p._deliver(msg)
+
+    def lost(self) -> str | None:
+        return self._bus.lost()
+
+    def _detach(self, p: HubPort) -> None:
+        with self._lock:
+            self._ports = [q for q in self._ports if q is not p]
+            last = not self._ports
+        if last:
+            self.close()
+
+    def close(self) -> None:
+        if self._closed:
+            return
+        self._closed = True
+        self._bus.shutdown()
+        self._reader.join(2.0)
+
+
+class HubPort(can.BusABC):
+    """One node's bus on a shared :class:`HubConnection` (``rx_wanted`` as on HubBus)."""
+
+    def __init__(self, conn: HubConnection) -> None:
+        self._conn = conn
+        self._queue: deque[can.Message] = deque()
+        self._ready = threading.Condition()
+        self.rx_wanted: Container[int] | None = None
+        self.channel = conn.channel
+        self.channel_info = conn.channel_info
+        super().__init__(channel=conn.channel)
+
+    def _deliver(self, msg: can.Message) -> None:
+        with self._ready:
+            self._queue.append(msg)
+            self._ready.notify()
+
+    def _recv_internal(self, timeout: float | None) -> tuple[can.Message | None, bool]:
+        with self._ready:
+            if not self._queue:
+                self._ready.wait(timeout)
+            if self._queue:
+                return self._queue.popleft(), False
+        return None, False
+
+    def send(self, msg: can.Message, timeout: float | None = None) -> None:
+        self._conn._send_from(self, [(msg.arbitration_id, bytes(msg.data), msg.is_extended_id)])
+
+    def send_many(self, frames: Iterable[tuple[int, bytes]]) -> int:
+        batch = [(cob_id, data, False) for cob_id, data in frames]
+        if batch:
+            self._conn._send_from(self, batch)
+        return len(batch)
+
+    def lost(self) -> str | None:
+        return self._conn.lost()
+
+    def shutdown(self) -> None:
+        super().shutdown()
+        self._conn._detach(self)

@@ -195,6 +195,9 @@ class Pacer:
         self._thread: threading.Thread | None = None
         self._t0 = 0.0
         self._k = 0
+        #: called (on the pacer thread) after each pass of the timers and at the end of every
+        #: wake-up: a shared connection writes the frames collected meanwhile in one go
+        self.flush_hooks: list[Callable[[], None]] = []
 
     def adopt(self, runner: Runner) -> Runner:
         """Let ``runner`` (not started yet) run on this pacer when it starts."""
@@ -238,6 +241,18 @@ class Pacer:
     def running(self) -> bool:
         return self._thread is not None and self._thread.is_alive()
 
+    @property
+    def thread_ident(self) -> int | None:
+        """``threading.get_ident()`` of the pacer thread (None before :meth:`start`)."""
+        return None if self._thread is None else self._thread.ident
+
+    def _flush(self) -> None:
+        for hook in self.flush_hooks:
+            try:
+                hook()
+            except Exception:  # a failing write is the bus's business (it reports it lost)
+                logger.exception("pacer flush hook")
+
     def align(self, t: float) -> float:
         """First tick time at or after ``t`` (monotonic s)."""
         k = math.ceil((t - self._t0) / self.period - 1e-9)
@@ -263,6 +278,8 @@ class Pacer:
             for r in runners:
                 if r._active and r.timer is not None and now >= r._timer_due:
                     wake = min(wake, self._service(r, now))
+            if self.flush_hooks:
+                self._flush()
             if now >= next_tick:
                 behind = False
                 for r in runners:
@@ -291,6 +308,8 @@ class Pacer:
                 for r in runners:
                     if r._active and r.timer is not None:
                         wake = min(wake, r._timer_due)
+            if self.flush_hooks:
+                self._flush()
             delay = min(wake, next_tick) - time.monotonic()
             if delay > 0:
                 self._stop.wait(delay) if delay > 0.02 else time.sleep(delay)
