@@ -693,6 +693,13 @@ class _Parser(argparse.ArgumentParser):
         super().__init__(*a, **kw)
         self._negative_number_matcher = re.compile(r"^-(\.?\d|inf|nan)", re.IGNORECASE)
 
+    def _parse_optional(self, arg_string: str) -> Any:
+        # a negative value is never an option, also where a short option shares its first
+        # letter (-inf is not "-i nf", -nan not "-n an"): the value parser refuses it in words
+        if self._negative_number_matcher.match(arg_string):
+            return None
+        return super()._parse_optional(arg_string)
+
     def error(self, message: str) -> NoReturn:
         text = f"{message} (see {self.prog} --help)"
         if _JSON_ERRORS:

@@ -176,6 +176,10 @@ def test_read_write_by_index_with_units_and_json_errors(node, capsys):
     # a usage error with --json is JSON too
     rc, out = dl(node, capsys, "set-speed", "nan")
     assert rc == 2 and out["exit_code"] == 2 and "nan and inf are refused" in out["error"]
+    # -inf / -nan are values (refused as such), not -i / -n short options
+    for text in ("-inf", "-nan", "-inf A"):
+        rc, out = dl(node, capsys, "set-current", text)
+        assert rc == 2 and "nan and inf are refused" in out["error"], text
 
 
 def test_set_gains_takes_units(node, capsys):
