@@ -17,7 +17,7 @@ import statistics
 import threading
 import time
 
-from drive_link.cli_connect import connect_from_args
+from drive_link.cli_connect import add_bus_arguments, connect_from_args
 from drive_link.drive import Drive
 from drive_link.errors import DriveError
 from drive_link.scan import scan
@@ -96,12 +96,7 @@ def run(d: Drive, n_reads: int = 300) -> dict[str, float]:
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``python benchmarks/bench_link.py``."""
     ap = argparse.ArgumentParser(prog="bench_link.py", description=__doc__)
-    ap.add_argument("--interface")
-    ap.add_argument("--channel")
-    ap.add_argument("--bitrate", type=int)
-    ap.add_argument("--host")
-    ap.add_argument("--port", type=int)
-    ap.add_argument("--node", type=int, default=1)
+    add_bus_arguments(ap)  # python-can's bus options, --host/--port, --node (as drive-link)
     ap.add_argument("--reads", type=int, default=300)
     ap.add_argument(
         "--drop-rates",

@@ -16,6 +16,7 @@ import sys
 from collections.abc import Sequence
 
 from dashboard.config import BenchConfig
+from drive_link.cli_connect import add_bus_arguments
 
 
 class _Parser(argparse.ArgumentParser):
@@ -58,10 +59,8 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="PORT",
         help="join a running loopback hub on 127.0.0.1:PORT (virtual-drive run --hub)",
     )
-    p.add_argument("--interface", help="python-can interface of the real bus (e.g. socketcan)")
-    p.add_argument("--channel", help="python-can channel (e.g. can0)")
-    p.add_argument("--bitrate", type=int, default=1_000_000, help="bit/s (default 1000000)")
-    p.add_argument("--node", type=int, default=1, help="CANopen node-ID of the drive (default 1)")
+    # --interface/-i, --channel/-c, --bitrate/-b (default 1000000), --node (drive_link.cli_connect)
+    add_bus_arguments(p, hub=False, extras=False, defaults={"bitrate": 1_000_000})
     p.add_argument("--host", default="127.0.0.1", help="API bind address (default 127.0.0.1)")
     p.add_argument("--port", type=int, default=8000, help="API port (default 8000)")
     p.add_argument("--gui-port", type=int, default=8080, help="GUI port (default 8080; 0 = any)")
@@ -87,11 +86,11 @@ def _port_free(host: str, port: int) -> bool:
             return False
     return True
 
+
 def _no_startup_traceback(record: logging.LogRecord) -> bool:
     """Drop uvicorn's lifespan traceback and its "startup failed" line (main prints one line)."""
     msg = record.getMessage()
     return not (msg.startswith("Traceback") or msg.startswith("Application startup failed"))
-
 
 
 def main(argv: Sequence[str] | None = None) -> int:
