@@ -191,6 +191,15 @@ def post_gains_preview(body: GainsIn, bench: BenchDep) -> dict[str, Any]:
     return jsonable(run(lambda: tuning.preview(bench, body.changes())))
 
 
+@router.post(
+    "/gains/response",
+    tags=["gains"],
+    summary="Bode data and z-plane poles of both loops for a gain set (Figs. 4, 5, 12)",
+)
+def post_gains_response(body: GainsIn, bench: BenchDep) -> dict[str, Any]:
+    return jsonable(run(lambda: tuning.response(bench, body.changes())))
+
+
 @router.post("/gains/ip_design", tags=["gains"], summary="IP gains from ξ, ω_n, a, b (eqs. 28–31)")
 def post_ip_design(body: IPDesignIn, bench: BenchDep) -> dict[str, Any]:
     return jsonable(run(lambda: tuning.design_ip(bench, body.xi, body.omega_n, body.a, body.b)))

@@ -84,6 +84,30 @@ def preview(bench: Bench, changes: dict[str, float | int]) -> dict[str, Any]:
     return {"current": current, "speed": speed, "check": check.to_dict()}
 
 
+def response(bench: Bench, changes: dict[str, float | int], n_points: int = 200) -> dict[str, Any]:
+    """Bode data (open loop dB and °, |T| and |S| dB over f Hz) and closed-loop poles/zeros in
+    the z-plane of the current loop and of the IP speed loop with ``changes`` applied (the
+    paper's Figs. 4, 5, 12; drive_link.design.current_loop_response/speed_loop_response)."""
+    g = _merged(bench, changes)
+    cur = design.current_loop_response(
+        g["type"],
+        R=g["motor_R"],
+        L=g["motor_L"],
+        L_c=g["L_c"],
+        R_c=g["R_c"],
+        k_p=g["k_p"],
+        k_i=g["k_i"],
+        n_points=n_points,
+    )
+    a, b = _ab(bench)
+    kp, ki = float(g["speed_k_p"]), float(g["speed_k_i"])
+    speed = design.speed_loop_response(a, b, kp, ki, n_points=n_points)
+    return {
+        "current": {**cur.as_dict(), "controller": g["type"], "L_c": g["L_c"], "R_c": g["R_c"]},
+        "speed": {**speed.as_dict(), "a": a, "b": b, "k_p": kp, "k_i": ki},
+    }
+
+
 def _ab(bench: Bench) -> tuple[float, float]:
     ident = bench.identified
     if ident:

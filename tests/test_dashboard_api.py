@@ -251,6 +251,27 @@ def test_gains_preview_matches_python_control(client):
     assert ref["S_inf"] == pytest.approx(2.0, rel=1e-3)
 
 
+def test_gains_response_bode_and_poles(client):
+    """The tuning panel's curves for a typed set, before applying: Bode of C(z)P(z) and the
+    closed-loop poles against python-control; the speed loop's poles are eq. (27)'s."""
+    r = client.post("/api/gains/response", json={"type": "deadbeat", "L_c": 1.5 * L, "R_c": R})
+    assert r.status_code == 200
+    c, s = r.json()["current"], r.json()["speed"]
+    loop = deadbeat_loop(1.5 * L)
+    f = np.asarray(c["f_hz"])
+    mag = np.abs(loop(np.exp(2j * math.pi * f * TS)))
+    assert np.asarray(c["magnitude_db"]) == pytest.approx(20 * np.log10(mag), abs=1e-3)
+    oracle = np.sort_complex(ct.feedback(deadbeat_loop(1.5 * L), 1).poles())
+    got = np.sort_complex(np.array([complex(*p) for p in c["poles"]]))
+    assert got[np.abs(got) > 1e-6] == pytest.approx(oracle[np.abs(oracle) > 1e-6], abs=1e-6)
+    assert c["stable"] is True and c["phase_margin_deg"] > 0 and len(c["crossovers"]) == 2
+    kp, ki, a, b = s["k_p"], s["k_i"], s["a"], s["b"]
+    want = np.roots([1, kp * b * (1 + ki) - 1 - a, a - kp * b])
+    got = np.array([complex(*p) for p in s["poles"]])
+    assert np.sort_complex(got) == pytest.approx(np.sort_complex(want), abs=1e-9)
+    assert client.post("/api/gains/response", json={"L_c": -1}).status_code == 422
+
+
 def test_gains_apply_readback_and_bad_input_changes_nothing(client, hdr):
     before = client.get("/api/gains").json()
     assert before["L_c"] == pytest.approx(f32(L))
