@@ -14,6 +14,8 @@ import time
 from dataclasses import dataclass, field
 from typing import Any
 
+__all__ = ["ActionCancelledError", "ActionTimeoutError", "Found", "LongAction"]
+
 
 class ActionCancelledError(RuntimeError):
     """The user pressed Cancel (or another client stopped the action)."""
@@ -78,18 +80,3 @@ class LongAction:
             "elapsed_s": round(now - self.started, 2),
             "deadline_in_s": round(self.deadline - now, 2),
         }
-
-
-def wait_recorder(rec: Any, action: LongAction, timeout: float, poll_s: float = 0.02) -> None:
-    """Like drive_link's ``TraceRecorder.wait`` but cancellable and bounded by the action's
-    deadline: poll the recorder state until "done"."""
-    end = min(time.monotonic() + timeout, action.deadline)
-    state = rec.state
-    while state != "done":
-        if state == "idle":
-            raise RuntimeError("trace recorder went idle before it was done")
-        if time.monotonic() >= end:
-            action.check()
-            raise ActionTimeoutError(f"trace not done after {timeout:g} s (recorder {state})")
-        action.sleep(poll_s)
-        state = rec.state
