@@ -422,7 +422,12 @@ class Hub:
             if events != c.events:
                 poll.modify(c.fd, events)
                 c.events = events
-        ready = poll.poll(-1.0 if timeout is None else timeout)
+        if timeout is None:
+            ready = poll.poll()
+        else:  # epoll_wait counts whole ms (a 0.12 ms wait would take 1 ms): select waits
+            # on the epoll descriptor to the microsecond, then the events are fetched
+            woke, _, _ = select.select([poll], [], [], timeout)
+            ready = poll.poll(0) if woke else []
         now = time.monotonic()
         writable = []
         for fd, events in ready:
