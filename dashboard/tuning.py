@@ -18,6 +18,24 @@ from drive_link import design
 from drive_link import gains as link_gains
 from firmware_protocol import paper
 
+__all__ = [
+    "A_PAPER",
+    "B_PAPER",
+    "DISPLAY",
+    "apply",
+    "design_ip",
+    "diff_markdown",
+    "display",
+    "motor_RL",
+    "preview",
+    "preview_markdown",
+    "read_gains",
+    "readback_markdown",
+    "response",
+    "store",
+    "stored_diff",
+]
+
 #: The paper's identified speed model (Section V), used until an identification has been run.
 A_PAPER, B_PAPER = paper.SPEED_MODEL
 
