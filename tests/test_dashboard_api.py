@@ -242,8 +242,15 @@ def test_gains_preview_matches_python_control(client):
         assert c["phase_margin_deg"] == pytest.approx(abs(pm), abs=0.5)
         assert len(c["crossovers"]) == 2
         assert c["S_inf"] == pytest.approx(s_inf, rel=2e-3)
+    # the GUI's text follows the same convention (Table 1: ±41.6°; computed 41.59°/41.37°)
+    from dashboard.tuning import preview_markdown
+
+    p = client.post("/api/gains/preview", json={"L_c": 1.5 * L}).json()
+    md = preview_markdown(p)
+    assert "PM 41.4° (41.6° at 6.7 kHz, 41.4° at 18.3 kHz)" in md and "PM -" not in md
     p = client.post("/api/gains/preview", json={"L_c": 1.8 * L}).json()
     assert p["check"]["warnings"] and not p["check"]["refusals"]  # what apply would say
+    assert "Needs force" in preview_markdown(p)
     p = client.post("/api/gains/preview", json={"type": "pi", "k_p": 2.0}).json()
     assert p["current"]["stable"] is False and p["check"]["refusals"]
     ref = client.post("/api/gains/preview", json={"L_c": L}).json()["current"]
