@@ -18,7 +18,9 @@ drive's state (objects marked ConfigOnly need the power stage off). Then only th
 differ are written: the controller gains as one staged set through the gain-set objects
 (0x20F0/0x20F1, :meth:`Drive.apply_gains`), the others with the ordinary checked writes; if the
 drive refuses a write part-way, what was written is put back (rollback) before the error is
-raised. The dashboard calls :func:`save`, :func:`diff` and :func:`load` like the CLI does.
+raised. The dashboard calls :func:`save`, :func:`diff` and :func:`load` like the CLI does;
+for a browser download :func:`dcf_text` (``dcf_text(read_config(drive), drive.node_id)``), for
+an upload pass the text as an :class:`io.StringIO` to :func:`diff` / :func:`load`.
 """
 
 from __future__ import annotations
@@ -44,7 +46,9 @@ __all__ = [
     "ConfigDiff",
     "DcfContents",
     "Difference",
+    "Source",
     "config_objects",
+    "dcf_text",
     "diff",
     "load",
     "read_config",
@@ -111,14 +115,31 @@ def write_dcf(
     """Write ``values`` (object name → value in its OD unit) as a DCF based on the shipped EDS.
 
     ``bitrate`` in bit/s (written in kbit/s; 0 when unknown)."""
+    path = Path(path)
+    text = dcf_text(
+        values, node_id, file_name=path.name, node_name=node_name, bitrate=bitrate, table=table
+    )
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def dcf_text(
+    values: dict[str, float | int],
+    node_id: int,
+    *,
+    file_name: str = "drive.dcf",
+    node_name: str = "",
+    bitrate: int | None = None,
+    table: ObjectTable | None = None,
+) -> str:
+    """The DCF of :func:`write_dcf` as text (for a browser download)."""
     table = table or default_table()
     eds = configparser.RawConfigParser(strict=False, interpolation=None)
     eds.optionxform = str  # type: ignore[assignment,method-assign]
     eds.read(EDS_PATH, encoding="utf-8")
-    path = Path(path)
     now = _dt.datetime.now()
     fi = "FileInfo"
-    eds.set(fi, "FileName", path.name)
+    eds.set(fi, "FileName", file_name)
     eds.set(fi, "Description", f"configuration of node {node_id} saved by drive-link")
     eds.set(fi, "ModificationTime", now.strftime("%I:%M%p"))
     eds.set(fi, "ModificationDate", now.strftime("%m-%d-%Y"))
@@ -142,8 +163,7 @@ def write_dcf(
         eds.set(sec, "ParameterValue", _text(obj, value))
     buf = io.StringIO()
     eds.write(buf, space_around_delimiters=False)
-    path.write_text(buf.getvalue(), encoding="utf-8")
-    return path
+    return buf.getvalue()
 
 
 def _section(obj: ObjectInfo, eds: configparser.RawConfigParser) -> str:
@@ -166,16 +186,25 @@ class DcfContents:
     node_id: int | None
 
 
-def read_dcf(path: str | Path, node_id: int = 1, table: ObjectTable | None = None) -> DcfContents:
-    """The ParameterValues of a DCF; :class:`InvalidValue` (one line) for an unreadable file,
-    an object the drive does not have, or a value that is not a number."""
+Source = str | Path | io.StringIO
+"""A DCF file path, or its text in an :class:`io.StringIO` (an upload in the dashboard)."""
+
+
+def read_dcf(path: Source, node_id: int = 1, table: ObjectTable | None = None) -> DcfContents:
+    """The ParameterValues of a DCF (a path, or an :class:`io.StringIO` of its text);
+    :class:`InvalidValue` (one line) for an unreadable file, an object the drive does not
+    have, or a value that is not a number."""
     table = table or default_table()
-    path = Path(path)
     eds = configparser.RawConfigParser(strict=False, interpolation=None)
     eds.optionxform = str  # type: ignore[assignment,method-assign]
     try:
-        with path.open(encoding="utf-8") as f:
-            eds.read_file(f)
+        if isinstance(path, io.StringIO):
+            eds.read_string(path.getvalue(), source="<upload>")
+            path = Path("<upload>")
+        else:
+            path = Path(path)
+            with path.open(encoding="utf-8") as f:
+                eds.read_file(f)
     except (OSError, UnicodeDecodeError, configparser.Error) as exc:
         raise InvalidValue(f"cannot read {path}: {exc}") from None
     dcf_node = None
@@ -278,7 +307,7 @@ def _checked(table: ObjectTable, values: dict[str, float | int]) -> dict[str, fl
     return out
 
 
-def diff(drive: Drive, path: str | Path) -> ConfigDiff:
+def diff(drive: Drive, path: Source) -> ConfigDiff:
     """Compare the DCF at ``path`` with the drive (values as the drive would store them)."""
     dcf = read_dcf(path, drive.node_id, drive.table)
     wanted = _checked(drive.table, dcf.values)
@@ -296,7 +325,7 @@ def diff(drive: Drive, path: str | Path) -> ConfigDiff:
 
 
 def load(
-    drive: Drive, path: str | Path, *, dry_run: bool = False, force: bool = False
+    drive: Drive, path: Source, *, dry_run: bool = False, force: bool = False
 ) -> dict[str, Any]:
     """Apply the DCF at ``path`` to ``drive`` all-or-nothing (see the module doc); with
     ``dry_run`` check everything and write nothing. A gain set with poor margins (a warning of

@@ -15,6 +15,7 @@ import canopen
 import pytest
 
 from drive_link import cli
+from drive_link.errors import InvalidValue
 from firmware_protocol import load_od
 
 pytestmark = pytest.mark.timeout(120)
@@ -193,3 +194,22 @@ def test_set_gains_takes_units(node, capsys):
         assert rc == 7 and "wrong dimension" in out["error"]
     finally:
         dl(node, capsys, "set-gains", f"L_c={before['L_c']!r}", f"R_c={before['R_c']!r}")
+
+
+def test_dashboard_path_text_in_text_out(node):
+    """The functions the dashboard calls: the DCF as text (download) and back from text
+    (upload), through the same checks."""
+    import io
+
+    from drive_link import Drive
+    from drive_link.config_dcf import dcf_text, diff, load, read_config
+
+    with Drive.connect(interface="virtual", channel=node, node_id=7) as d:
+        text = dcf_text(read_config(d), d.node_id)
+        up = io.StringIO(text)
+        up.name = "drive.dcf"  # canopen picks the format by the name
+        assert canopen.import_od(up).node_id == 7
+        assert diff(d, io.StringIO(text)).changes == []
+        bad = re.sub(r"(\[2010sub3\]\n(?:.*\n)*?ParameterValue=).*", r"\g<1>7.5", text)
+        with pytest.raises(InvalidValue, match=r"nothing written: .*R_c"):
+            load(d, io.StringIO(bad))
