@@ -291,8 +291,12 @@ def cmd_set_current(args: argparse.Namespace, d: Drive) -> int:
 
 
 def _with_unit(obj: Any, v: Any) -> str:
+    """``v`` with its unit, its enumeration label, or (unsigned without unit: bit fields,
+    COB-IDs, codes) its hex form."""
     unit = obj.unit if obj.unit not in ("", "1") else ""
     label = dict(obj.enum).get(v) if obj.enum and isinstance(v, int) else None
+    if label is None and not unit and obj.type_name.startswith("UNSIGNED") and isinstance(v, int):
+        label = f"0x{v:0{max(2, obj.bits // 4)}X}"
     return f"{v} {unit}".rstrip() + (f" ({label})" if label else "")
 
 
