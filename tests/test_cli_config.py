@@ -63,16 +63,15 @@ def test_config_save_loads_in_canopen_and_matches_the_drive(node, capsys, tmp_pa
     assert rc == 0 and out["objects"] >= 30 and out["node_id"] == 7
     od = canopen.import_od(str(f))
     assert od.node_id == 7 and od.bitrate == 500000  # [DeviceComissioning] NodeID, Baudrate
-    checked = 0
-    for var in _variables(od):
-        if var.value is None:
-            continue
-        rc, got = dl(node, capsys, "read", f"0x{var.index:04X}:{var.subindex:X}")
-        assert rc == 0, got
-        (value,) = got.values()
+    saved = [v for v in _variables(od) if v.value is not None]
+    assert len(saved) == out["objects"]
+    # what the drive reports, read by index in one command (JSON keyed by OD name, in order)
+    rc, got = dl(node, capsys, "read", *[f"0x{v.index:04X}:{v.subindex:X}" for v in saved])
+    assert rc == 0, got
+    assert len(got) == len(saved)
+    for var, value in zip(saved, got.values(), strict=True):
         assert var.value == pytest.approx(value, rel=1e-7), var.name
-        checked += 1
-    assert checked == out["objects"]
+    checked = len(saved)
     rc, out = dl(node, capsys, "config", "diff", str(f))
     assert rc == 0 and out["changes"] == [] and out["same"] == checked
 
