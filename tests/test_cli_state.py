@@ -138,7 +138,13 @@ def test_step_and_identify_restore_state_mode_setpoint(hub):
 
 def test_ctrl_c_during_a_step_restores(hub):
     before = put(hub, "SWITCHED ON", "speed", 0, 0.0)
-    cmd = [sys.executable, "-m", "drive_link.cli", "step", "speed", "--length", "3000"]
+    # SIGINT raises KeyboardInterrupt in the child even where the test runner's process ignores
+    # SIGINT (an ignored signal is inherited, and Python then installs no handler)
+    main = (
+        "import signal, sys; signal.signal(signal.SIGINT, signal.default_int_handler); "
+        "from drive_link.cli import main; sys.exit(main())"
+    )
+    cmd = [sys.executable, "-c", main, "step", "speed", "--length", "3000"]
     cmd += ["--divider", "200", "--host", "127.0.0.1", "--port", str(hub.port)]
     p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
