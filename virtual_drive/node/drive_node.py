@@ -15,12 +15,14 @@ gains and setpoints take effect at a chunk (sample) boundary.
 Object values: parameters live in the canopen LocalNode's data store (raw bytes, defaults from
 the EDS); live values (statusword, measurements, trace data, error objects) are computed on read.
 
-The node is split by job; this module assembles it (services, lifecycle, bus, communication
-objects, resets, CiA 402 / NMT hooks, the pacing loop's chunk):
+The node is split by job; this module assembles it (services, lifecycle, bus, parameter
+access, CiA 402 hooks, the pacing loop's chunk):
 
 - :mod:`.local_node` the canopen LocalNode whose reads and writes go through the drive;
 - :mod:`.writes` every write: checks, then a table of handlers by object index;
 - :mod:`.parameters` load / push to the simulator / store / restore the parameter set;
+- :mod:`.communication` communication objects (heartbeat, EMCY, SDO server 2, PDOs), NMT reset
+  communication; :mod:`.resets` reset node (deferred while braking), 0x6007 reactions;
 - :mod:`.gain_sets` the staged gain set 0x20F0/0x20F1 and the current limit;
 - :mod:`.trace_config` trace configuration writes and the recorder's set-up;
 - :mod:`.ramps` setpoints, profile and stop ramps of the next chunk;
@@ -35,6 +37,7 @@ import logging
 import threading
 import time
 from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -46,12 +49,12 @@ from firmware_protocol import abort_codes
 from firmware_protocol.enums import StoreStatus
 from firmware_protocol.od import load_od
 
-from . import parameters, ramps, statusword, storage, writes
+from . import communication, parameters, ramps, resets, statusword, storage, writes
 from .cia402 import Cia402StateMachine
-from .emcy import DATA_SET_LOST, HEARTBEAT_LOSS, NMT_CONNECTION_LOSS, EmcyManager
+from .emcy import EmcyManager
 from .heartbeat import HeartbeatConsumer, HeartbeatProducer
 from .local_node import DriveLocalNode, RpdoRefusedError
-from .nmt import CMD_RESET_COMMUNICATION, CMD_RESET_NODE, OPERATIONAL, NmtSlave
+from .nmt import OPERATIONAL, NmtSlave
 from .od_maps import (
     CURRENT_WINDOW_A,
     MEASUREMENTS,
@@ -140,11 +143,11 @@ class VirtualDrive:
         self.nmt = NmtSlave(
             node_id,
             self._send,
-            on_reset_node=self._reset_application,
-            on_reset_communication=self._reset_communication,
+            on_reset_node=partial(resets.reset_application, self),
+            on_reset_communication=partial(communication.reset_communication, self),
             on_state_change=self._on_nmt_change,
-            on_abort_connection=self._on_nmt_abort_connection,
-            on_boot=self._on_boot,
+            on_abort_connection=partial(resets.on_nmt_abort_connection, self),
+            on_boot=partial(resets.on_boot, self),
         )
         self.emcy = EmcyManager(0x80 + node_id, self._send, self.nmt.emcy_allowed)
         self.sdo = BlockSdoServer(
@@ -156,8 +159,8 @@ class VirtualDrive:
         self.hb_consumer = HeartbeatConsumer(
             self.network.subscribe,
             self.network.unsubscribe,
-            self._on_heartbeat_lost,
-            self._on_heartbeat_back,
+            partial(resets.on_heartbeat_lost, self),
+            partial(resets.on_heartbeat_back, self),
         )
         self.pdo = PdoEngine(
             self.node,
@@ -278,98 +281,6 @@ class VirtualDrive:
         """Stored parameters (or defaults) into the data store and the simulator."""
         parameters.load_parameters(self)
 
-    def _configure_communication(self) -> None:
-        now = time.monotonic()
-        self.hb_producer.set_period(self._value(0x1017), now)
-        self.hb_consumer.configure(self._consumer_entries())
-        self.emcy.set_cob_id(self._value(0x1014))
-        self._bind_sdo2()
-        self.pdo.configure()
-
-    def _consumer_entries(self, sub: int = 0, value: int = 0) -> list[int]:
-        """0x1016 sub 1..N present values (with ``value`` in place of ``sub`` if given)."""
-        count = self._value(0x1016, 0)
-        return [value if s == sub else self._value(0x1016, s) for s in range(1, count + 1)]
-
-    def _bind_sdo2(self) -> None:
-        rx, tx = self._value(0x1201, 1), self._value(0x1201, 2)
-        if self.sdo2 is not None:
-            self.network.unsubscribe(self.sdo2.rx_cobid, self.sdo2.on_request)
-            self.sdo2 = None
-        if rx & 0x80000000 or tx & 0x80000000:
-            return
-        self.sdo2 = BlockSdoServer(
-            rx & 0x7FF, tx & 0x7FF, self.node, self.nmt.sdo_allowed, send=self._send
-        )
-        self.network.subscribe(self.sdo2.rx_cobid, self.sdo2.on_request)
-
-    def _reset_communication(self) -> None:
-        """NMT reset communication: 0x1000–0x1FFF back to stored values or defaults (CiA 301).
-
-        Exception: while the power stage is still on after the 0x6007 reaction (a stop ramp
-        still braking) the consumer heartbeat 0x1016 keeps its present value, so the master's
-        supervision is never dropped while the motor can turn.
-        """
-        keep_1016 = self.cia402.torque_enabled
-        kept = dict(self.node.data_store.get(0x1016, {})) if keep_1016 else {}
-        stored, _status, _error = parameters.read_store(self)
-        for index in [i for i in self.node.data_store if i < 0x2000]:
-            del self.node.data_store[index]
-        for (index, sub), raw in stored.items():
-            if index < 0x2000 and index in self.od:
-                self.node.data_store.setdefault(index, {})[sub] = raw
-        if keep_1016:
-            self.node.data_store.pop(0x1016, None)
-            if kept:
-                self.node.data_store[0x1016] = kept
-        self._pcache.clear()
-        self.pdo.reset_counters()
-        self._configure_communication()
-
-    def _reset_application(self) -> bool:
-        """NMT reset node: all parameters to stored values, drive to SWITCH ON DISABLED.
-
-        Runs after the 0x6007 reaction. While its stop ramp still brakes the motor the reset is
-        deferred (returns False): the pacing loop completes it at standstill (or after
-        :data:`RESET_BRAKE_LIMIT_S`), then the node boots. The motor is never left turning under
-        a freshly reset, unsupervised application.
-        """
-        if self.cia402.torque_enabled:
-            self._reset_deferred_at = float(self.sim.time)
-            logger.info("reset node deferred until the stop ramp ends")
-            return False
-        self._do_reset_application()
-        return True
-
-    def _finish_deferred_reset(self) -> None:
-        """Pacing loop: complete a deferred reset node once the motor is braked."""
-        started = self._reset_deferred_at
-        if started is None:
-            return
-        braked = not self.cia402.torque_enabled
-        if not braked and float(self.sim.time) - started < RESET_BRAKE_LIMIT_S:
-            return
-        self._reset_deferred_at = None
-        with self._write_lock:
-            self._do_reset_application()
-        self.nmt.finish_reset()
-
-    def _do_reset_application(self) -> None:
-        with self.sim_lock:
-            self.cia402 = Cia402StateMachine(self._options, self._reset_fault)
-            ramps.set_sim_mode(self, "off")
-            self.sim.set_current_ref(0.0)
-            self.sim.set_speed_ref(0.0)
-            self._speed_ref = 0.0
-            self.recorder.stop()
-            self.sim.reset_fault()
-            self._sim_mode = "off"
-            self._last_fault = None
-        self.emcy.clear_all()
-        self._mode = MODE_PROFILE_VELOCITY
-        self._load_parameters()
-        return None
-
     def save_parameters(self) -> None:
         """0x1010 "save": persistent objects' present values to the store file (atomic)."""
         parameters.save_parameters(self)
@@ -414,50 +325,6 @@ class VirtualDrive:
         if new == OPERATIONAL:
             self.pdo.configure()
 
-    def _on_heartbeat_lost(self, node_id: int) -> None:
-        self.emcy.raise_error(HEARTBEAT_LOSS, bytes([node_id]))
-        self._connection_reaction(self._value(0x6007), HEARTBEAT_LOSS)
-
-    def _connection_reaction(self, option: int, code: int) -> None:
-        """CiA 402 0x6007: 1 fault (0x605E reaction), 2 disable voltage, 3 quick stop (0x605A)."""
-        if option == 1:
-            self.cia402.fault(code)
-        elif option == 2:
-            self.cia402.disable_voltage()
-        elif option == 3:
-            self.cia402.quick_stop()
-
-    def _on_nmt_abort_connection(self, command: int) -> None:
-        """NMT stop / reset communication / reset node: the 0x6007 reaction (CiA 402 §6.3.3).
-
-        Leaving the NMT state in which the master commands the drive while the power stage is
-        on is a loss of the connection. Both resets reload the communication objects (RPDO
-        mappings and COB-IDs the master commands through may be gone) and reset node resets
-        the application: neither may leave the motor turning, so there 0x6007 = 0 (no action)
-        acts as 3 (quick stop). NMT stop honours 0.
-        """
-        if not self.cia402.operation_enabled:
-            return
-        option = self._value(0x6007)
-        if command in (CMD_RESET_NODE, CMD_RESET_COMMUNICATION) and option == 0:
-            option = 3
-        logger.warning("NMT command 0x%02X while OPERATION ENABLED: 0x6007 = %d", command, option)
-        if option == 1:
-            self.emcy.raise_error(NMT_CONNECTION_LOSS)  # 0x603F/0x1003 (no frame in STOPPED)
-        self._connection_reaction(option, NMT_CONNECTION_LOSS)
-
-    def _on_boot(self) -> None:
-        """After every boot-up message: a damaged/unreadable store is reported on the bus
-        (EMCY 0x6310 "data set lost", error register bit 0; 0x2060 store_status 2/3)."""
-        if self.store_status in (StoreStatus.DAMAGED, StoreStatus.UNREADABLE):
-            data = bytes([int(self.store_status)])
-            if not self.emcy.raise_error(DATA_SET_LOST, data):
-                self.emcy.announce(DATA_SET_LOST, data)  # still active: say it again
-
-    def _on_heartbeat_back(self, node_id: int) -> None:
-        if self.cia402.fault_code != HEARTBEAT_LOSS:
-            self.emcy.clear_error(HEARTBEAT_LOSS)
-
     # -- the loop -------------------------------------------------------------------------
     def _step(self, n: int) -> None:
         """One chunk: setpoints, simulation, faults, recorder, live values (runner thread).
@@ -494,6 +361,6 @@ class VirtualDrive:
 
     def _periodic(self, now: float) -> None:
         if self._reset_deferred_at is not None:
-            self._finish_deferred_reset()
+            resets.finish_deferred_reset(self)
         self.hb_consumer.tick(now)
         self.hb_producer.tick(now)

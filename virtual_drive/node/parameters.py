@@ -26,7 +26,7 @@ from firmware_protocol.entry import LimitError
 from firmware_protocol.enums import StoreStatus
 from firmware_protocol.stability import check_ip_speed_gains
 
-from . import gain_sets, plant, storage
+from . import communication, gain_sets, plant, storage
 from .emcy import DATA_SET_LOST
 
 if TYPE_CHECKING:
@@ -68,7 +68,7 @@ def load_parameters(d: VirtualDrive) -> None:
         d._pcache.clear()
         d.store_status, d.store_error = StoreStatus.DAMAGED, problem
     push_plant(d)
-    d._configure_communication()
+    communication.configure_communication(d)
 
 
 def rules_broken(d: VirtualDrive) -> str | None:
@@ -92,17 +92,7 @@ def rules_broken(d: VirtualDrive) -> str | None:
 
 def read_store(d: VirtualDrive) -> tuple[dict[tuple[int, int], bytes], StoreStatus, str | None]:
     """The store file's values, its 0x2060 status and the error text (None if fine)."""
-    if d.store_path is None:
-        return {}, StoreStatus.DEFAULTS, None
-    try:
-        stored = storage.load(d.store_path)
-    except storage.StoreCorruptError as exc:
-        logger.error("parameter file damaged, defaults used: %s", exc)
-        return {}, StoreStatus.DAMAGED, str(exc)
-    except OSError as exc:
-        logger.error("parameter file unreadable, defaults used: %s", exc)
-        return {}, StoreStatus.UNREADABLE, str(exc)
-    return stored, (StoreStatus.OK if stored else StoreStatus.DEFAULTS), None
+    return storage.load_with_status(d.store_path)
 
 
 def push_plant(d: VirtualDrive) -> None:

@@ -17,6 +17,8 @@ import os
 import tempfile
 from pathlib import Path
 
+from firmware_protocol.enums import StoreStatus
+
 logger = logging.getLogger(__name__)
 
 FORMAT = "bldc-bench-drive-parameters"
@@ -137,3 +139,22 @@ def load(path: str | os.PathLike) -> dict[tuple[int, int], bytes]:
         raise
     except (ValueError, KeyError, TypeError, AttributeError) as exc:
         raise StoreCorruptError(f"{path}: {exc}") from exc
+
+
+def load_with_status(
+    path: str | os.PathLike | None,
+) -> tuple[dict[tuple[int, int], bytes], StoreStatus, str | None]:
+    """The store's values, its 0x2060 status and the error text (None if fine): no file
+    configured or an empty store -> DEFAULTS, a damaged file -> DAMAGED, an unreadable one ->
+    UNREADABLE (both with no values: the defaults apply)."""
+    if path is None:
+        return {}, StoreStatus.DEFAULTS, None
+    try:
+        stored = load(path)
+    except StoreCorruptError as exc:
+        logger.error("parameter file damaged, defaults used: %s", exc)
+        return {}, StoreStatus.DAMAGED, str(exc)
+    except OSError as exc:
+        logger.error("parameter file unreadable, defaults used: %s", exc)
+        return {}, StoreStatus.UNREADABLE, str(exc)
+    return stored, (StoreStatus.OK if stored else StoreStatus.DEFAULTS), None

@@ -30,7 +30,7 @@ from firmware_protocol.cob_id import check_cob_id, check_heartbeat_consumers
 from firmware_protocol.entry import LimitError
 
 from . import cia402 as sm
-from . import gain_sets, parameters, plant, storage
+from . import communication, gain_sets, parameters, plant, storage
 from .od_maps import SUPPORTED_MODES
 from .pdo import is_pdo_config
 from .trace_config import check_trace_channel, trace_config_write
@@ -137,7 +137,7 @@ def _limit_error_to_abort(fn: Callable[[], None]) -> None:
 
 def _heartbeat_consumers(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
     """0x1016: node-ID 1..127, one entry per node, reserved bits 0 (CiA 301)."""
-    entries = d._consumer_entries(sub, value)
+    entries = communication.consumer_entries(d, sub, value)
     _limit_error_to_abort(lambda: check_heartbeat_consumers(entries, own_node_id=d.node_id))
     return True, lambda: d.hb_consumer.configure(entries)
 
@@ -157,7 +157,7 @@ def _sdo_server2(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
     """0x1201: the second SDO server's COB-IDs; rebinds it."""
     if sub in (1, 2):
         _limit_error_to_abort(lambda: check_cob_id("sdo", value, d._value(0x1201, sub)))
-    return True, d._bind_sdo2
+    return True, lambda: communication.bind_sdo2(d)
 
 
 def _controlword(d: VirtualDrive, sub: int, value: Any) -> WriteResult:

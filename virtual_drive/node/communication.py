@@ -1,0 +1,71 @@
+"""The communication objects (CiA 301): heartbeat 0x1016/0x1017, EMCY 0x1014, the second SDO
+server 0x1201, the PDOs, and NMT "reset communication".
+
+:func:`configure_communication` applies the present values to the services (after a parameter
+load or a reset); the write handlers (:mod:`.writes`) apply single writes.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import TYPE_CHECKING
+
+from . import storage
+from .sdo_block import BlockSdoServer
+
+if TYPE_CHECKING:
+    from .drive_node import VirtualDrive
+
+__all__ = ["bind_sdo2", "configure_communication", "consumer_entries", "reset_communication"]
+
+
+def configure_communication(d: VirtualDrive) -> None:
+    """Heartbeat producer/consumer, EMCY COB-ID, SDO server 2 and PDOs from the present values."""
+    now = time.monotonic()
+    d.hb_producer.set_period(d._value(0x1017), now)
+    d.hb_consumer.configure(consumer_entries(d))
+    d.emcy.set_cob_id(d._value(0x1014))
+    bind_sdo2(d)
+    d.pdo.configure()
+
+
+def consumer_entries(d: VirtualDrive, sub: int = 0, value: int = 0) -> list[int]:
+    """0x1016 sub 1..N present values (with ``value`` in place of ``sub`` if given)."""
+    count = d._value(0x1016, 0)
+    return [value if s == sub else d._value(0x1016, s) for s in range(1, count + 1)]
+
+
+def bind_sdo2(d: VirtualDrive) -> None:
+    """(Re)bind the second SDO server to 0x1201:1/2 (bit 31 set in either: no server)."""
+    rx, tx = d._value(0x1201, 1), d._value(0x1201, 2)
+    if d.sdo2 is not None:
+        d.network.unsubscribe(d.sdo2.rx_cobid, d.sdo2.on_request)
+        d.sdo2 = None
+    if rx & 0x80000000 or tx & 0x80000000:
+        return
+    d.sdo2 = BlockSdoServer(rx & 0x7FF, tx & 0x7FF, d.node, d.nmt.sdo_allowed, send=d._send)
+    d.network.subscribe(d.sdo2.rx_cobid, d.sdo2.on_request)
+
+
+def reset_communication(d: VirtualDrive) -> None:
+    """NMT reset communication: 0x1000-0x1FFF back to stored values or defaults (CiA 301).
+
+    Exception: while the power stage is still on after the 0x6007 reaction (a stop ramp
+    still braking) the consumer heartbeat 0x1016 keeps its present value, so the master's
+    supervision is never dropped while the motor can turn.
+    """
+    keep_1016 = d.cia402.torque_enabled
+    kept = dict(d.node.data_store.get(0x1016, {})) if keep_1016 else {}
+    stored, _status, _error = storage.load_with_status(d.store_path)
+    for index in [i for i in d.node.data_store if i < 0x2000]:
+        del d.node.data_store[index]
+    for (index, sub), raw in stored.items():
+        if index < 0x2000 and index in d.od:
+            d.node.data_store.setdefault(index, {})[sub] = raw
+    if keep_1016:
+        d.node.data_store.pop(0x1016, None)
+        if kept:
+            d.node.data_store[0x1016] = kept
+    d._pcache.clear()
+    d.pdo.reset_counters()
+    configure_communication(d)
