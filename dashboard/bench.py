@@ -19,6 +19,7 @@ import numpy as np
 from dashboard.actions import Found, LongAction
 from dashboard.security import ControlLease
 from firmware_protocol import emcy_codes
+from firmware_protocol.od import load_od
 
 #: The staged gain-set names (0x20F0) → the live object each one mirrors (docs/contracts.md §1).
 LIVE_NAMES: dict[str, str] = {
@@ -304,8 +305,11 @@ class Bench:
             self.last_step_t = time.monotonic()
         self.emit("setpoint", {"rpm": rpm})
 
-    def step_speed(self, delta_rpm: float, limit: float = 4000.0) -> float:
-        """Add ``delta_rpm`` to the speed setpoint (clamped to ±limit); returns the new setpoint."""
+    def step_speed(self, delta_rpm: float, limit: float | None = None) -> float:
+        """Add ``delta_rpm`` to the speed setpoint (clamped to ±limit, default the EDS default of
+        0x6080 max_motor_speed, rpm); returns the new setpoint."""
+        if limit is None:
+            limit = float(load_od().entry("max_motor_speed").default or 0)
         target = float(np.clip(self.speed_setpoint + delta_rpm, -limit, limit))
         self.set_speed(target)
         return target
