@@ -15,6 +15,12 @@ import can
 
 from .errors import BusError
 
+__all__ = [
+    "HUB_CHANNEL",
+    "bus_settings",
+    "open_bus",
+]
+
 #: Channel name the loopback hub serves (socketcand "bus name").
 HUB_CHANNEL = "vcan0"
 

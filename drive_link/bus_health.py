@@ -18,6 +18,16 @@ import threading
 
 import can
 
+__all__ = [
+    "BUS_OFF",
+    "ERROR_ACTIVE",
+    "ERROR_PASSIVE",
+    "UNKNOWN",
+    "BusHealth",
+    "socketcan_link_state",
+    "state_from_error_frame",
+]
+
 ERROR_ACTIVE = "ERROR_ACTIVE"
 ERROR_PASSIVE = "ERROR_PASSIVE"
 BUS_OFF = "BUS_OFF"

@@ -3,6 +3,13 @@
 The drive owns the state machine; the host writes controlword commands and watches the
 statusword until the requested state is reached or a timeout expires. States and commands follow
 CiA 402-2 §7.1 (figure 7, tables 3 and 4).
+
+Why not canopen 2.4.1's ``BaseNode402``: it does not do the job on a lossy, slow link.
+Its timeouts are fixed class constants of 0.4–0.8 s (a state change under frame loss needs
+several SDO round trips with resends: we wait 3 s); a mode change the drive never confirms is
+logged as a warning and the call returns as if it had worked (we raise :class:`DriveTimeout`);
+``setup_402_state_machine()`` asserts on the NMT state (#309); and its mode wait polls 0x6061 in
+a busy loop. Its state tables agree with ours (both are the standard's).
 """
 
 from __future__ import annotations

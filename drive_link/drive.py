@@ -2,6 +2,14 @@
 
 It does not know (nor ask) whether the node is the DSP or the virtual drive: everything goes
 through the object dictionary of docs/contracts.md §1.
+
+Built on canopen's :class:`~canopen.RemoteNode` (``Drive.node``, see :mod:`drive_link.remote`):
+NMT commands (``node.nmt``), the EMCY consumer (``node.emcy``), the TPDO configuration
+(``node.tpdo.read()``) and value encoding (the OD's ``ODVariable``) are canopen's. Kept as thin
+layers of our own: the per-channel SDO lock with resends (:mod:`drive_link.sdo`, also serving
+``node.sdo``), the block-upload client (:mod:`drive_link.sdo_block`), the NMT state / OFFLINE
+detection from heartbeats (:mod:`drive_link.nmt`) and the supervision re-arm
+(:mod:`drive_link.supervision`).
 """
 
 from __future__ import annotations
@@ -21,16 +29,28 @@ from firmware_protocol.current_stability import (
     check_current_gains,
 )
 from firmware_protocol.entry import LimitError
+from firmware_protocol.entry import f32 as _f32
 
 from . import cia402, connection
 from .emcy import Emcy, EmcyListener
 from .errors import DriveError, DriveTimeout, InvalidValue, NodeNotFound, StateError
-from .live import LiveStreams, MappedField, TpdoConfig
-from .nmt import HeartbeatMonitor, HeartbeatProducer, send_nmt
+from .live import LiveStreams, TpdoConfig, read_tpdo_configs
+from .nmt import HeartbeatMonitor, HeartbeatProducer, send_command
 from .objects import ObjectInfo, ObjectTable, default_table
+from .remote import remote_node
 from .sdo import SdoChannel
 from .supervision import SupervisedSdoChannel, Supervisor
 from .trace import Recorder
+
+__all__ = [
+    "CONSUMER_MIN_MS",
+    "GAIN_FIELDS",
+    "LOAD_SIGNATURE",
+    "SAVE_SIGNATURE",
+    "STORE_STATUS",
+    "Drive",
+    "Gains",
+]
 
 SAVE_SIGNATURE = 0x65766173  # "save"
 #: 0x2060 store_status (U8, ro) values → name (docs: virtual_drive/node/README.md, OD.md).
@@ -96,12 +116,6 @@ class Gains:
 GAIN_FIELDS: tuple[str, ...] = tuple(f.name for f in fields(Gains))
 
 
-def _f32(x: float) -> float:
-    import struct
-
-    return struct.unpack("<f", struct.pack("<f", x))[0]
-
-
 class Drive:
     """One drive. Create with :meth:`connect`; thread-safe; close with :meth:`close`.
 
@@ -133,7 +147,10 @@ class Drive:
         self.sdo_trace: SdoChannel = self.sdo
         self.heartbeat = HeartbeatMonitor(net, node_id)
         self.heartbeat.attach_reader(self.read)  # 0x1017 wait + SDO fallback of nmt_state
-        self._emcy = EmcyListener(net, 0x80 + node_id)
+        #: canopen's view of the node: nmt, emcy, tpdo/rpdo; its sdo is our locked channel
+        self.node = remote_node(net, node_id, self.table.od or default_table().od, self.sdo)
+        self._emcy: EmcyListener = self.node.emcy
+        self._emcy_cob = 0x80 + node_id
         self._producer: HeartbeatProducer | None = None
         self._consumer_configured = False
         self._live: LiveStreams | None = None
@@ -214,12 +231,12 @@ class Drive:
             cob = int(self.read("cob_id_emcy"))
         except DriveError:
             return
-        if cob & 0x80000000 or (cob & 0x7FF) == self._emcy.cob_id:
+        if cob & 0x80000000 or (cob & 0x7FF) == self._emcy_cob:
             return
-        history = self._emcy.history
-        self._emcy.close()
-        self._emcy = EmcyListener(self._conn.network, cob & 0x7FF)
-        self._emcy.history = history
+        net = self._conn.network
+        net.unsubscribe(self._emcy_cob, self._emcy.on_emcy)
+        self._emcy_cob = cob & 0x7FF
+        net.subscribe(self._emcy_cob, self._emcy.on_emcy)
 
     def _setup_trace_channel(self) -> None:
         """Use the drive's second SDO server (0x1201) for uploads if it has a valid one."""
@@ -258,7 +275,10 @@ class Drive:
         if self._live:
             self._live.close()
         self.heartbeat.close()
-        self._emcy.close()
+        if self._emcy_cob != 0x80 + self.node_id:  # back where remove_network() expects it
+            self._conn.network.unsubscribe(self._emcy_cob, self._emcy.on_emcy)
+            self._conn.network.subscribe(0x80 + self.node_id, self._emcy.on_emcy)
+        self.node.remove_network()
         self.sdo.close()
         if self.sdo_trace is not self.sdo:
             self.sdo_trace.close()
@@ -346,7 +366,7 @@ class Drive:
         "reset node", "reset communication" (waits while supervision is being re-armed)."""
         self.supervisor.wait_ready()
         self.supervisor.expect_nmt(command)
-        send_nmt(self._conn.network, command, self.node_id)
+        send_command(self.node.nmt, command)
         target = _NMT_CONFIRM.get(command)
         if target is None or not self.heartbeat.last_time:
             return  # resets are confirmed by the boot-up; without heartbeats nothing confirms
@@ -365,7 +385,7 @@ class Drive:
                         f"node {self.node_id}: NMT {command} not confirmed by a heartbeat "
                         f"reporting {target} within {deadline - sent + 2.5 * period:.1f} s"
                     ) from None
-            send_nmt(self._conn.network, command, self.node_id)
+            send_command(self.node.nmt, command)
 
     # ------------------------------------------------------------------ restart supervision
     @property
@@ -563,8 +583,7 @@ class Drive:
     @property
     def emcy_history(self) -> list[Emcy]:
         """EMCY messages received from this drive since connect, oldest first."""
-        with self._emcy._lock:
-            return list(self._emcy.history)
+        return self._emcy.history
 
     def on_emcy(self, callback) -> None:
         """Call ``callback(Emcy)`` for every EMCY (runs on the bus thread: keep it short)."""
@@ -585,31 +604,9 @@ class Drive:
 
     # ------------------------------------------------------------------ live streams
     def read_tpdo_config(self) -> list[TpdoConfig]:
-        """The drive's TPDO communication and mapping parameters (0x1800–, 0x1A00–) by SDO."""
-        out = []
-        for k in range(1, 513):
-            comm = f"tpdo{k}_communication"
-            if f"{comm}.cob_id" not in self.table:
-                break
-            cob = int(self.read(f"{comm}.cob_id"))
-            ttype = int(self.read(f"{comm}.transmission_type"))
-            timer = int(self.read(f"{comm}.event_timer"))
-            count = int(self.read(f"tpdo{k}_mapping.number_of_mapped_objects"))
-            flds = []
-            offset = 0
-            for i in range(1, count + 1):
-                ref = int(self.read(f"tpdo{k}_mapping.mapped_object_{i}"))
-                index, sub, bits = ref >> 16, (ref >> 8) & 0xFF, ref & 0xFF
-                obj = self.table.by_index(index, sub)
-                if obj is not None and obj.bits == bits:
-                    flds.append(MappedField(obj.name, index, sub, offset, bits, obj.fmt, obj.unit))
-                else:
-                    flds.append(
-                        MappedField(f"0x{index:04X}:{sub:02X}", index, sub, offset, bits, "")
-                    )
-                offset += bits
-            out.append(TpdoConfig(k, cob & 0x7FF, ttype, timer, flds, valid=not cob & 0x80000000))
-        return out
+        """The drive's TPDO communication and mapping parameters (0x1800–, 0x1A00–) by SDO
+        (canopen's ``TPDO.read()`` over the locked channel)."""
+        return read_tpdo_configs(self.node, self.table)
 
     @property
     def live(self) -> LiveStreams:

@@ -1,16 +1,21 @@
-"""Emergency messages (CiA 301 §7.2.7) and the pre-defined error field 0x1003."""
+"""Emergency messages (CiA 301 §7.2.7) and the pre-defined error field 0x1003.
+
+Reception is canopen's :class:`~canopen.emcy.EmcyConsumer` (``RemoteNode.emcy``) with the small
+hardening of :class:`EmcyListener`; this module adds the meanings of the codes and the
+:class:`Emcy` value the library hands out.
+"""
 
 from __future__ import annotations
 
-import struct
-import threading
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
-import canopen
+from canopen.emcy import EmcyConsumer, EmcyError
 
 from firmware_protocol import emcy_codes
+
+__all__ = ["EMCY_CODES", "Emcy", "EmcyListener", "describe"]
 
 EMCY_CODES: Mapping[int, str] = emcy_codes.MEANINGS
 """EMCY error code -> meaning (CiA 301 table 21, CiA 402): :mod:`firmware_protocol.emcy_codes`."""
@@ -27,6 +32,12 @@ class Emcy:
     data: bytes = b""
     timestamp: float | None = None
 
+    @classmethod
+    def from_error(cls, err: EmcyError) -> Emcy:
+        """The :class:`Emcy` of a canopen :class:`~canopen.emcy.EmcyError`."""
+        return cls(code=err.code, register=err.register, data=bytes(err.data),
+                   timestamp=err.timestamp)  # fmt: skip
+
     @property
     def description(self) -> str:
         """Meaning of ``code``."""
@@ -36,39 +47,43 @@ class Emcy:
         return f"EMCY 0x{self.code:04X} ({self.description}), error register 0x{self.register:02X}"
 
 
-class EmcyListener:
-    """Collects the EMCY frames of one node and calls subscribers (on the notifier thread)."""
+class EmcyListener(EmcyConsumer):
+    """canopen's :class:`~canopen.emcy.EmcyConsumer` of one node (``RemoteNode.emcy``), made
+    safe for a long session on a real bus.
 
-    def __init__(self, network: canopen.Network, cob_id: int, max_history: int = 256):
-        self.cob_id = cob_id
-        self._network = network
-        self._lock = threading.Lock()
-        self.history: list[Emcy] = []
+    What it adds to canopen's consumer: a frame shorter than 8 bytes (3 is enough for code and
+    register) is accepted instead of raising ``struct.error`` on the bus thread, the log keeps
+    the last ``max_history`` entries instead of growing for ever, a raising subscriber does not
+    keep the others from being called, and subscribers get :class:`Emcy` values.
+    ``log``/``active``/``wait()`` are canopen's.
+    """
+
+    def __init__(self, max_history: int = 256):
+        super().__init__()
         self.max_history = max_history
-        self._callbacks: list[Callable[[Emcy], None]] = []
-        network.subscribe(cob_id, self._on_frame)
 
-    def close(self) -> None:
-        """Stop listening."""
-        try:
-            self._network.unsubscribe(self.cob_id, self._on_frame)
-        except (KeyError, ValueError):
-            pass
+    def on_emcy(self, can_id: int, data: bytes | bytearray, timestamp: float) -> None:
+        """Bus-thread handler (subscribed to the node's EMCY COB-ID)."""
+        if len(data) < 3:
+            return  # not an EMCY (CiA 301 §7.2.7.3.1: 8 bytes; code and register are needed)
+        super().on_emcy(can_id, bytes(data[:8]).ljust(8, b"\x00"), timestamp or time.time())
+        with self.emcy_received:
+            del self.log[: -self.max_history]
+            del self.active[: -self.max_history]
+
+    @property
+    def history(self) -> list[Emcy]:
+        """EMCYs received, oldest first (at most ``max_history``)."""
+        with self.emcy_received:
+            return [Emcy.from_error(e) for e in self.log]
 
     def subscribe(self, callback: Callable[[Emcy], None]) -> None:
-        """Call ``callback(emcy)`` for every EMCY received (keep it short: notifier thread)."""
-        self._callbacks.append(callback)
+        """Call ``callback(emcy)`` for every EMCY received (keep it short: bus thread)."""
 
-    def _on_frame(self, can_id: int, data: bytearray, timestamp: float) -> None:
-        if len(data) < 3:
-            return
-        code, reg = struct.unpack_from("<HB", data)
-        e = Emcy(code=code, register=reg, data=bytes(data[3:8]), timestamp=timestamp or time.time())
-        with self._lock:
-            self.history.append(e)
-            del self.history[: -self.max_history]
-        for cb in list(self._callbacks):
+        def safe(err: EmcyError) -> None:
             try:
-                cb(e)
+                callback(Emcy.from_error(err))
             except Exception:
-                pass
+                pass  # a subscriber's bug must not stop the other subscribers
+
+        self.add_callback(safe)

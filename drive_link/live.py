@@ -19,6 +19,9 @@ import canopen
 import numpy as np
 
 from .connection import BusMonitor
+from .objects import ObjectTable
+
+__all__ = ["LiveStreams", "MappedField", "TpdoConfig", "read_tpdo_configs"]
 
 #: A TPDO silence longer than this (s) is a pause (NMT state, drive restart), not lost frames.
 _PAUSE_S = 1.0
@@ -49,6 +52,60 @@ class TpdoConfig:
     event_timer_ms: int
     fields: list[MappedField] = field(default_factory=list)
     valid: bool = True
+
+
+def read_tpdo_configs(node: canopen.RemoteNode, table: ObjectTable) -> list[TpdoConfig]:
+    """The node's TPDO communication and mapping parameters (0x1800–, 0x1A00–), read by SDO
+    with canopen's ``TPDO.read()``, as :class:`TpdoConfig` (fields named from ``table``).
+
+    Two things are taken around canopen: every mapping entry is recorded as read (canopen 2.4.1
+    drops an entry naming an object its OD lacks with a log warning, which would shift every
+    later field; here it is kept as ``0xIIII:SS``, not decoded), and the subscriptions
+    ``read()`` makes are dropped again (canopen would decode each frame into ``PdoVariable``
+    objects on the bus thread, up to 1 kHz per TPDO; :class:`LiveStreams` decodes into numpy).
+    """
+    out = []
+    for number, pdo_map in sorted(node.tpdo.map.items()):
+        mapped: list[tuple[int, int, int]] = []
+        add_variable = pdo_map.add_variable
+
+        def record(
+            index: int, subindex: int = 0, length: int | None = None,
+            _add=add_variable, _mapped=mapped,
+        ):  # fmt: skip
+            _mapped.append((index, subindex, length or 0))
+            return _add(index, subindex, length)
+
+        pdo_map.add_variable = record
+        try:
+            pdo_map.read()
+        finally:
+            del pdo_map.add_variable
+        if pdo_map.enabled and pdo_map.cob_id is not None:
+            try:
+                node.network.unsubscribe(pdo_map.cob_id, pdo_map.on_message)
+            except (KeyError, ValueError):
+                pass
+        flds = []
+        offset = 0
+        for index, sub, bits in mapped:
+            obj = table.by_index(index, sub)
+            if obj is not None and obj.bits == bits:
+                flds.append(MappedField(obj.name, index, sub, offset, bits, obj.fmt, obj.unit))
+            else:
+                flds.append(MappedField(f"0x{index:04X}:{sub:02X}", index, sub, offset, bits, ""))
+            offset += bits
+        out.append(
+            TpdoConfig(
+                number,
+                (pdo_map.cob_id or 0) & 0x7FF,
+                int(pdo_map.trans_type or 0),
+                int(pdo_map.event_timer or 0),
+                flds,
+                valid=bool(pdo_map.enabled),
+            )
+        )
+    return out
 
 
 class _Stream:

@@ -1,4 +1,20 @@
-"""NMT master commands, drive heartbeat monitor, host heartbeat producer (CiA 301 §7.2.8)."""
+"""NMT master commands, drive heartbeat monitor, host heartbeat producer (CiA 301 §7.2.8).
+
+Commands are sent by canopen's :class:`~canopen.nmt.NmtMaster` (``RemoteNode.nmt``; the codes
+and state names are canopen's ``NMT_COMMANDS`` / ``NMT_STATES``). The node's *state* is kept
+by our :class:`HeartbeatMonitor`, not by ``NmtMaster.state``, because under loss and latency
+canopen's tracking does not do the job:
+
+- ``NmtMaster.state`` is the last heartbeat, or the state the last *sent* command implies, for
+  ever: a node that went silent still reads "OPERATIONAL"; there is no OFFLINE, and a command
+  lost on the bus is reported as obeyed;
+- ``wait_for_heartbeat`` / ``wait_for_bootup`` clear a flag and wait for the next frame, so a
+  boot-up that arrives between the reset command and the wait is missed (we count boot-ups),
+  and a heartbeat already in flight before a command counts as its confirmation (we require a
+  heartbeat received *after* the command, :meth:`HeartbeatMonitor.wait_for`);
+- a node without heartbeat (0x1017 = 0) has no state at all; we fall back to its TPDOs and
+  SDO answers.
+"""
 
 from __future__ import annotations
 
@@ -9,30 +25,42 @@ from collections.abc import Callable
 
 import can
 import canopen
+from canopen import nmt as _canopen_nmt
 
 from .errors import BusError, DriveError, DriveTimeout, SdoAbort
 
-#: NMT command specifiers.
+__all__ = [
+    "DEFAULT_PERIOD",
+    "FIRST_HEARTBEAT_WAIT_MAX",
+    "NMT_COMMANDS",
+    "NMT_STATES",
+    "HeartbeatMonitor",
+    "HeartbeatProducer",
+    "send_command",
+    "send_nmt",
+]
+
+#: Command name (as the CLI spells it) → NMT command specifier (canopen's codes).
 NMT_COMMANDS: dict[str, int] = {
-    "start": 0x01,  # → OPERATIONAL
-    "stop": 0x02,  # → STOPPED
-    "pre-operational": 0x80,
-    "reset node": 0x81,
-    "reset communication": 0x82,
+    name: _canopen_nmt.NMT_COMMANDS[key]
+    for name, key in (
+        ("start", "OPERATIONAL"),
+        ("stop", "STOPPED"),
+        ("pre-operational", "PRE-OPERATIONAL"),
+        ("reset node", "RESET"),
+        ("reset communication", "RESET COMMUNICATION"),
+    )
 }
 
-#: Heartbeat state byte → name.
+#: Heartbeat state byte → name (canopen's names of the CiA 301 states).
 NMT_STATES: dict[int, str] = {
-    0x00: "INITIALISING",
-    0x04: "STOPPED",
-    0x05: "OPERATIONAL",
-    0x7F: "PRE-OPERATIONAL",
+    code: _canopen_nmt.NMT_STATES[code] for code in (0x00, 0x04, 0x05, 0x7F)
 }
 
 
-def send_nmt(network: canopen.Network, command: str, node_id: int) -> None:
+def send_command(master: canopen.nmt.NmtMaster, command: str) -> None:
     """Send an NMT command ("start", "stop", "pre-operational", "reset node",
-    "reset communication") to ``node_id`` (0 = all nodes)."""
+    "reset communication") with canopen's ``NmtMaster`` (its node-ID; 0 = all nodes)."""
     try:
         cs = NMT_COMMANDS[command]
     except KeyError:
@@ -40,9 +68,20 @@ def send_nmt(network: canopen.Network, command: str, node_id: int) -> None:
             f"unknown NMT command {command!r}; one of {', '.join(NMT_COMMANDS)}"
         ) from None
     try:
-        network.send_message(0x000, bytes([cs, node_id]))
+        try:
+            master.send_command(cs)
+        except KeyError:  # canopen logs the old state by name: a heartbeat had an odd state byte
+            master.network.send_message(0x000, bytes([cs, master.id]))
     except (can.CanError, RuntimeError) as exc:
         raise BusError(f"CAN send failed: {exc}") from None
+
+
+def send_nmt(network: canopen.Network, command: str, node_id: int) -> None:
+    """Send an NMT command to ``node_id`` (0 = all nodes) on ``network``; see
+    :func:`send_command`."""
+    master = _canopen_nmt.NmtMaster(node_id)
+    master.network = network
+    send_command(master, command)
 
 
 #: Longest wait for a first heartbeat in a fresh session (s); a slower producer (0x1017 up to

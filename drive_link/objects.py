@@ -4,7 +4,10 @@ Every fact (names, indices, types, access, units, limits, defaults, enumerations
 comes from :func:`firmware_protocol.load_od`, the one reading of the EDS; limit checks are
 :meth:`firmware_protocol.Entry.check`, the same code the drive runs before storing a write.
 What is host-specific lives here: parsing CLI text into numbers, struct encode/decode of
-values on the wire and mapping :class:`firmware_protocol.LimitError` to :class:`InvalidValue`.
+and mapping :class:`firmware_protocol.LimitError` to :class:`InvalidValue`. Values on the wire are
+encoded and decoded by canopen's own :class:`~canopen.objectdictionary.ODVariable` of the same
+EDS (``encode_raw`` / ``decode_raw``): one model of an object, the one a :class:`canopen.RemoteNode`
+uses too (:attr:`ObjectTable.od`).
 Names follow docs/contracts.md §1: the bare object name for variables (``"controlword"``) and
 ``"<object>.<sub>"`` for records and arrays (``"current_controller.L_c"``).
 """
@@ -13,28 +16,28 @@ from __future__ import annotations
 
 import struct
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import lru_cache
+
+import canopen
+from canopen.objectdictionary import ODVariable
 
 from firmware_protocol import Entry, LimitError, load_od
 from firmware_protocol.entry import ABORT_VALUE_TOO_HIGH, ABORT_VALUE_TOO_LOW
 
 from .errors import ABORT_MEANINGS, InvalidValue, UnknownObject
 
-#: CANopen data type code → struct format of the value on the wire (little-endian, CiA 301).
+__all__ = ["STRUCT_FORMATS", "ObjectInfo", "ObjectTable", "default_table"]
+
+#: CANopen data type code → struct format of the value on the wire (little-endian, CiA 301),
+#: as canopen encodes it (``ODVariable.STRUCT_TYPES``; BOOLEAN … REAL32, the drive's types).
 STRUCT_FORMATS: dict[int, str] = {
-    0x01: "<?",
-    0x02: "<b",
-    0x03: "<h",
-    0x04: "<i",
-    0x05: "<B",
-    0x06: "<H",
-    0x07: "<I",
-    0x08: "<f",
+    dt: "<" + s.format.lstrip("<")
+    for dt, s in ODVariable.STRUCT_TYPES.items()
+    if 0x01 <= dt <= 0x08
 }
 
-_VISIBLE_STRING = 0x09
-_SIGNED_FORMATS = ("<b", "<h", "<i")
+_SIGNED_TYPES = (0x02, 0x03, 0x04)
 
 
 @dataclass(frozen=True)
@@ -44,10 +47,12 @@ class ObjectInfo:
     Attributes mirror the entry: ``name``, ``index``, ``subindex``, ``data_type`` (CANopen
     code), ``access`` ("ro", "wo", "rw", "const", ...), ``unit`` ("" if none), ``low``/``high``
     limits in the object's unit (None = type range), ``default`` (text from the EDS),
-    ``description``, ``enum`` (value → label pairs) and ``pdo_mappable``.
+    ``description``, ``enum`` (value → label pairs) and ``pdo_mappable``. ``var`` is canopen's
+    :class:`~canopen.objectdictionary.ODVariable` of the same object: it encodes and decodes.
     """
 
     entry: Entry
+    var: ODVariable = field(compare=False, repr=False)
 
     @property
     def name(self) -> str:
@@ -173,39 +178,45 @@ class ObjectInfo:
         return f"{exc.message} ({what}the drive answers SDO abort 0x{code:08X}: {meaning})"
 
     def encode(self, value: float | int | str | bytes) -> bytes:
-        """Bytes on the wire for ``value`` (checked first)."""
+        """Bytes on the wire for ``value`` (checked first; canopen's ``encode_raw``)."""
         v = self.check(value)
-        if not self.fmt:
-            return v.encode("ascii") if isinstance(v, str) else bytes(v)
-        return struct.pack(self.fmt, v)
+        if not self.fmt and not isinstance(v, str):
+            return bytes(v)
+        return bytes(self.var.encode_raw(v))
 
     def decode(self, data: bytes) -> float | int | str | bytes:
-        """Python value from the bytes on the wire (REAL32 → float, integers → int)."""
-        fmt = self.fmt
-        if not fmt:
-            if self.data_type == _VISIBLE_STRING:
-                return bytes(data).rstrip(b"\x00").decode("ascii", errors="replace")
-            return bytes(data)
-        size = struct.calcsize(fmt)
+        """Python value from the bytes on the wire (REAL32 → float, integers → int; canopen's
+        ``decode_raw`` after fitting the length: an expedited upload may carry fewer bytes
+        than the type (sign-extended here) or the 4 bytes of an unspecified size)."""
+        if not self.fmt:
+            return self.var.decode_raw(bytes(data))
+        size = struct.calcsize(self.fmt)
+        data = bytes(data[:size])
         if len(data) < size:
-            # Expedited uploads may be shorter for small types; pad the sign correctly.
-            negative = bool(data) and fmt in _SIGNED_FORMATS and data[-1] & 0x80
-            data = bytes(data) + (b"\xff" if negative else b"\x00") * (size - len(data))
-        v = struct.unpack_from(fmt, data)[0]
-        return bool(v) if fmt == "<?" else v
+            negative = bool(data) and self.data_type in _SIGNED_TYPES and data[-1] & 0x80
+            data += (b"\xff" if negative else b"\x00") * (size - len(data))
+        return self.var.decode_raw(data)
 
 
 class ObjectTable:
     """All objects of the drive by name and by (index, subindex)."""
 
-    def __init__(self, objects: list[ObjectInfo]):
+    def __init__(self, objects: list[ObjectInfo], od: canopen.ObjectDictionary | None = None):
         self._by_name = {o.name: o for o in objects}
         self._by_index = {(o.index, o.subindex): o for o in objects}
+        #: canopen's dictionary the objects' ``var`` belong to (for a :class:`canopen.RemoteNode`)
+        self.od = od
 
     @classmethod
     def from_od(cls, node_id: int = 1) -> ObjectTable:
         """Table of every entry of :func:`firmware_protocol.load_od` (the shipped EDS)."""
-        return cls([ObjectInfo(e) for e in load_od(node_id=node_id).entries])
+        view = load_od(node_id=node_id)
+        od = view.canopen_od()
+        objects = [
+            ObjectInfo(e, od[e.index] if e.object_name == e.name else od[e.index][e.subindex])
+            for e in view.entries
+        ]
+        return cls(objects, od)
 
     def __contains__(self, name: object) -> bool:
         return name in self._by_name

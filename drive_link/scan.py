@@ -14,6 +14,13 @@ from . import connection
 from .errors import BusError
 from .nmt import NMT_STATES
 
+__all__ = [
+    "HEARTBEAT_WAIT",
+    "RE_PROBES",
+    "NodeInfo",
+    "scan",
+]
+
 
 @dataclass
 class NodeInfo:

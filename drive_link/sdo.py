@@ -41,6 +41,12 @@ from .errors import BusError, DriveTimeout, SdoAbort
 from .sdo_block import block_upload
 from .sdo_segmented import NoAnswer
 
+__all__ = [
+    "PROTOCOL_ABORTS",
+    "Progress",
+    "SdoChannel",
+]
+
 #: progress(bytes_done, bytes_total_or_None)
 Progress = Callable[[int, "int | None"], None]
 

@@ -11,6 +11,14 @@ when no answer came: if the first one reached the drive and only its confirmatio
 the drive executes the same write twice — the same value to the same object, which is
 harmless for every object of this drive (parameters, controlword commands that name a target
 state, store/restore, trace commands).
+
+A request that was sent k times and answered may still get k - 1 late answers (the first
+answer was only slow, not lost). They can arrive during the *next* transfer on the channel,
+e.g. the drive's abort of a refused write arriving while the same object is read back, or an
+old statusword answering a new poll. The next transfer therefore skips up to k - 1 frames
+identical to the last transfer's final answer (``client.stale_answer``, set when a transfer
+ends with a request/answer pair: expedited and segmented transfers, aborts): if a skipped frame
+was in fact the new answer, the identical late one or a resend supplies it.
 """
 
 from __future__ import annotations
@@ -22,6 +30,8 @@ from collections.abc import Callable
 
 from canopen.sdo.client import SdoClient
 from canopen.sdo.exceptions import SdoAbortedError, SdoCommunicationError
+
+__all__ = ["Exchange", "NoAnswer", "continue_upload", "download", "upload"]
 
 ABORT = 0x80
 TOGGLE = 0x10
@@ -50,6 +60,11 @@ class Exchange:
         self.subindex = subindex
         self.requests_sent = 0
         self.drain()
+        #: (frame, how many more may come): late duplicates of the last transfer's answer
+        self.stale: tuple[bytes, int] | None = getattr(client, "stale_answer", None)
+        client.stale_answer = None  # type: ignore[attr-defined]
+        self.abort_frame = b""
+        self._duplicates: tuple[bytes, int] | None = None  # of the last request's answer
 
     def drain(self) -> None:
         """Forget frames of earlier transfers."""
@@ -77,9 +92,14 @@ class Exchange:
             except queue.Empty:
                 return None
             data = bytes(data).ljust(8, b"\0")
+            if self.stale is not None and data == self.stale[0]:
+                left_over = self.stale[1] - 1
+                self.stale = (data, left_over) if left_over > 0 else None
+                continue  # a late duplicate of the previous transfer's last answer
             if data[0] == ABORT:
                 index, subindex, code = struct.unpack_from("<HBI", data, 1)
                 if (index, subindex) == (self.index, self.subindex):
+                    self.abort_frame = data
                     raise SdoAbortedError(code)
                 continue  # the end of some other transfer
             return data
@@ -96,18 +116,29 @@ class Exchange:
         ``timeout``, 2 × ``timeout``, then every 4 × ``timeout`` s without one, at most
         ``resends`` times."""
         wait = timeout
-        for _ in range(resends + 1):
+        for sent in range(1, resends + 2):
             self.send(frame)
             deadline = time.monotonic() + wait
             while (left := deadline - time.monotonic()) > 0:
-                resp = self.next(left)
+                try:
+                    resp = self.next(left)
+                except SdoAbortedError:  # ends the transfer
+                    self._duplicates = (self.abort_frame, sent - 1) if sent > 1 else None
+                    self.finish()
+                    raise
                 if resp is None:
                     break
                 if accept(resp):
+                    self._duplicates = (resp, sent - 1) if sent > 1 else None
                     return resp
             wait = min(2 * wait, 4 * timeout)  # back off, but keep probing a slow node
         what = "initiate" if initial else "segment"
         raise NoAnswer(f"no answer to the {what} request", resends + 1, initial)
+
+    def finish(self) -> None:
+        """The transfer ended with the last request's answer: the next transfer on the client
+        skips that many identical late copies of it (see the module doc)."""
+        self.client.stale_answer = self._duplicates  # type: ignore[attr-defined]
 
 
 def _same_object(frame: bytes, index: int, subindex: int) -> bool:
@@ -144,6 +175,7 @@ def continue_upload(ex: Exchange, resp: bytes, timeout: float, resends: int) -> 
     cmd = resp[0]
     if cmd & 0x02:  # expedited
         n = 4 - ((cmd >> 2) & 0x03) if cmd & 0x01 else 4
+        ex.finish()
         return bytes(resp[4 : 4 + n])
     size = struct.unpack_from("<I", resp, 4)[0] if cmd & 0x01 else None
     data = bytearray()
@@ -159,6 +191,7 @@ def continue_upload(ex: Exchange, resp: bytes, timeout: float, resends: int) -> 
         toggle ^= TOGGLE
     if size is not None and len(data) != size:
         raise SdoCommunicationError(f"segmented upload returned {len(data)} of {size} bytes")
+    ex.finish()
     return bytes(data)
 
 
@@ -184,6 +217,7 @@ def download(
         cmd = 0x23 | ((4 - len(data)) << 2)
         frame = struct.pack("<BHB", cmd, index, subindex) + data.ljust(4, b"\0")
         ex.request(frame, confirmed, timeout, resends, initial=True)
+        ex.finish()
         return
     frame = struct.pack("<BHBI", 0x21, index, subindex, len(data))
     ex.request(frame, confirmed, timeout, resends, initial=True)
@@ -197,5 +231,6 @@ def download(
         frame = bytes([cmd]) + chunk.ljust(7, b"\0")
         ex.request(frame, _segment_of(0x20, toggle), timeout, resends)
         if last:
+            ex.finish()
             return
         toggle ^= TOGGLE

@@ -36,6 +36,21 @@ import canopen
 from .errors import DriveError, StateError
 from .sdo import SdoChannel
 
+__all__ = [
+    "ABORT_CONNECTION_OPTION",
+    "CONSUMER_HEARTBEAT",
+    "NOT_JOURNALLED",
+    "PRODUCER_HEARTBEAT",
+    "SUPERVISION_FIRST",
+    "RearmReport",
+    "SupervisedSdoChannel",
+    "SupervisionError",
+    "Supervisor",
+    "journalled",
+    "pdo_group",
+    "write_pdo_group",
+]
+
 #: Communication objects never replayed: error history, store/restore commands, read-only
 #: identity and error objects.
 NOT_JOURNALLED = frozenset({0x1001, 0x1002, 0x1003, 0x1010, 0x1011})

@@ -19,6 +19,18 @@ import numpy as np
 
 from .errors import DriveTimeout, InvalidValue, StateError
 
+__all__ = [
+    "STATES",
+    "TRACE_DATA",
+    "TRIGGER_EDGES",
+    "TRIGGER_MODES",
+    "TS",
+    "Recorder",
+    "Trace",
+    "Trigger",
+    "od_reference",
+]
+
 if TYPE_CHECKING:
     from .drive import Drive
 

@@ -303,3 +303,72 @@ def test_drop_estimate_ignores_jitter_and_pauses(lost, pause_s, want):
         release(conn)
         tx.shutdown()
         rx.shutdown()
+
+
+# ------------------------------------------------------------ canopen RemoteNode on our channel
+def test_remote_node_shares_the_locked_channel_and_canopen_pieces_work(local_node):
+    """drive_link.remote: canopen's TPDO.read(), NMT master and EMCY consumer on our channel,
+    against canopen's own LocalNode (its OD and NMT state read in-process are the truth)."""
+    from drive_link.nmt import send_command
+    from drive_link.remote import remote_node
+
+    srv, conn = local_node
+    sdo = SdoChannel(conn.network, 5, 0x605, 0x585, timeout=0.5)
+    node = remote_node(conn.network, 5, default_table().od, sdo)
+    name = b"a segmented string value that needs many segments" * 2
+    srv.sdo[0x1008].raw = name.decode()
+    errors: list[Exception] = []
+
+    def reads() -> None:  # our own transfers on the same channel meanwhile
+        try:
+            for _ in range(10):
+                assert sdo.upload(0x1008, 0) == name
+        except Exception as exc:  # collected for the assertion
+            errors.append(exc)
+
+    th = threading.Thread(target=reads)
+    th.start()
+    try:
+        node.tpdo.read()
+    finally:
+        th.join(30)
+    assert not errors
+    for k, pdo_map in node.tpdo.map.items():
+        cob = srv.sdo[0x1800 + k - 1][1].raw
+        assert pdo_map.cob_id == cob & 0x1FFFFFFF and pdo_map.enabled == (not cob & 0x80000000)
+        count = srv.sdo[0x1A00 + k - 1][0].raw
+        refs = [srv.sdo[0x1A00 + k - 1][i].raw for i in range(1, count + 1)]
+        assert [(v.index, v.subindex, v.length) for v in pdo_map.map] == [
+            (r >> 16, (r >> 8) & 0xFF, r & 0xFF) for r in refs
+        ]
+
+    # a mapping naming an object the EDS lacks: canopen raises KeyError, the field is kept by
+    # its index (not decoded) and the other fields keep their offsets
+    from drive_link.live import read_tpdo_configs
+
+    srv.sdo[0x1A00][0].raw = 2
+    srv.sdo[0x1A00][1].raw = 0x5FFF0010
+    srv.sdo[0x1A00][2].raw = 0x60410010  # statusword, 16 bits
+    cfg = read_tpdo_configs(node, default_table())[0]
+    assert [(f.name, f.offset, f.bits, f.fmt) for f in cfg.fields] == [
+        ("0x5FFF:00", 0, 16, ""),
+        ("statusword", 16, 16, "<H"),
+    ]
+
+    got: list = []
+    node.emcy.subscribe(got.append)
+    conn.bus.send(can.Message(arbitration_id=0x85, data=b"\x10\x23", is_extended_id=False))
+    srv.emcy.send(0x2310, 0x02, b"\x01")  # canopen's own EMCY producer, CiA 301 layout
+    deadline = time.monotonic() + 5
+    while not got and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert [(e.code, e.register) for e in node.emcy.history] == [(0x2310, 0x02)]  # 2-byte frame
+    assert got and got[0].code == 0x2310 and got[0].data[:1] == b"\x01"
+
+    send_command(node.nmt, "stop")
+    deadline = time.monotonic() + 5
+    while srv.nmt.state != "STOPPED" and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert srv.nmt.state == "STOPPED"
+    node.remove_network()
+    sdo.close()

@@ -1,0 +1,100 @@
+"""A late answer to a resent SDO request never answers the next transfer.
+
+CiA 301 §7.2.4.3: one request, one answer. When the first answer is only slow, the client
+resends after its timeout and the server answers twice; the second copy arrives during the
+next transfer. Truth here is a scripted server (no timing): after each request it queues the
+frames a real server would have put on the bus by then, in order.
+"""
+
+from __future__ import annotations
+
+import queue
+import struct
+
+import pytest
+from canopen.sdo.exceptions import SdoAbortedError
+
+from drive_link import sdo_segmented
+
+pytestmark = pytest.mark.timeout(30)
+
+IDX, SUB = 0x2000, 0x01  # motor.R
+ABORT_STATE = 0x08000022
+
+
+def _abort(code: int) -> bytes:
+    return struct.pack("<BHBI", 0x80, IDX, SUB, code)
+
+
+def _upload_answer(value: float) -> bytes:
+    return struct.pack("<BHB", 0x43, IDX, SUB) + struct.pack("<f", value)
+
+
+class _ScriptedClient:
+    """Just what :mod:`drive_link.sdo_segmented` uses of canopen's ``SdoClient``: ``rx_cobid``,
+    ``responses`` and ``network.send_message``; ``script[k]`` = frames queued after the k-th
+    request."""
+
+    rx_cobid = 0x601
+
+    def __init__(self, script: list[list[bytes]]):
+        self.responses: queue.Queue[bytes] = queue.Queue()
+        self.script = script
+        self.sent: list[bytes] = []
+        self.network = self
+
+    def send_message(self, can_id: int, data: bytes) -> None:
+        self.sent.append(bytes(data))
+        for frame in self.script[len(self.sent) - 1]:
+            self.responses.put(frame)
+
+
+def test_late_abort_of_a_refused_write_does_not_fail_the_read_back():
+    refused = _abort(ABORT_STATE)
+    client = _ScriptedClient(
+        [
+            [],  # write #1: the drive's abort is slow ...
+            [refused],  # write #2 (resent): ... and arrives now
+            [refused, _upload_answer(0.5)],  # read: the abort of write #2, then the value
+        ]
+    )
+    with pytest.raises(SdoAbortedError) as err:
+        sdo_segmented.download(client, IDX, SUB, struct.pack("<f", 0.6), timeout=0.05, resends=3)
+    assert err.value.code == ABORT_STATE
+    assert sdo_segmented.upload(client, IDX, SUB, timeout=0.05, resends=3) == struct.pack(
+        "<f", 0.5
+    )
+    assert len(client.sent) == 3  # no extra resend was needed
+
+
+def test_a_genuine_identical_abort_still_fails_the_next_transfer():
+    """If the skipped copy was the real answer, the late duplicate (or a resend) brings it."""
+    refused = _abort(ABORT_STATE)
+    client = _ScriptedClient(
+        [
+            [],
+            [refused],
+            [refused],  # the read is refused too; write #2's late abort was lost on the bus
+            [refused],  # resent read: refused again
+        ]
+    )
+    with pytest.raises(SdoAbortedError):
+        sdo_segmented.download(client, IDX, SUB, struct.pack("<f", 0.6), timeout=0.05, resends=3)
+    with pytest.raises(SdoAbortedError) as err:
+        sdo_segmented.upload(client, IDX, SUB, timeout=0.05, resends=3)
+    assert err.value.code == ABORT_STATE
+
+
+def test_late_copy_of_an_old_value_is_not_returned_as_the_new_one():
+    old, new = _upload_answer(1.0), _upload_answer(2.0)
+    client = _ScriptedClient([[], [old], [old, new]])
+    assert sdo_segmented.upload(client, IDX, SUB, timeout=0.05, resends=3) == old[4:]
+    assert sdo_segmented.upload(client, IDX, SUB, timeout=0.05, resends=3) == new[4:]
+
+
+def test_an_answered_first_request_expects_no_duplicates():
+    old = _upload_answer(1.0)
+    client = _ScriptedClient([[old], [old]])
+    sdo_segmented.upload(client, IDX, SUB, timeout=0.05, resends=3)
+    assert sdo_segmented.upload(client, IDX, SUB, timeout=0.05, resends=3) == old[4:]
+    assert len(client.sent) == 2
