@@ -18,6 +18,7 @@ import numpy as np
 
 from dashboard.actions import Found, LongAction
 from dashboard.security import ControlLease
+from drive_link.jsonable import jsonable
 from firmware_protocol import emcy_codes
 from firmware_protocol.od import load_od
 
@@ -58,26 +59,6 @@ def as_dict(obj: Any) -> dict[str, Any]:
     if hasattr(obj, "_asdict"):
         return dict(obj._asdict())
     return {k: v for k, v in vars(obj).items() if not k.startswith("_")}
-
-
-def jsonable(x: Any) -> Any:
-    """numpy scalars/arrays and NaN/inf → JSON-safe Python values."""
-    if isinstance(x, dict):
-        return {str(k): jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [jsonable(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return jsonable(x.tolist())
-    if isinstance(x, (np.floating, float)):
-        f = float(x)
-        return f if np.isfinite(f) else None
-    if isinstance(x, (np.integer,)):
-        return int(x)
-    if isinstance(x, complex):
-        return [x.real, x.imag]
-    if isinstance(x, (bytes, bytearray)):
-        return x.hex()
-    return x
 
 
 #: Drive.status() fields shown by the dashboard (added by drive_link; absent ones are None).

@@ -30,6 +30,7 @@ import numpy as np
 from drive_link import design
 from drive_link.design import analyse_current_loop
 from drive_link.identify import fit_first_order
+from drive_link.jsonable import jsonable as _clean
 from drive_link.metrics import step_metrics
 
 
@@ -62,19 +63,6 @@ def _int(name: str, text: str, *, minimum: int = 1) -> int:
     if v < minimum:
         raise UsageError(f"{name} must be >= {minimum} (got {v})")
     return v
-
-
-def _clean(x: Any) -> Any:
-    """JSON-safe: numpy scalars to Python, non-finite floats to None, recursively."""
-    if isinstance(x, dict):
-        return {k: _clean(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [_clean(v) for v in x]
-    if isinstance(x, np.generic):
-        x = x.item()
-    if isinstance(x, float) and not math.isfinite(x):
-        return None
-    return x
 
 
 def _fmt(x: float | None, spec: str = ".4g", unit: str = "") -> str:
