@@ -27,7 +27,7 @@ __all__ = [
 
 SPEED_COLORS = ("#1f77b4", "#ff7f0e")
 CURRENT_COLORS = ("#2ca02c", "#d62728")
-PLOT_HEIGHT_PX = 330  #: height of a main-area plot including its legend (px)
+PLOT_HEIGHT_PX = 310  #: height of a main-area plot including its legend (px): two fit in 800 px
 
 
 def fmt(x: Any, spec: str = ".4g") -> str:
