@@ -26,7 +26,12 @@ from firmware_protocol import abort_codes
 
 from . import connection, od_select, units
 from .cia402 import FAULT, FAULT_REACTION_ACTIVE, OPERATION_ENABLED
-from .cli_connect import add_hidden_aliases, bus_options, connect_from_args
+from .cli_connect import (
+    add_hidden_aliases,
+    bus_options,
+    bus_settings_from_args,
+    connect_from_args,
+)
 from .drive import GAIN_FIELDS, Drive
 from .errors import (
     BusError,
@@ -138,13 +143,7 @@ def _gain_value(name: str, text: str) -> float | int | str:
 def cmd_scan(args: argparse.Namespace) -> int:
     from .scan import scan
 
-    conn = connection.acquire(
-        interface=args.interface,
-        channel=args.channel,
-        bitrate=args.bitrate,
-        host=args.host,
-        port=args.port,
-    )
+    conn = connection.acquire(**bus_settings_from_args(args))  # --fd, --bus-kwargs ... too
     try:
         nodes = scan(conn.bus, timeout=_timeout(args, 1.0))
     finally:
