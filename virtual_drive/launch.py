@@ -208,6 +208,8 @@ def virtual_bench(
     with contextlib.ExitStack() as stack:
         if store_dir is None:
             store_dir = stack.enter_context(tempfile.TemporaryDirectory(prefix="virtual-bench-"))
+        elif ids:
+            Path(store_dir).mkdir(parents=True, exist_ok=True)
         settings = BusSettings()
         settings.drives = {}
         settings.stores = {n: Path(store_dir) / f"node{n}.json" for n in ids}
