@@ -6,9 +6,10 @@
 
 The hub (:class:`virtual_drive.hub.Hub`) runs in this process (a thread) or, with
 ``hub_process=True``, as ``virtual-drive hub`` in a child process so its pacing does not share
-this process's GIL. Each node-ID gets a ``virtual-drive run`` child process (the drives keep
-their TPDO rates whatever this process does; they exit by themselves when this process is gone)
-or, with ``drives_in_process=True``, a :class:`~virtual_drive.node.VirtualDrive` in this process.
+this process's GIL. The drives run in a ``virtual-drive run --nodes`` child process (they keep
+their TPDO rates whatever this process does and exit by themselves when this process is gone;
+``process_per_node=True``: one child per node) or, with ``drives_in_process=True``, as
+:class:`~virtual_drive.node.VirtualDrive` objects in this process.
 Everything is stopped when the ``with`` block ends, also on errors. The dashboard
 (``drive-dashboard --virtual``), ``virtual-drive hub --nodes`` and the benchmarks use it.
 """
@@ -47,15 +48,15 @@ class BusSettings(dict):
     _respawn: Any = None
 
     def restart_drive(self, node_id: int) -> Any:
-        """Stop node ``node_id``'s ``virtual-drive run`` child (SIGTERM) and start it again on
-        the same parameter file; returns the new ``DriveProcess``. Raises RuntimeError if it
-        does not come up, KeyError for a node not started here, TypeError for in-process drives.
+        """Stop the ``virtual-drive run`` child serving node ``node_id`` (SIGTERM; with several
+        nodes in one child, all of them) and start it again on the same parameter files;
+        returns the new ``DriveProcess``. Raises RuntimeError if it does not come up, KeyError
+        for a node not started here, TypeError for in-process drives.
         """
         if self._respawn is None:
             raise TypeError("only child-process drives can be restarted")
         self.drives[node_id].stop()
-        self.drives[node_id] = self._respawn(node_id)
-        return self.drives[node_id]
+        return self._respawn(node_id)
 
     @property
     def port(self) -> int:
@@ -68,22 +69,14 @@ class BusSettings(dict):
 
 
 def parse_nodes(text: str) -> tuple[int, ...]:
-    """Node-IDs from ``"1-4"``, ``"1,3"``, ``"2"`` or ``"1-2,5"`` (each 1..127, no repeats).
+    """Node-IDs from ``"1-4"``, ``"1,3"`` or ``"1-2,5"``: ``virtual-drive run --nodes``'s rule
+    (:func:`virtual_drive.node.cli_run.parse_nodes`: 1..127, no repeats, at most 16).
 
     Raises ValueError with a one-line reason.
     """
-    ids: list[int] = []
-    for part in str(text).split(","):
-        m = re.fullmatch(r"\s*(\d+)\s*(?:-\s*(\d+)\s*)?", part)
-        if not m:
-            raise ValueError(f"node list {text!r}: use e.g. 1-4 or 1,3")
-        lo = int(m.group(1))
-        hi = int(m.group(2)) if m.group(2) else lo
-        if hi < lo:
-            raise ValueError(f"node range {part.strip()!r} runs backwards")
-        ids.extend(range(lo, hi + 1))
-    _check_nodes(ids)
-    return tuple(ids)
+    from virtual_drive.node.cli_run import parse_nodes as run_parse_nodes
+
+    return tuple(run_parse_nodes(str(text)))
 
 
 def _check_nodes(ids: Iterable[int]) -> tuple[int, ...]:
@@ -188,6 +181,7 @@ def virtual_bench(
     store_dir: str | Path | None = None,
     hub_process: bool = False,
     drives_in_process: bool = False,
+    process_per_node: bool = False,
     timeout: float = 60.0,
     drive_args: Iterable[str] = (),
 ) -> Iterator[BusSettings]:
@@ -199,7 +193,9 @@ def virtual_bench(
     speed: simulated seconds per wall-clock second. store_dir: folder of the parameter files
     ``node<N>.json`` (default: a temporary folder removed at the end). timeout: s to wait for each
     child to come up (interpreter start took up to 40 s at load 20). drive_args: extra
-    ``virtual-drive run`` options.
+    ``virtual-drive run`` options. The drives run in one ``virtual-drive run --nodes`` child
+    (up to 16 per child) or, with ``process_per_node``, one child each; with
+    ``drives_in_process`` in this process.
 
     Raises ValueError (bad node-IDs or hub settings, nothing started), OSError (port busy) or
     RuntimeError (a child did not come up; everything started is stopped again).
@@ -236,7 +232,7 @@ def virtual_bench(
                     _drive_in_process(settings, n, settings.stores[n], speed)
                 )
         elif ids:
-            _spawn_all(stack, settings, ids, speed, timeout, tuple(drive_args))
+            _spawn_all(stack, settings, ids, speed, timeout, tuple(drive_args), process_per_node)
         yield settings
 
 
@@ -247,44 +243,70 @@ def _spawn_all(
     speed: float,
     timeout: float,
     drive_args: tuple[str, ...],
+    process_per_node: bool,
 ) -> None:
-    """One ``virtual-drive run`` child per node, started side by side (each start costs an
-    interpreter and imports: about 1 s idle, tens of s on a busy host)."""
+    """The ``virtual-drive run`` children: one serving all nodes (``--nodes``: one pacing loop
+    and one hub connection, the cheapest) or, with ``process_per_node``, one per node; started
+    side by side (each start costs an interpreter and imports: about 1 s idle, tens of s on a
+    busy host)."""
+    from virtual_drive.node.cli_run import MAX_NODES
     from virtual_drive.node.process import spawn_virtual_drive
 
-    def respawn(n: int) -> Any:
+    step = 1 if process_per_node else MAX_NODES
+    groups = [ids[k : k + step] for k in range(0, len(ids), step)]
+    store_dir = next(iter(settings.stores.values())).parent
+
+    def spawn(group: tuple[int, ...]) -> Any:
+        if len(group) == 1:
+            return spawn_virtual_drive(
+                drive_args,
+                port=settings.port,
+                channel=settings["channel"],
+                node_id=group[0],
+                store=settings.stores[group[0]],
+                speed=speed,
+                timeout=timeout,
+            )
         return spawn_virtual_drive(
             drive_args,
             port=settings.port,
             channel=settings["channel"],
-            node_id=n,
-            store=settings.stores[n],
+            nodes=",".join(map(str, group)),
+            store=store_dir / "node{node}.json",
             speed=speed,
             timeout=timeout,
         )
+
+    def respawn(n: int) -> Any:
+        group = next(g for g in groups if n in g)
+        proc = spawn(group)
+        for m in group:
+            settings.drives[m] = proc
+        return proc
 
     settings._respawn = respawn
     stack.callback(_stop_drives, settings)  # SIGTERM each, then SIGKILL after 10 s
     results: dict[int, Any] = {}
 
-    def spawn(n: int) -> None:
+    def start(k: int) -> None:
         try:
-            results[n] = respawn(n)
+            results[k] = spawn(groups[k])
         except BaseException as exc:  # reported below, after every start has finished
-            results[n] = exc
+            results[k] = exc
 
-    threads = [threading.Thread(target=spawn, args=(n,), daemon=True) for n in ids]
+    threads = [threading.Thread(target=start, args=(k,), daemon=True) for k in range(len(groups))]
     for t in threads:
         t.start()
     for t in threads:
         t.join()
     failures = []
-    for n in ids:
-        r = results.get(n, RuntimeError("no result"))
+    for k, group in enumerate(groups):
+        r = results.get(k, RuntimeError("no result"))
         if isinstance(r, BaseException):
-            failures.append(f"node {n}: {r}")
+            failures.append(f"node {','.join(map(str, group))}: {r}")
         else:
-            settings.drives[n] = r
+            for n in group:
+                settings.drives[n] = r
     if failures:
         raise RuntimeError("; ".join(failures))
 
@@ -292,7 +314,7 @@ def _spawn_all(
 def _stop_drives(settings: BusSettings) -> None:
     """Stop every child drive (each even if stopping another one failed)."""
     errors = []
-    for proc in list(settings.drives.values()):
+    for proc in {id(p): p for p in settings.drives.values()}.values():
         try:
             proc.stop()
         except Exception as exc:
