@@ -234,7 +234,8 @@ class Pacer:
     def stop(self, timeout: float = 5.0) -> None:
         self._stop.set()
         if self._thread is not None:
-            self._thread.join(timeout)
+            if self._thread is not threading.current_thread():  # (a step may stop its drive)
+                self._thread.join(timeout)
             self._thread = None
 
     @property
