@@ -1,6 +1,7 @@
 """Benchmark: several virtual drives (node-IDs 1-4 by default) on one loopback hub, as started by
 ``virtual-drive hub --nodes 1-4`` (:func:`virtual_drive.launch.virtual_bench`: the hub in its own
-process, one ``virtual-drive run`` child per node).
+process, the drives in one ``virtual-drive run --nodes`` child, or one child per node with
+``--process-per-node``).
 
 All nodes are started (NMT "start all"), so each streams its default TPDOs (TPDO1-4 at
 100/1000/1000/100 Hz, about 2,200 frames/s and 25 % of a 1 Mbit/s bus per node); a python-can
@@ -50,9 +51,21 @@ def _set_tpdo_period(bus: dict, nodes: tuple[int, ...], ms: int) -> None:
             d.write("tpdo3_communication.event_timer", ms)
 
 
-def run(nodes: tuple[int, ...], seconds: float, bitrate: int, tpdo_ms: int | None) -> int:
+def run(
+    nodes: tuple[int, ...],
+    seconds: float,
+    bitrate: int,
+    tpdo_ms: int | None,
+    process_per_node: bool = False,
+) -> int:
     t_start = time.monotonic()
-    with virtual_bench(nodes=nodes, hub_process=True, bitrate=bitrate, timeout=120.0) as bus:
+    with virtual_bench(
+        nodes=nodes,
+        hub_process=True,
+        bitrate=bitrate,
+        timeout=120.0,
+        process_per_node=process_per_node,
+    ) as bus:
         print(
             f"{len(nodes)} virtual drives (nodes {','.join(map(str, nodes))}) up in "
             f"{time.monotonic() - t_start:.1f} s on hub 127.0.0.1:{bus.port}, "
@@ -70,20 +83,25 @@ def run(nodes: tuple[int, ...], seconds: float, bitrate: int, tpdo_ms: int | Non
             wait_joined(c)
         go(clients)
         time.sleep(3.0)  # NMT start sent, streams flowing
-        pids = {n: d.pid for n, d in bus.drives.items()}
+        pids: dict[int, list[int]] = {}  # drive process -> the nodes it serves
+        for n, d in bus.drives.items():
+            pids.setdefault(d.pid, []).append(n)
         hub_pid = bus.hub_process.pid
-        c0 = {n: cpu_seconds(p) for n, p in pids.items()}
+        c0 = {p: cpu_seconds(p) for p in pids}
         h0, t0, load0 = cpu_seconds(hub_pid), time.monotonic(), loadavg()
         time.sleep(seconds)
         dt = time.monotonic() - t0
-        drive_pct = {n: 100 * (cpu_seconds(p) - c0[n]) / dt for n, p in pids.items()}
+        drive_pct = {p: 100 * (cpu_seconds(p) - c0[p]) / dt for p in pids}
         hub_pct = 100 * (cpu_seconds(hub_pid) - h0) / dt
         load1 = loadavg()
         sink, sdo = (result(c) for c in clients)
     total = sum(drive_pct.values())
     print(
         f"drives CPU (% of one core over {seconds:g} s): "
-        + ", ".join(f"node {n} {p:.1f}" for n, p in drive_pct.items())
+        + ", ".join(
+            f"nodes {','.join(map(str, pids[p]))} (pid {p}) {pct:.1f}"
+            for p, pct in drive_pct.items()
+        )
         + f"; together {total:.1f} % (goal <= 30 %)"
     )
     print(f"hub CPU {hub_pct:.1f} % of one core")
@@ -125,12 +143,17 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seconds", type=float, default=20.0, help="measuring window, s")
     ap.add_argument("--bitrate", type=int, default=1_000_000, help="emulated bit rate, bit/s")
     ap.add_argument("--tpdo-ms", type=int, help="TPDO2/TPDO3 event timer of every node, ms")
+    ap.add_argument(
+        "--process-per-node",
+        action="store_true",
+        help="one virtual-drive process per node (default: one process serves all, --nodes)",
+    )
     args = ap.parse_args(argv)
     try:
         nodes = parse_nodes(args.nodes)
     except ValueError as exc:
         ap.error(str(exc))
-    return run(nodes, args.seconds, args.bitrate, args.tpdo_ms)
+    return run(nodes, args.seconds, args.bitrate, args.tpdo_ms, args.process_per_node)
 
 
 if __name__ == "__main__":
