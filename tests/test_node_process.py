@@ -299,14 +299,18 @@ def test_bus_from_python_can_environment(hub):
     assert r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1, r.stderr
 
 
-def test_drive_exits_when_the_hub_goes_away():
-    """A lost bus ends the process with one line (no orphan spinning on a dead socket)."""
+@pytest.mark.parametrize("nodes", [None, "1-2"])
+def test_drive_exits_when_the_hub_goes_away(nodes):
+    """A lost bus ends the process with one line (no orphan spinning on a dead socket), also
+    with several nodes on one shared connection (and no traceback per failed write)."""
     hub = HubProcess()
-    proc = spawn_virtual_drive(port=hub.port)
+    proc = spawn_virtual_drive(port=hub.port, nodes=nodes)
     try:
         hub.stop()
         assert proc.proc.wait(10) == 1
+        proc.stop()  # stderr read to the end
         assert "CAN bus lost" in proc.stderr_tail
+        assert "Traceback" not in proc.stderr_tail, proc.stderr_tail
     finally:
         if proc.proc.poll() is None:
             proc.kill()

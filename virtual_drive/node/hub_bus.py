@@ -287,6 +287,7 @@ class HubConnection:
         self._lock = threading.Lock()
         self._held: list[bytes] = []
         self._batch_ident: int | None = None
+        self._broken: str | None = None
         self._closed = False
         self._reader = threading.Thread(target=self._read, name="hub-connection", daemon=True)
         self._reader.start()
@@ -307,8 +308,13 @@ class HubConnection:
         if self._held:
             held, self._held = self._held, []
             data = b"".join(held)
-            with self._bus._send_lock:
-                self._bus._sock.sendall(data)
+            try:
+                with self._bus._send_lock:
+                    self._bus._sock.sendall(data)
+            except OSError as exc:  # reported once; lost() says why
+                if self._broken is None:
+                    self._broken = f"socketcand connection failed: {exc}"
+                    logger.warning("hub connection: %s", exc)
 
     def _send_from(self, src: HubPort, frames: list[tuple[int, bytes, bool]]) -> None:
         lines = [format_send(cob_id, data, ext) for cob_id, data, ext in frames]
@@ -355,7 +361,8 @@ class HubConnection:
                     p._deliver(msg)
 
     def lost(self) -> str | None:
-        return self._bus.lost()
+        """Why the shared connection is gone, or None (as :meth:`HubBus.lost`)."""
+        return self._bus.lost() or self._broken
 
     def _detach(self, p: HubPort) -> None:
         with self._lock:
