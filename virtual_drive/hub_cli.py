@@ -1,6 +1,6 @@
 """``virtual-drive hub``: run the loopback CAN hub (:class:`virtual_drive.hub.Hub`) until SIGINT or
-SIGTERM, optionally with virtual drives on it (``--nodes 1-4``: one ``virtual-drive run`` child
-process per node-ID, started and stopped by :func:`virtual_drive.launch.virtual_bench`).
+SIGTERM, optionally with virtual drives on it (``--nodes 1-4``: served by a ``virtual-drive run
+--nodes`` child process, started and stopped by :func:`virtual_drive.launch.virtual_bench`).
 
 The first line on stdout is the python-can line that joins the hub (scripts parse its port).
 """
@@ -43,7 +43,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         "--nodes",
         metavar="IDS",
         help="also run a virtual drive per node-ID on the hub, e.g. 1-4 or 1,3 "
-        "(one `virtual-drive run` child process each)",
+        "(served by one `virtual-drive run --nodes` child process)",
     )
     p.add_argument(
         "--speed", type=float, default=1.0, help="--nodes: simulated seconds per wall-clock second"
