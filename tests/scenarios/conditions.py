@@ -11,16 +11,13 @@ Used by ``tests/scenarios`` and ``benchmarks/bench_conditions.py``; no test logi
 from __future__ import annotations
 
 import contextlib
-import inspect
 import os
-import re
 import shutil
 import signal
 import socket
 import subprocess
 import sys
 import tempfile
-import threading
 import time
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
@@ -167,58 +164,6 @@ class CpuHog:
 # --------------------------------------------------------------------------------------------
 
 
-class HubProcess:
-    """``virtual-drive hub`` in its own process (under the watcher: it ends with this process),
-    so the emulated bus keeps its timing whatever the test process does with its GIL."""
-
-    def __init__(self, faults: dict, timeout: float = 60.0) -> None:
-        cmd = [sys.executable, "-m", "virtual_drive.cli", "hub", "--port", "0"]
-        cmd += ["--drop-rate", repr(faults.get("drop_rate", 0.0))]
-        cmd += ["--delay-ms", repr(1e3 * faults.get("delay_s", 0.0))]
-        if faults.get("jitter_s"):
-            cmd += ["--jitter-ms", repr(1e3 * faults["jitter_s"])]
-        cmd += ["--seed", str(faults.get("seed", 0))]
-        self._proc = subprocess.Popen(
-            [sys.executable, "-c", _WATCH, str(os.getpid()), *cmd],
-            stdin=subprocess.DEVNULL,
-            stdout=subprocess.PIPE,
-            text=True,
-            start_new_session=True,
-        )
-        assert self._proc.stdout is not None
-        box: list[str] = []
-        reader = threading.Thread(target=lambda: box.append(self._proc.stdout.readline()))
-        reader.daemon = True
-        reader.start()
-        reader.join(timeout)
-        m = re.search(r"port=(\d+)", box[0] if box else "")
-        if not m:
-            self.stop()
-            raise RuntimeError(f"virtual-drive hub did not come up: {box!r}")
-        self.port = int(m.group(1))
-
-    def stop(self) -> None:
-        """SIGTERM its session (SIGKILL after 5 s)."""
-        with contextlib.suppress(ProcessLookupError, PermissionError):
-            os.killpg(self._proc.pid, signal.SIGTERM)
-        try:
-            self._proc.wait(5)
-        except subprocess.TimeoutExpired:
-            with contextlib.suppress(ProcessLookupError, PermissionError):
-                os.killpg(self._proc.pid, signal.SIGKILL)
-            self._proc.wait(5)
-
-
-def _hub_kwargs(cond: Condition) -> dict:
-    """Hub fault settings for ``cond``; jitter only if this hub version has it (else delay)."""
-    from virtual_drive.hub import Hub
-
-    kw: dict = {"drop_rate": cond.drop_rate, "delay_s": cond.delay_s, "seed": 9}
-    if cond.jitter_s and "jitter_s" in inspect.signature(Hub.__init__).parameters:
-        kw["jitter_s"] = cond.jitter_s
-    return kw
-
-
 class Bench:
     """A virtual drive (its own process) on the condition's bus, as a user meets it.
 
@@ -232,13 +177,16 @@ class Bench:
         self.cond = cond
         self.hub_in_process = hub_in_process
         self.hub = None  #: the in-process :class:`~virtual_drive.hub.Hub` (hub_in_process)
-        self.hub_proc: HubProcess | None = None
         self.hub_port: int | None = None
         self.hog: CpuHog | None = None
         self.proc = None
+        self.settings = None  #: :class:`virtual_drive.launch.BusSettings` (hub conditions)
+        self._stack = contextlib.ExitStack()
         self._tmp = tempfile.TemporaryDirectory(prefix=f"bench-{cond.name}-")
-        self.store = Path(self._tmp.name) / "parameters.json"
-        self.hub_faults: dict = {}
+        self.store = Path(self._tmp.name) / f"node{self.node_id}.json"
+        self.hub_faults: dict = {
+            "drop_rate": cond.drop_rate, "delay_s": cond.delay_s, "jitter_s": cond.jitter_s
+        }  # fmt: skip
 
     # ---------------------------------------------------------------- lifecycle
     def start(self) -> Bench:
@@ -246,41 +194,52 @@ class Bench:
             if self.cond.busy:
                 self.hog = CpuHog().start()
             if self.cond.channel is None:
-                from virtual_drive.hub import Hub
+                from virtual_drive.launch import virtual_bench
 
-                self.hub_faults = _hub_kwargs(self.cond)
-                if self.hub_in_process:
-                    self.hub = Hub(port=0, **self.hub_faults).start()
-                    self.hub_port = self.hub.port
-                else:
-                    self.hub_proc = HubProcess(self.hub_faults)
-                    self.hub_port = self.hub_proc.port
-            self._spawn()
+                # the product's one launcher: hub (own process unless hub_in_process) + drive
+                self.settings = self._stack.enter_context(
+                    virtual_bench(
+                        nodes=(self.node_id,),
+                        hub_process=not self.hub_in_process,
+                        seed=9,
+                        store_dir=self._tmp.name,
+                        timeout=self._timeout,
+                        **self.hub_faults,
+                    )
+                )
+                self.hub, self.hub_port = self.settings.hub, self.settings.port
+                self.proc = self.settings.drives[self.node_id]
+                apply_tpdo_event_timers(self)
+            else:
+                self._spawn()
         except BaseException:
             self.stop()
             raise
         return self
 
+    @property
+    def _timeout(self) -> float:
+        return max(60.0, 20.0 * self.cond.slow)
+
     def _spawn(self) -> None:
+        """The drive on the SocketCAN channel (the hub conditions use the launcher)."""
         from virtual_drive.node.process import spawn_virtual_drive
 
-        timeout = max(60.0, 20.0 * self.cond.slow)
-        if self.hub_port is not None:
-            self.proc = spawn_virtual_drive(
-                port=self.hub_port, node_id=self.node_id, store=self.store, timeout=timeout
-            )
-        else:
-            self.proc = spawn_virtual_drive(
-                interface="socketcan",
-                channel=self.cond.channel,
-                node_id=self.node_id,
-                store=self.store,
-                timeout=timeout,
-            )
+        self.proc = spawn_virtual_drive(
+            interface="socketcan",
+            channel=self.cond.channel,
+            node_id=self.node_id,
+            store=self.store,
+            timeout=self._timeout,
+        )
         apply_tpdo_event_timers(self)
 
     def restart(self) -> None:
         """Stop the drive process (SIGTERM) and start it again on the same store file."""
+        if self.settings is not None:
+            self.proc = self.settings.restart_drive(self.node_id)
+            apply_tpdo_event_timers(self)
+            return
         if self.proc is not None:
             self.proc.stop()
         self._spawn()
@@ -288,14 +247,11 @@ class Bench:
     def stop(self) -> None:
         """Stop drive, hub and CPU hog (each step runs even if an earlier one failed)."""
         try:
-            if self.proc is not None:
+            if self.settings is None and self.proc is not None:
                 self.proc.stop()
         finally:
             try:
-                if self.hub is not None:
-                    self.hub.stop()
-                if self.hub_proc is not None:
-                    self.hub_proc.stop()
+                self._stack.close()  # the launcher: drive, then hub
             finally:
                 try:
                     if self.hog is not None:
