@@ -14,14 +14,43 @@ Modules (one job each):
 - :mod:`dashboard.models` — request bodies (pydantic; bad input is a 422, nothing applied).
 - :mod:`dashboard.bench` — one drive shared by all clients: commands, setpoints, sequences.
 - :mod:`dashboard.security` — control lease (one controller, visible take-over), Origin, token.
-- :mod:`dashboard.tuning` — gains read-back, preview (stability, GM, PM, ‖S‖∞), atomic apply,
-  IP design from ξ, ω_n (eqs. 28–31), store and live-vs-stored diff.
-- :mod:`dashboard.experiments` — trace capture, current step test (Fig. 13) with the model's
-  prediction, identification of G(z) = b/(z − a) (Fig. 16).
+- :mod:`dashboard.tuning` — gains read-back, preview and apply through
+  :func:`drive_link.gains.apply_gains`, IP design from ξ, ω_n (eqs. 28–31), store, live-vs-stored
+  diff; :mod:`dashboard.loop_view` — Bode and pole curves from :mod:`drive_link.design`.
+- :mod:`dashboard.experiments` — trace capture, current step test (Fig. 13) and identification
+  (Fig. 16): drive_link's (:mod:`drive_link.steps`) run as a long action, turned into plots.
 - :mod:`dashboard.export` — captures as CSV and PNG.
-- :mod:`dashboard.gui` / :mod:`dashboard.gui_scene` — the viser GUI and the 3D rotor.
+- :mod:`dashboard.gui` / :mod:`dashboard.gui_tabs` (one module per tab) /
+  :mod:`dashboard.gui_scene` — the viser GUI and the 3D rotor.
 - :mod:`dashboard.virtual` — opens the bench (real bus, running hub, or hub + virtual drive).
 - :mod:`dashboard.browser` — headless /usr/bin/chromium and a child ``drive-dashboard`` (shared
   by the e2e test, the screenshot command and the benchmark).
 - :mod:`dashboard.screenshot` — ``python -m dashboard.screenshot docs/bench.png`` (README picture).
+
+Scripting: ``from dashboard import BenchConfig, create_app`` (imported on first use, so
+``import dashboard.fields`` does not load FastAPI and viser). See ``docs/architecture.md``.
 """
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .app import create_app
+    from .config import BenchConfig
+
+__all__ = ["BenchConfig", "create_app"]
+
+_HOMES = {"BenchConfig": "dashboard.config", "create_app": "dashboard.app"}
+
+
+def __getattr__(name: str) -> Any:
+    home = _HOMES.get(name)
+    if home is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(importlib.import_module(home), name)
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -8,7 +8,7 @@ from typing import Annotated, Any, TypeVar
 from fastapi import APIRouter, Depends, Header, HTTPException, Request, Response
 
 from dashboard import experiments, tuning
-from dashboard.bench import Bench, jsonable
+from dashboard.bench import Bench
 from dashboard.errors import http_error
 from dashboard.export import capture_csv, capture_png
 from dashboard.models import (
@@ -28,6 +28,9 @@ from dashboard.models import (
     TraceIn,
 )
 from dashboard.security import LeaseError
+from drive_link.jsonable import jsonable
+
+__all__ = ["router"]
 
 router = APIRouter(prefix="/api")
 T = TypeVar("T")

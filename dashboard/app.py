@@ -14,9 +14,12 @@ from fastapi.responses import HTMLResponse, JSONResponse, RedirectResponse
 from starlette.concurrency import run_in_threadpool
 
 from dashboard import api, stream
-from dashboard.bench import Bench, jsonable
+from dashboard.bench import Bench
 from dashboard.config import BenchConfig
 from dashboard.security import allowed_hosts, allowed_origins, bearer, host_ok, token_ok
+from drive_link.jsonable import jsonable
+
+__all__ = ["STATE_CHANGING", "BenchOpener", "create_app"]
 
 BenchOpener = Callable[[BenchConfig], contextlib.AbstractContextManager[Bench]]
 

@@ -22,6 +22,19 @@ from drive_link.jsonable import jsonable
 from firmware_protocol import emcy_codes
 from firmware_protocol.od import load_od
 
+__all__ = [
+    "EMCY_TEXT",
+    "LIVE_NAMES",
+    "LIVE_SIGNALS",
+    "SEQUENCE_SLACK_S",
+    "STATUS_FIELDS",
+    "STATUS_PERIOD_S",
+    "STORE_PERIOD_S",
+    "Bench",
+    "Capture",
+    "as_dict",
+]
+
 #: The staged gain-set names (0x20F0) → the live object each one mirrors (docs/contracts.md §1).
 LIVE_NAMES: dict[str, str] = {
     "type": "current_controller.type",

@@ -16,6 +16,19 @@ import time
 from collections.abc import Iterator, Sequence
 from typing import Any, NamedTuple
 
+__all__ = [
+    "CHROMIUM",
+    "FLAGS",
+    "Dashboard",
+    "click",
+    "dismiss_notifications",
+    "free_port",
+    "launch",
+    "run_dashboard",
+    "stop_process",
+    "text_input",
+]
+
 CHROMIUM = "/usr/bin/chromium"
 FLAGS = (
     "--headless",

@@ -18,6 +18,8 @@ from collections.abc import Sequence
 from dashboard.config import BenchConfig
 from drive_link.cli_connect import add_bus_arguments
 
+__all__ = ["build_parser", "main"]
+
 
 class _Parser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # type: ignore[override]

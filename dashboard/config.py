@@ -5,6 +5,8 @@ from __future__ import annotations
 import ipaddress
 from dataclasses import dataclass, field
 
+__all__ = ["LOOPBACK_HOSTS", "BenchConfig", "is_loopback"]
+
 LOOPBACK_HOSTS = ("127.0.0.1", "localhost", "::1")
 
 

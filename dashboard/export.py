@@ -8,6 +8,8 @@ import numpy as np
 
 from dashboard.bench import Capture
 
+__all__ = ["capture_csv", "capture_png"]
+
 
 def capture_csv(cap: Capture) -> bytes:
     """CSV of a capture: one header row of column names ("t" in s first), then one row per

@@ -13,6 +13,8 @@ import math
 import re
 from dataclasses import dataclass
 
+__all__ = ["FieldError", "NumberSpec", "show"]
+
 _NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
 
 

@@ -36,6 +36,15 @@ from typing import Any
 
 from dashboard.security import host_ok, origin_ok
 
+__all__ = [
+    "SEND_LOCK",
+    "LoopSafeEvent",
+    "guard_handshake",
+    "install_loop_safe_events",
+    "install_send_lock",
+    "refuse_share_url",
+]
+
 #: One lock for every message queued into viser (see module docstring).
 SEND_LOCK = threading.RLock()
 

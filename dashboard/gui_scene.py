@@ -14,6 +14,16 @@ from typing import Any
 import numpy as np
 import viser
 
+__all__ = [
+    "DIM",
+    "MAGNET_COLORS",
+    "PHASE_COLORS",
+    "SIX_STEP",
+    "RotorScene",
+    "background",
+    "frame_camera",
+]
+
 #: six-step commutation: sector 0..5 → (phase driven +, phase driven −), 60° electrical each.
 SIX_STEP = ((0, 1), (0, 2), (1, 2), (1, 0), (2, 0), (2, 1))
 PHASE_COLORS = ((220, 60, 60), (60, 170, 60), (60, 90, 220))

@@ -11,6 +11,8 @@ import time
 
 import numpy as np
 
+__all__ = ["STALE_AFTER_S", "data_age_s", "decimate", "freshness_text", "min_span_envelope"]
+
 STALE_AFTER_S = 1.0  #: the live view says "stale" when the newest sample is older than this
 
 

@@ -18,6 +18,8 @@ from pathlib import Path
 
 from dashboard.browser import click, dismiss_notifications, launch, run_dashboard
 
+__all__ = ["SCROLL_TOP", "VIEWPORT", "main", "take"]
+
 VIEWPORT = {"width": 1400, "height": 900}
 SCROLL_TOP = (
     "() => document.querySelectorAll('*').forEach(e => { if (e.scrollTop) e.scrollTop = 0; })"

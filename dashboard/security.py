@@ -17,6 +17,18 @@ from urllib.parse import urlsplit
 
 from dashboard.config import is_loopback
 
+__all__ = [
+    "ControlLease",
+    "Holder",
+    "LeaseError",
+    "allowed_hosts",
+    "allowed_origins",
+    "bearer",
+    "host_ok",
+    "origin_ok",
+    "token_ok",
+]
+
 
 class LeaseError(Exception):
     """The caller does not hold control (or cannot take it without ``take_over``)."""

@@ -15,8 +15,11 @@ import numpy as np
 from fastapi import APIRouter, WebSocket, WebSocketDisconnect
 from starlette.concurrency import run_in_threadpool
 
-from dashboard.bench import Bench, jsonable
+from dashboard.bench import Bench
 from dashboard.security import allowed_hosts, host_ok, origin_ok, token_ok
+from drive_link.jsonable import jsonable
+
+__all__ = ["AUTH_TIMEOUT_S", "router"]
 
 router = APIRouter()
 

@@ -23,6 +23,8 @@ from .drive import Drive
 from .errors import DriveError, DriveTimeout, SdoAbort
 from .nmt import HeartbeatProducer
 
+__all__ = ["ITEMS", "CheckFailed", "CheckResult", "run_checks"]
+
 DEVICE_TYPE_402_SERVO = 0x00020192
 
 ABORT_RANGE = abort_codes.INVALID_VALUE

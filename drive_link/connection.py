@@ -22,6 +22,16 @@ from firmware_protocol.can_bits import frame_bits, frame_bits_fast
 from .bus import open_bus
 from .bus_health import BusHealth
 
+__all__ = [
+    "SEND_DEADLINE",
+    "BusMonitor",
+    "Connection",
+    "PacedNetwork",
+    "acquire",
+    "queue_full",
+    "release",
+]
+
 #: How long one frame may wait for room in a full transmit queue before the send fails (s).
 SEND_DEADLINE = 2.0
 

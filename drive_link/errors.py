@@ -10,6 +10,18 @@ from collections.abc import Mapping
 
 from firmware_protocol import abort_codes
 
+__all__ = [
+    "ABORT_MEANINGS",
+    "BusError",
+    "DriveError",
+    "DriveTimeout",
+    "InvalidValue",
+    "NodeNotFound",
+    "SdoAbort",
+    "StateError",
+    "UnknownObject",
+]
+
 ABORT_MEANINGS: Mapping[int, str] = abort_codes.MEANINGS
 """SDO abort code -> meaning, CiA 301 table 22 (from :mod:`firmware_protocol.abort_codes`)."""
 

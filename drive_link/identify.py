@@ -19,6 +19,14 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+__all__ = [
+    "TS_MODEL",
+    "FirstOrderFit",
+    "fit_first_order",
+    "identify_first_order",
+    "simulate_first_order",
+]
+
 TS_MODEL = 20e-6
 """Loop sampling period of the model [s] (fs = 50 kHz)."""
 

@@ -14,6 +14,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+__all__ = ["StepMetrics", "moving_average", "step_metrics"]
+
 
 @dataclass(frozen=True)
 class StepMetrics:

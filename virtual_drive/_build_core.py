@@ -12,6 +12,8 @@ from pathlib import Path
 
 from cffi import FFI
 
+__all__ = ["CDEF", "ffibuilder"]
+
 _CSRC = Path(__file__).resolve().parent / "csrc"
 _SOURCES = ["controllers.c", "plant.c", "loop.c"]
 

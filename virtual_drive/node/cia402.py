@@ -45,6 +45,18 @@ from firmware_protocol.cia402 import (
 )
 from firmware_protocol.cia402 import STATE_BITS as _STATE_BITS
 
+__all__ = [
+    "DISABLE_VOLTAGE",
+    "ENABLE_OPERATION",
+    "QUICK_STOP",
+    "RAMP_QUICK",
+    "RAMP_SLOW",
+    "SHUTDOWN",
+    "SWITCH_ON",
+    "Cia402StateMachine",
+    "decode_command",
+]
+
 logger = logging.getLogger(__name__)
 
 

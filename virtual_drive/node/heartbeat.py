@@ -17,6 +17,13 @@ import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 
+__all__ = [
+    "HeartbeatConsumer",
+    "HeartbeatProducer",
+    "decode_consumer_entry",
+    "encode_consumer_entry",
+]
+
 logger = logging.getLogger(__name__)
 
 

@@ -24,6 +24,20 @@ from collections.abc import Callable
 
 from canopen.nmt import NMT_COMMANDS, NMT_STATES
 
+__all__ = [
+    "CMD_PRE_OPERATIONAL",
+    "CMD_RESET_COMMUNICATION",
+    "CMD_RESET_NODE",
+    "CMD_START",
+    "CMD_STOP",
+    "INITIALISING",
+    "OPERATIONAL",
+    "PRE_OPERATIONAL",
+    "STATE_NAMES",
+    "STOPPED",
+    "NmtSlave",
+]
+
 logger = logging.getLogger(__name__)
 
 _STATE_CODES = {name: code for code, name in NMT_STATES.items()}

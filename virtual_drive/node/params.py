@@ -31,6 +31,8 @@ from firmware_protocol.current_stability import (
 from firmware_protocol.od import Entry, LimitError, ObjectDictionaryView
 from firmware_protocol.stability import check_ip_speed_gains
 
+__all__ = ["ParamChecker"]
+
 Number = int | float
 
 ABORT_INVALID_VALUE = abort_codes.INVALID_VALUE

@@ -46,6 +46,8 @@ from firmware_protocol.cob_id import check_cob_id
 from firmware_protocol.emcy_codes import RPDO_LENGTH, RPDO_VALUE
 from firmware_protocol.entry import LimitError
 
+__all__ = ["PDO_INVALID", "PdoEngine", "is_pdo_config"]
+
 logger = logging.getLogger(__name__)
 
 RPDO_COMM, RPDO_MAP = 0x1400, 0x1600

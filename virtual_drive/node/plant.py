@@ -11,6 +11,19 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+__all__ = [
+    "CURRENT_KW",
+    "GAIN_SET_SPEED_KW",
+    "INVERTER_KW",
+    "LOAD_KW",
+    "MOTOR_KW",
+    "PROTECTION_KW",
+    "SETTERS",
+    "SPEED_KW",
+    "PlantError",
+    "apply",
+]
+
 #: OD record index → (simulator setter, {sub: keyword})
 CURRENT_KW = {
     1: "type",

@@ -27,6 +27,26 @@ import numpy as np
 
 from firmware_protocol.enums import TraceCommand, TraceState, TraceTriggerEdge, TraceTriggerMode
 
+__all__ = [
+    "ARMED",
+    "CAPACITY",
+    "CMD_ARM",
+    "CMD_FORCE",
+    "CMD_STOP",
+    "DONE",
+    "EDGE_EITHER",
+    "EDGE_FALLING",
+    "EDGE_RISING",
+    "IDLE",
+    "MODE_CROSSING",
+    "MODE_FAULT",
+    "MODE_IMMEDIATE",
+    "MODE_STEP",
+    "RECORDING",
+    "TraceConfigError",
+    "TraceRecorder",
+]
+
 logger = logging.getLogger(__name__)
 
 IDLE, ARMED, RECORDING, DONE = (int(s) for s in TraceState)

@@ -66,6 +66,8 @@ from canopen.sdo.constants import (
 
 from firmware_protocol import abort_codes
 
+__all__ = ["MAX_BLKSIZE", "BlockSdoServer", "crc16_ccitt"]
+
 logger = logging.getLogger(__name__)
 
 #: Largest sub-block the protocol allows (seqno is 7 bits, 0 invalid).

@@ -11,9 +11,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from firmware_protocol.cia402 import CW_HALT, SW_SPEED_ZERO
+from firmware_protocol.cia402 import CW_HALT, OPERATION_ENABLED, QUICK_STOP_ACTIVE, SW_SPEED_ZERO
 
-from . import cia402 as sm
 from .od_maps import CURRENT_WINDOW_A, MODE_PROFILE_VELOCITY
 
 if TYPE_CHECKING:
@@ -29,10 +28,10 @@ def statusword(d: VirtualDrive) -> int:
     reached = False
     limit = False
     mode_bits = 0
-    if st.state == sm.QUICK_STOP_ACTIVE:
+    if st.state == QUICK_STOP_ACTIVE:
         # CiA 402: in QUICK STOP ACTIVE (0x605A 5..8) bit 10 = the axis is stopped
         reached = st.ramp is None
-    elif st.state == sm.OPERATION_ENABLED or st.ramp is not None:
+    elif st.state == OPERATION_ENABLED or st.ramp is not None:
         if d._mode == MODE_PROFILE_VELOCITY:
             reached = velocity_reached(d)
             limit = abs(live["i_p_ref"]) >= 0.999 * d._value(0x2020, 3)

@@ -19,6 +19,20 @@ from pathlib import Path
 
 from firmware_protocol.enums import StoreStatus
 
+__all__ = [
+    "FORMAT",
+    "LOAD_SIGNATURE",
+    "SAVE_SIGNATURE",
+    "VERSION",
+    "StoreCorruptError",
+    "StoreUnreadableError",
+    "load",
+    "load_with_status",
+    "remove_stale_temps",
+    "save",
+    "write_atomic",
+]
+
 logger = logging.getLogger(__name__)
 
 FORMAT = "bldc-bench-drive-parameters"

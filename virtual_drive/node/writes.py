@@ -26,10 +26,10 @@ from canopen import objectdictionary as odm
 from canopen.sdo import SdoAbortedError
 
 from firmware_protocol import abort_codes
+from firmware_protocol.cia402 import OPERATION_ENABLED
 from firmware_protocol.cob_id import check_cob_id, check_heartbeat_consumers
 from firmware_protocol.entry import LimitError
 
-from . import cia402 as sm
 from . import communication, gain_sets, parameters, plant, storage
 from .od_maps import SUPPORTED_MODES
 from .pdo import is_pdo_config
@@ -117,7 +117,7 @@ COMMANDS: Mapping[int, Handler] = {
 # -- checks before the EDS check ------------------------------------------------------------
 def _check_mode(d: VirtualDrive, sub: int, value: Any) -> None:
     """0x6060: not while OPERATION ENABLED (0x08000022); a supported mode (0x06090030)."""
-    if d.cia402.state == sm.OPERATION_ENABLED:
+    if d.cia402.state == OPERATION_ENABLED:
         raise SdoAbortedError(abort_codes.DEVICE_STATE)
     if value not in SUPPORTED_MODES:
         raise SdoAbortedError(abort_codes.INVALID_VALUE)

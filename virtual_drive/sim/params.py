@@ -31,6 +31,22 @@ from firmware_protocol import paper
 from firmware_protocol.enums import CONTROLLER_TYPES
 from firmware_protocol.od import load_od
 
+__all__ = [
+    "A_IDENTIFIED",
+    "B_IDENTIFIED",
+    "OD_LIMITS",
+    "RPM_PER_RAD_S",
+    "CurrentControllerParams",
+    "InverterParams",
+    "LoadParams",
+    "MotorParams",
+    "ProtectionParams",
+    "SpeedControllerParams",
+    "Ts",
+    "field_names",
+    "mechanics_from_identified",
+]
+
 Ts: float = paper.TS
 """Sampling period (s): fs = 50 kHz, equal to the PWM period."""
 

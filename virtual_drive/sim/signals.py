@@ -13,6 +13,8 @@ between the sector's "+" and "-" phases; e_L the back-EMF between the same phase
 
 from __future__ import annotations
 
+__all__ = ["OVERSAMPLED", "SIGNALS", "UNITS"]
+
 SIGNALS: tuple[str, ...] = (
     "i_p",
     "i_a",

@@ -31,6 +31,15 @@ from virtual_drive.sim.params import (
 )
 from virtual_drive.sim.signals import SIGNALS
 
+__all__ = [
+    "FAULT_KINDS",
+    "FAULT_OVERCURRENT",
+    "FAULT_OVERVOLTAGE",
+    "FAULT_UNDERVOLTAGE",
+    "Fault",
+    "Simulator",
+]
+
 FAULT_OVERCURRENT = emcy_codes.OVERCURRENT
 FAULT_OVERVOLTAGE = emcy_codes.DC_OVERVOLTAGE
 FAULT_UNDERVOLTAGE = emcy_codes.DC_UNDERVOLTAGE

@@ -1,19 +1,23 @@
-"""Print timing figures of the OD view: ``python -m firmware_protocol.bench``.
+"""Print timing figures of the OD view: ``python benchmarks/bench_od.py``.
 
 Figures: EDS parse (uncached), ``canopen_od()`` build, ``Entry.check`` and
 ``check_constraints`` per call (both run on every SDO write by the drive and before every host
-write), header + Markdown rendering. Wall-clock, best of several repeats, on this machine.
+write), header + Markdown rendering. Wall-clock, best of several repeats, on this machine; the
+load average (/proc/loadavg) is printed beside them.
 """
 
 from __future__ import annotations
 
+import os
 import time
 import timeit
 from collections.abc import Callable
 
-from .c_header import render_header
-from .markdown import render_markdown
-from .od import EDS_PATH, _load_cached, load_od
+from firmware_protocol.c_header import render_header
+from firmware_protocol.markdown import render_markdown
+from firmware_protocol.od import EDS_PATH, _load_cached, load_od  # _load_cached: the uncached parse
+
+__all__ = ["main"]
 
 
 def _best(fn: Callable[[], object], number: int, repeat: int = 5) -> float:
@@ -46,7 +50,11 @@ def main() -> None:
         ("render_header()", _best(lambda: render_header(view), number=3), "ms", 1e3),
         ("render_markdown()", _best(lambda: render_markdown(view), number=3), "ms", 1e3),
     ]
-    print(f"firmware_protocol benchmark ({len(view)} entries, {time.strftime('%Y-%m-%d')})")
+    load = " ".join(f"{x:.2f}" for x in os.getloadavg())
+    print(
+        f"firmware_protocol benchmark ({len(view)} entries, {time.strftime('%Y-%m-%d')}, "
+        f"load average {load})"
+    )
     for label, seconds, unit, scale in rows:
         print(f"  {label:<40} {seconds * scale:8.2f} {unit}")
 
