@@ -89,6 +89,9 @@ __all__ = [
 
 logger = logging.getLogger(__name__)
 
+#: Samples per piece while a stop ramp runs (1 ms at Ts = 20 µs): see :meth:`VirtualDrive._step`.
+RAMP_CHUNK = 50
+
 ABORT_STORE = abort_codes.STORE  # kept for importers of the old module
 ABORT_HARDWARE = abort_codes.HARDWARE
 
@@ -327,6 +330,19 @@ class VirtualDrive:
 
     # -- the loop -------------------------------------------------------------------------
     def _step(self, n: int) -> None:
+        """``n`` samples (runner thread). A stop ramp decides its brake current from the speed
+        once per chunk (:func:`ramps.ramp_step`), so while one runs the samples go in pieces of
+        at most :data:`RAMP_CHUNK` (1 ms) whatever the pacing period: a 10 ms tick (as in
+        User-Mode Linux) otherwise braked through zero to -27 rpm."""
+        if self.cia402.ramp is None:
+            self._step_chunk(n)
+            return
+        while n > 0:
+            k = min(n, RAMP_CHUNK)
+            self._step_chunk(k)
+            n -= k
+
+    def _step_chunk(self, n: int) -> None:
         """One chunk: setpoints, simulation, faults, recorder, live values (runner thread).
 
         The full-rate arrays are only asked from the simulator while the recorder is armed or
