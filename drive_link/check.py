@@ -195,11 +195,15 @@ def item_heartbeat(d: Drive, opts: dict) -> str:
         d.write("producer_heartbeat_time", p)
         try:
             time.sleep(2 * p / 1000)
-            times = _heartbeat_times(d, max(0.6, 10 * p / 1000))
+            window = max(1.0, 20 * p / 1000)
+            times = _heartbeat_times(d, window)
         finally:
             d.write("producer_heartbeat_time", period_ms)
-        _expect(len(times) >= 3, f"only {len(times)} heartbeats in {max(0.6, 10 * p / 1000):g} s")
-        measured = float(np.median(np.diff(times))) * 1000
+        _expect(len(times) >= 3, f"only {len(times)} heartbeats in {window:g} s")
+        # mean period over the window (first to last frame): a host or hub that a busy
+        # machine stalls delivers frames in bunches, which shrinks a median of the gaps (13.7 ms
+        # for a 50 ms producer at load 28) but not the span; a lost frame adds 1/n
+        measured = float(times[-1] - times[0]) / (len(times) - 1) * 1000
         tol = opts.get("rate_tolerance", 0.25)
         _expect(
             abs(measured - p) <= tol * p + 2, f"heartbeat period {measured:.1f} ms, expected {p} ms"
@@ -507,6 +511,10 @@ def item_trace(d: Drive, opts: dict) -> str:
     )
 
 
+#: Consumer heartbeat time (ms) the heartbeat_consumer item sets for its 50 ms test producer.
+CONSUMER_MS = 1000
+
+
 def item_heartbeat_consumer(d: Drive, opts: dict) -> str:
     period = 50
     prod = HeartbeatProducer(d.bus, 0x7E, period)
@@ -516,7 +524,9 @@ def item_heartbeat_consumer(d: Drive, opts: dict) -> str:
         d.set_speed(0)
         d.enable()
         n_emcy = len(d.emcy_history)
-        d.write("consumer_heartbeat_time.consumer_1", (0x7E << 16) | (4 * period))
+        # consumer time 1000 ms (the library's default floor, 20 producer periods): a host
+        # thread that a busy machine starves for 200 ms must not trip a motor (seen at load 28)
+        d.write("consumer_heartbeat_time.consumer_1", (0x7E << 16) | CONSUMER_MS)
         time.sleep(0.3)
         _expect(
             d.state == cia402.OPERATION_ENABLED,
@@ -525,7 +535,7 @@ def item_heartbeat_consumer(d: Drive, opts: dict) -> str:
         logged = [e.code for e in d.error_history()]  # 0x1003, newest first
         prod.stop()
         stopped = True
-        deadline = time.monotonic() + 2.0
+        deadline = time.monotonic() + CONSUMER_MS / 1000 + 2.0
         codes: list[int] = []
         while time.monotonic() < deadline:
             codes = [e.code for e in d.emcy_history[n_emcy:]]
