@@ -1,6 +1,10 @@
 """Request and response bodies of the REST API (pydantic: a bad body is a 422, nothing applied).
 
-Units are SI as on the drive (A, V, Ω, H, s, rpm) unless a field's name says otherwise.
+Units are SI as on the drive (A, V, Ω, H, s, rpm) unless a field's name says otherwise. A field
+with a unit (an OD object's, or ``x-unit`` in its schema) also takes a string of a number and a
+unit (``{"L_c": "22.2 uH"}``), converted by pint (:func:`drive_link.units.parse_value`, the CLI's
+parser) before the bounds are checked; a wrong dimension or nan/inf is a 422 naming the field. A
+JSON number is taken in the field's unit, as before; a string without a unit stays refused.
 Gain names are the drive's staged gain-set names (object 0x20F0, docs/contracts.md §1).
 A field that carries an OD object's value takes its bounds from the EDS (:func:`od_field`;
 :func:`od_fields` lists them), so the API cannot drift from what the drive accepts.
@@ -8,18 +12,22 @@ A field that carries an OD object's value takes its bounds from the EDS (:func:`
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
 from firmware_protocol.enums import CONTROLLER_NAMES, CONTROLLER_TYPES
 from firmware_protocol.od import load_od
+
+from .fields import unit_part
 
 __all__ = [
     "CONTROLLER_TYPES",
     "OD_KEY",
     "TYPE_NAMES",
+    "UNIT_KEY",
     "CommandIn",
     "ControlIn",
     "ControlOut",
@@ -40,12 +48,19 @@ __all__ = [
     "field_bounds",
     "od_field",
     "od_fields",
+    "unit_field",
 ]
 
 TYPE_NAMES = CONTROLLER_NAMES
 
 OD_KEY = "x-od-object"
 """JSON-schema key naming the OD object that bounds a field (shown in the OpenAPI schema)."""
+
+_NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
+_NUMBER_THEN_WORD = re.compile(r"\s*[+\-−]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?\s*[^\W\d_]")
+
+UNIT_KEY = "x-unit"
+"""JSON-schema key of a field's unit when no OD object names it (``"s"``, ``"ms"``, ``"rad/s"``)."""
 
 
 def od_field(
@@ -66,6 +81,25 @@ def od_field(
         description=f"{unit}{description or od_name}",
         json_schema_extra={OD_KEY: od_name},
     )
+
+
+def unit_field(default: Any = ..., *, unit: str, **kw: Any) -> Any:
+    """A pydantic ``Field`` in ``unit`` (pint's spelling): a string such as ``"500 ms"`` is
+    converted to it (:class:`Strict`); ``kw`` as for ``Field`` (bounds in ``unit``)."""
+    return Field(default, json_schema_extra={UNIT_KEY: unit}, **kw)
+
+
+def _unit(model: type[BaseModel], field: str) -> str | None:
+    """The unit a field's value is in: its OD object's (EDS) or its ``x-unit``; None if none."""
+    info = model.model_fields.get(field)
+    extra = info.json_schema_extra if info is not None else None
+    if not isinstance(extra, dict):
+        return None
+    if OD_KEY in extra:
+        unit = load_od().entry(str(extra[OD_KEY])).unit
+    else:
+        unit = str(extra.get(UNIT_KEY) or "")
+    return unit if unit and unit != "1" else None
 
 
 def field_bounds(model: type[BaseModel], field: str, scale: float = 1.0) -> tuple[float, float]:
@@ -96,6 +130,31 @@ class Strict(BaseModel):
     must be finite (no NaN, no ±inf, no 1e400)."""
 
     model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
+
+    @field_validator("*", mode="before")
+    @classmethod
+    def _with_unit(cls, value: Any, info: ValidationInfo) -> Any:
+        """A string of a number and a unit (``"22.2 uH"``) in a field with a unit → the number
+        in the field's unit (pint); a wrong dimension, nan/inf or a non-whole value for an
+        integer field → ValueError (422). Anything else is left to the strict checks."""
+        if not isinstance(value, str) or info.field_name is None:
+            return value
+        unit = _unit(cls, info.field_name)
+        if unit is None:
+            return value
+        if unit_part(value) is None:
+            if _NUMBER_THEN_WORD.match(value) and not _NUMBER.fullmatch(value.strip()):
+                raise ValueError(
+                    f"{info.field_name}: {value!r} is not a number and a unit pint knows "
+                    f"(the field is in {unit})"
+                )
+            return value
+        from drive_link.units import parse_value
+
+        integer = cls.model_fields[info.field_name].annotation in (int, int | None)
+        return parse_value(
+            value.strip().replace("−", "-"), unit, integer=integer, name=info.field_name
+        )
 
 
 class ControlIn(Strict):
@@ -130,7 +189,7 @@ class SpeedStepIn(Strict):
 
 
 class SequenceStep(Strict):
-    at_s: float = Field(..., ge=0, le=600, description="time after start, s")
+    at_s: float = unit_field(..., unit="s", ge=0, le=600, description="time after start, s")
     rpm: float = od_field("target_velocity")
 
 
@@ -189,7 +248,9 @@ class GainsIn(Strict):
 
 class IPDesignIn(Strict):
     xi: float = Field(1.0, gt=0, le=10, description="damping ratio ξ")
-    omega_n: float = Field(2.3, gt=0, le=1000, description="natural frequency ω_n, rad/s")
+    omega_n: float = unit_field(
+        2.3, unit="rad/s", gt=0, le=1000, description="natural frequency ω_n, rad/s"
+    )
     a: float | None = Field(
         None, gt=0, lt=1, description="identified pole a; default: last identified"
     )
@@ -199,7 +260,9 @@ class IPDesignIn(Strict):
 class CurrentStepIn(Strict):
     from_A: float = od_field("setpoints.i_p_ref", 15.0)
     to_A: float = od_field("setpoints.i_p_ref", 20.0)
-    duration_ms: float = Field(2.0, gt=0, le=300, description="recorded after the step, ms")
+    duration_ms: float = unit_field(
+        2.0, unit="ms", gt=0, le=300, description="recorded after the step, ms"
+    )
 
 
 class TraceIn(Strict):
@@ -255,7 +318,9 @@ class TraceIn(Strict):
 class IdentifyIn(Strict):
     from_A: float = od_field("setpoints.i_p_ref", 15.0, description="i_p* before the step")
     to_A: float = od_field("setpoints.i_p_ref", 30.0, description="i_p* after the step")
-    duration_s: float = Field(1.0, gt=0, le=20, description="recorded after the step, s")
+    duration_s: float = unit_field(
+        1.0, unit="s", gt=0, le=20, description="recorded after the step, s"
+    )
 
 
 class Margins(BaseModel):

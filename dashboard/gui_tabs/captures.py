@@ -31,7 +31,9 @@ class CapturesTab:
         self.cap_md = gui.add_markdown("", visible=False)
         dl.on_click(self.action(self._download, self.cap_md, needs_control=False))
         with gui.add_folder("Trace (i_p at 50 kHz)"):
-            self.tr_len = Field(self, NumberSpec("Length (samples)", 2, 8192, integer=True), 1000)
+            self.tr_len = Field(
+                self, NumberSpec("Length (samples)", 2, 8192, integer=True, unit="samples"), 1000
+            )
             self.tr_div = Field(
                 self, NumberSpec("Divider", *field_bounds(TraceIn, "divider"), integer=True), 1
             )

@@ -26,19 +26,25 @@ class CurrentTab:
 
     def _build_current_tab(self) -> None:
         gui = self.gui
-        self.i_in = Field(self, NumberSpec("i_p* (A)", *field_bounds(CurrentIn, "i_p_ref")), 0.0)
+        self.i_in = Field(
+            self, NumberSpec("i_p* (A)", *field_bounds(CurrentIn, "i_p_ref"), unit="A"), 0.0
+        )
         btn = gui.add_button("Set current")
         self.current_md = self.md()
         btn.on_click(self.action(self._set_current, self.current_md))
         with gui.add_folder("Current step test (Fig. 13)"):
             self.step_from = Field(
-                self, NumberSpec("From (A)", *field_bounds(CurrentStepIn, "from_A")), 15.0
+                self, NumberSpec("From (A)", *field_bounds(CurrentStepIn, "from_A"), unit="A"), 15.0
             )
             self.step_to = Field(
-                self, NumberSpec("To (A)", *field_bounds(CurrentStepIn, "to_A")), 20.0
+                self, NumberSpec("To (A)", *field_bounds(CurrentStepIn, "to_A"), unit="A"), 20.0
             )
             self.avg_n = Field(
-                self, NumberSpec("Moving average (samples)", 1, 1000, integer=True), 1
+                self,
+                NumberSpec(
+                    "Moving average (samples)", 1, 1000, integer=True, unit="samples"
+                ),
+                1,
             )
             run = gui.add_button("Run current step")
             self.step_md = self.md()

@@ -29,12 +29,18 @@ class IdentifyTab:
             "The drive is put back as found afterwards."
         )
         self.id_from = Field(
-            self, NumberSpec("Identify from (A)", *field_bounds(IdentifyIn, "from_A")), 15.0
+            self,
+            NumberSpec(
+                "Identify from (A)", *field_bounds(IdentifyIn, "from_A"), unit="A"
+            ),
+            15.0,
         )
         self.id_to = Field(
-            self, NumberSpec("Identify to (A)", *field_bounds(IdentifyIn, "to_A")), 30.0
+            self, NumberSpec("Identify to (A)", *field_bounds(IdentifyIn, "to_A"), unit="A"), 30.0
         )
-        self.id_dur = Field(self, NumberSpec("Duration (s)", 0.0, 20.0, lo_open=True), 1.0)
+        self.id_dur = Field(
+            self, NumberSpec("Duration (s)", 0.0, 20.0, lo_open=True, unit="s"), 1.0
+        )
         self.id_btns = gui.add_button_group("Identification", ("Run", "Use a, b in IP design"))
         self.id_md = gui.add_markdown("", visible=False)
         self.id_btns.on_click(self.action(self._identify_button, self.id_md, needs_control=False))

@@ -23,13 +23,17 @@ class SpeedTab:
     def _build_speed_tab(self) -> None:
         gui = self.gui
         self.speed_in = Field(
-            self, NumberSpec("Speed setpoint (rpm)", *field_bounds(SpeedIn, "rpm")), 0.0
+            self, NumberSpec("Speed setpoint (rpm)", *field_bounds(SpeedIn, "rpm"), unit="rpm"), 0.0
         )
         btn = gui.add_button("Set speed")
         self.speed_md = self.md()
         btn.on_click(self.action(self._set_speed, self.speed_md))
         self.step_size = Field(
-            self, NumberSpec("Step size (rpm)", 1, field_bounds(SpeedStepIn, "delta_rpm")[1]), 500.0
+            self,
+            NumberSpec(
+                "Step size (rpm)", 1, field_bounds(SpeedStepIn, "delta_rpm")[1], unit="rpm"
+            ),
+            500.0,
         )
         self.step_btns = gui.add_button_group("Step", ("+ step", "− step"))
         self.stepbtn_md = self.md()
@@ -43,7 +47,7 @@ class SpeedTab:
         self.seq_md = self.md()
         seq.on_click(self.action(self._sequence_button, self.seq_md))
         self.load_in = Field(
-            self, NumberSpec("Load torque (N·m)", *field_bounds(LoadIn, "T_load")), 0.0
+            self, NumberSpec("Load torque (N·m)", *field_bounds(LoadIn, "T_load"), unit="N·m"), 0.0
         )
         b = gui.add_button(
             "Apply load step",
@@ -75,8 +79,8 @@ class SpeedTab:
 
 def parse_sequence(text: str) -> list[tuple[float, float]]:
     """``"0:1000, 3:1500"`` → [(0.0, 1000.0), (3.0, 1500.0)] (s, rpm); FieldError otherwise."""
-    t_spec = NumberSpec("sequence time (s)", *field_bounds(SequenceStep, "at_s"))
-    rpm_spec = NumberSpec("sequence setpoint (rpm)", *field_bounds(SequenceStep, "rpm"))
+    t_spec = NumberSpec("sequence time (s)", *field_bounds(SequenceStep, "at_s"), unit="s")
+    rpm_spec = NumberSpec("sequence setpoint (rpm)", *field_bounds(SequenceStep, "rpm"), unit="rpm")
     steps = []
     for part in str(text).split(","):
         if not part.strip():

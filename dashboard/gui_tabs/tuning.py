@@ -44,23 +44,45 @@ class TuningTab:
         self.type_in = gui.add_dropdown(
             "Current controller", tuple(CONTROLLER_TYPES), initial_value="deadbeat"
         )
-        self.Lc_uH = Field(self, NumberSpec("L_c (µH)", *field_bounds(GainsIn, "L_c", 1e6)), 14.8)
+        self.Lc_uH = Field(
+            self, NumberSpec("L_c (µH)", *field_bounds(GainsIn, "L_c", 1e6), unit="µH"), 14.8
+        )
         self.Lc_ratio = Field(self, NumberSpec("L_c / L", 0.0, 3.0, lo_open=True), 1.0)
-        self.Rc_mOhm = Field(self, NumberSpec("R_c (mΩ)", *field_bounds(GainsIn, "R_c", 1e3)), 6.2)
-        self.kp_i = Field(self, NumberSpec("PI k_p (V/A)", *field_bounds(GainsIn, "k_p")), 0.4647)
-        self.ki_i = Field(self, NumberSpec("PI k_i (V/A)", *field_bounds(GainsIn, "k_i")), 0.0492)
+        self.Rc_mOhm = Field(
+            self, NumberSpec("R_c (mΩ)", *field_bounds(GainsIn, "R_c", 1e3), unit="mΩ"), 6.2
+        )
+        self.kp_i = Field(
+            self, NumberSpec("PI k_p (V/A)", *field_bounds(GainsIn, "k_p"), unit="V/A"), 0.4647
+        )
+        self.ki_i = Field(
+            self, NumberSpec("PI k_i (V/A)", *field_bounds(GainsIn, "k_i"), unit="V/A"), 0.0492
+        )
         self.kp_w = Field(
-            self, NumberSpec("IP k_p (A/rpm)", *field_bounds(GainsIn, "speed_k_p")), 0.2113
+            self,
+            NumberSpec(
+                "IP k_p (A/rpm)", *field_bounds(GainsIn, "speed_k_p"), unit="A/rpm"
+            ),
+            0.2113,
         )
         self.ki_w = Field(
-            self, NumberSpec("IP k_i (1/sample)", *field_bounds(GainsIn, "speed_k_i")), 2.9994e-5
+            self,
+            NumberSpec(
+                "IP k_i (1/sample)", *field_bounds(GainsIn, "speed_k_i"), unit="1/sample"
+            ),
+            2.9994e-5,
         )
         with gui.add_folder("IP design from ξ, ω_n (eqs. 28–31)", expand_by_default=False):
             self.xi_in = Field(self, NumberSpec("ξ", 0.0, 10.0, lo_open=True), 1.0)
-            self.wn_in = Field(self, NumberSpec("ω_n (rad/s)", 0.0, 1000.0, lo_open=True), 2.3)
+            self.wn_in = Field(
+                self, NumberSpec("ω_n (rad/s)", 0.0, 1000.0, lo_open=True, unit="rad/s"), 2.3
+            )
             self.a_in = Field(self, NumberSpec("a", 0.0, 1.0, lo_open=True), paper.A_IDENTIFIED)
             self.b_in = Field(
-                self, NumberSpec("b (rpm/A per sample)", 0.0, 1.0, lo_open=True), paper.B_IDENTIFIED
+                self,
+                NumberSpec(
+                    "b (rpm/A per sample)", 0.0, 1.0, lo_open=True, unit="rpm/A/sample"
+                ),
+                paper.B_IDENTIFIED,
             )
             self.design_md = gui.add_markdown("", visible=False)
             gui.add_button("Compute IP gains").on_click(
