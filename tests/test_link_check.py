@@ -189,3 +189,27 @@ def test_store_restore_puts_a_tuned_drive_back(virtual_node, capsys):
         assert int(d.read("tpdo4_mapping.number_of_mapped_objects")) == 1
         assert int(d.read("tpdo4_mapping.mapped_object_1")) == (0x2040 << 16) | (11 << 8) | 32
         assert int(d.read("tpdo4_communication.cob_id")) == cob
+
+
+def test_pdo_rates_fails_for_a_drive_that_silently_drops_periods(virtual_node, capsys):
+    """The drive sends every other TPDO1 (0x184) while 0x1800:5 says 10 ms and counts nothing
+    missed: pdo_rates measures about 50 Hz from the frames' bus timestamps and fails (CiA 301:
+    the event timer is the transmission period), whatever the host's own load."""
+    vd, ch = virtual_node
+    real_send = vd.bus.send
+    n = [0]
+
+    def lossy_send(msg, timeout=None):
+        if msg.arbitration_id == 0x184:
+            n[0] += 1
+            if n[0] % 2:
+                return None  # dropped inside the drive, not counted in 0x2070
+        return real_send(msg, timeout)
+
+    vd.bus.send = lossy_send
+    argv = ["check", "--interface", "virtual", "--channel", ch, "--node", "4", "--json"]
+    rc = cli.main([*argv, "--only", "pdo_rates"])
+    (result,) = json.loads(capsys.readouterr().out)
+    assert rc == 1 and not result["ok"], result
+    m = re.match(r"TPDO1 at (\d+) Hz", result["detail"])
+    assert m and 40 <= int(m[1]) <= 60, result["detail"]
