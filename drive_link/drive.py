@@ -82,6 +82,8 @@ _GAIN_OBJECTS: dict[str, tuple[int, str, str]] = {
 
 #: NMT commands confirmed by the next heartbeat, and the state it must report
 _NMT_CONFIRM = {"start": "OPERATIONAL", "stop": "STOPPED", "pre-operational": "PRE-OPERATIONAL"}
+#: How long Drive.nmt waits for the drive's first heartbeat before it can confirm a command, s.
+FIRST_HEARTBEAT_S = 1.5
 
 
 @dataclass(frozen=True)
@@ -368,8 +370,15 @@ class Drive:
         self.supervisor.expect_nmt(command)
         send_command(self.node.nmt, command)
         target = _NMT_CONFIRM.get(command)
-        if target is None or not self.heartbeat.last_time:
-            return  # resets are confirmed by the boot-up; without heartbeats nothing confirms
+        if target is None:
+            return  # resets are confirmed by the boot-up
+        if not self.heartbeat.last_time:
+            # a one-shot command may run before the drive's first heartbeat arrived: wait for
+            # one (a producer time is at most about 1 s in practice); none → nothing confirms
+            try:
+                self.heartbeat.wait_for(tuple(_NMT_CONFIRM.values()), FIRST_HEARTBEAT_S)
+            except DriveTimeout:
+                return
         # An NMT command has no answer (CiA 301): on a lossy bus it is lost silently. Repeat it
         # until a heartbeat sent after it reports the target state (idempotent in that state).
         period = self.heartbeat.producer_time or 0.1
