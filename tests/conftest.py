@@ -15,6 +15,8 @@ import os
 import time
 from pathlib import Path
 
+import pytest
+
 
 def _schedstat(pid: int) -> tuple[float, float]:
     """(s on a CPU, s waiting on a run queue) summed over the threads of ``pid`` (0, 0 if the
@@ -53,6 +55,17 @@ class RunQueueProbe:
 
     def __repr__(self) -> str:
         return f"run-queue wait {self.wait:.2f} s/s, CPU {self.cpu:.2f} s/s (pid {self.pid})"
+
+
+@pytest.fixture(scope="module")
+def hub_drive(tmp_path_factory):
+    """A loopback hub in this process with a ``virtual-drive run`` child on it (node 1, its own
+    parameter file), started by the product's launcher; yields the
+    :class:`~virtual_drive.hub.Hub` (``.port``, ``.stats``)."""
+    from virtual_drive.launch import virtual_bench
+
+    with virtual_bench(nodes=(1,), store_dir=tmp_path_factory.mktemp("store")) as bus:
+        yield bus.hub
 
 
 def min_rate(nominal_hz: float, wait: float, margin: float = 0.9) -> float:

@@ -20,20 +20,6 @@ pytestmark = pytest.mark.timeout(120)
 L = 14.8e-6
 
 
-@pytest.fixture(scope="module")
-def hub_drive(tmp_path_factory):
-    from virtual_drive.hub import Hub
-    from virtual_drive.node import spawn_virtual_drive
-
-    store = tmp_path_factory.mktemp("store") / "params.json"
-    with Hub(port=0) as hub:
-        proc = spawn_virtual_drive(port=hub.port, node_id=1, store=store)
-        try:
-            yield hub
-        finally:
-            proc.stop()
-
-
 def run(hub, *args: str, timeout: float = 60.0) -> subprocess.CompletedProcess:
     """`drive-link ARGS` in a child process (the real command line)."""
     cmd = [sys.executable, "-m", "drive_link.cli", args[0], "--host", "127.0.0.1"]

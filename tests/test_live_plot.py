@@ -28,20 +28,6 @@ pytestmark = pytest.mark.timeout(240)
 
 
 @pytest.fixture(scope="module")
-def hub_drive(tmp_path_factory):
-    from virtual_drive.hub import Hub
-    from virtual_drive.node import spawn_virtual_drive
-
-    store = tmp_path_factory.mktemp("store") / "params.json"
-    with Hub(port=0) as hub:
-        proc = spawn_virtual_drive(port=hub.port, node_id=1, store=store)
-        try:
-            yield hub
-        finally:
-            proc.stop()
-
-
-@pytest.fixture(scope="module")
 def drive(hub_drive):
     d = Drive.connect(host="127.0.0.1", port=hub_drive.port, heartbeat_ms=None)
     d.nmt("start")

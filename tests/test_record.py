@@ -32,20 +32,6 @@ TPDO2 = 0x281
 
 
 @pytest.fixture(scope="module")
-def hub_drive(tmp_path_factory):
-    from virtual_drive.hub import Hub
-    from virtual_drive.node import spawn_virtual_drive
-
-    store = tmp_path_factory.mktemp("store") / "params.json"
-    with Hub(port=0) as hub:
-        proc = spawn_virtual_drive(port=hub.port, node_id=1, store=store)
-        try:
-            yield hub
-        finally:
-            proc.stop()
-
-
-@pytest.fixture(scope="module")
 def session(hub_drive, tmp_path_factory):
     """Three recorders running while a Drive spins the motor up and captures a trace."""
     d = tmp_path_factory.mktemp("rec")

@@ -27,20 +27,6 @@ pytestmark = pytest.mark.timeout(200)
 CONSUMER_ENTRY = (0x7F << 16) | 1000
 
 
-@pytest.fixture(scope="module")
-def hub_drive(tmp_path_factory):
-    from virtual_drive.hub import Hub
-    from virtual_drive.node import spawn_virtual_drive
-
-    store = tmp_path_factory.mktemp("store") / "params.json"
-    with Hub(port=0) as hub:
-        proc = spawn_virtual_drive(port=hub.port, node_id=1, store=store)
-        try:
-            yield hub
-        finally:
-            proc.stop()
-
-
 def _cmd(hub, *extra: str) -> list[str]:
     return [sys.executable, "-m", "drive_link.cli", "shell", "--host", "127.0.0.1",
             "--port", str(hub.port), *extra]
