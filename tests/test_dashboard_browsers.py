@@ -54,6 +54,7 @@ def pages(api):
         out = []
         for b in browsers:
             pg = b.new_page(viewport=VIEWPORT)
+            pg.set_default_timeout(90_000)  # a busy host stalls the pages for tens of seconds
             pg.goto(url)
             pg.get_by_role("button", name="Enable").wait_for(timeout=60_000)
             out.append(pg)
