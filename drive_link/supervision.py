@@ -16,7 +16,9 @@ the motor could then run with nobody watching the host. :class:`Supervisor`:
   the rest of the journal (PDOs by the CiA 301 procedure: COB-ID invalid, mapping count 0,
   entries, count, COB-ID), then opens the gate.
 
-Times: ``wait_timeout`` (s) bounds how long a user command waits for a re-arm; after a failed
+Times: ``wait_timeout`` (s, default 15: a re-arm is several SDO writes, each with a ~5.7 s
+resend budget; 5 s ran out with the drive starved at run-queue wait 0.63 s/s) bounds how long a
+user command waits for a re-arm; after a failed
 re-arm user commands raise :class:`SupervisionError` until :meth:`Supervisor.rearm` succeeds.
 """
 
@@ -172,7 +174,7 @@ class Supervisor:
         network: canopen.Network,
         node_id: int,
         restart_producer: Callable[[], None] | None = None,
-        wait_timeout: float = 5.0,
+        wait_timeout: float = 15.0,
         gap_factor: float = 3.0,
     ):
         self.node_id = node_id
