@@ -67,7 +67,7 @@ def text(page) -> str:
     return page.inner_text("body")
 
 
-def wait_text(page, pattern: str, timeout: float = 30.0) -> re.Match:
+def wait_text(page, pattern: str, timeout: float = 60.0) -> re.Match:
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         m = re.search(pattern, text(page))
