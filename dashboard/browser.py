@@ -24,6 +24,7 @@ __all__ = [
     "dismiss_notifications",
     "free_port",
     "launch",
+    "open_bench",
     "run_dashboard",
     "stop_process",
     "text_input",
@@ -51,6 +52,31 @@ def free_port() -> int:
 def launch(playwright: Any) -> Any:
     """Headless /usr/bin/chromium from a ``sync_playwright()`` handle; returns the Browser."""
     return playwright.chromium.launch(executable_path=CHROMIUM, args=list(FLAGS), headless=True)
+
+
+def open_bench(page: Any, url: str, timeout: float = 240.0) -> float:
+    """Open the bench page at ``url`` and wait until it is usable (the Enable button shown).
+
+    ``timeout`` in s. A starved host (load 20 on two cores: software WebGL, the viser bundle
+    parsed at a tenth of a core) has kept a page past 60 s; if the button is not there half-way,
+    the page is loaded again once (a page whose first websocket attempt timed out stays blank).
+    Returns the s it took; raises ``TimeoutError`` with what the page shows otherwise."""
+    t0 = time.monotonic()
+    enable = page.get_by_role("button", name="Enable")
+    last: Exception | None = None
+    for k in (1, 2):
+        until = t0 + timeout * k / 2  # first load: half the time; the second: the rest
+        try:
+            page.goto(url, timeout=max(until - time.monotonic(), 1.0) * 1000)
+            enable.wait_for(timeout=max(until - time.monotonic(), 1.0) * 1000)
+            return time.monotonic() - t0
+        except Exception as exc:  # Playwright's TimeoutError
+            last = exc
+    shown = page.evaluate("() => document.body ? document.body.innerText.slice(0, 300) : ''")
+    raise TimeoutError(
+        f"bench page {url} not usable after {time.monotonic() - t0:.0f} s (two loads); "
+        f"it shows: {shown!r}"
+    ) from last
 
 
 def stop_process(proc: subprocess.Popen, timeout: float = 10.0) -> None:

@@ -16,7 +16,7 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
-from dashboard.browser import click, dismiss_notifications, launch, run_dashboard
+from dashboard.browser import click, dismiss_notifications, launch, open_bench, run_dashboard
 
 __all__ = ["SCROLL_TOP", "VIEWPORT", "main", "take"]
 
@@ -47,8 +47,7 @@ def take(out: Path, scene_3d: bool = True, settle_s: float = 0.2) -> None:
         browser = launch(p)
         try:
             page = browser.new_page(viewport=VIEWPORT)
-            page.goto(dash.gui_url)
-            page.get_by_role("button", name="Enable").wait_for(timeout=30_000)
+            open_bench(page, dash.gui_url)
             click(page, page.get_by_role("button", name="Enable"))
             page.get_by_text("OPERATION ENABLED").first.wait_for(timeout=20_000)
             time.sleep(0.5)

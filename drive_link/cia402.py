@@ -61,6 +61,7 @@ __all__ = [
     "OPERATION_ENABLED",
     "QUICK_STOP_ACTIVE",
     "READY_TO_SWITCH_ON",
+    "STATE_TIMEOUT_S",
     "SWITCHED_ON",
     "SWITCH_ON_DISABLED",
     "SW_INTERNAL_LIMIT",
@@ -71,6 +72,12 @@ __all__ = [
     "mode_name",
     "state_from_statusword",
 ]
+
+#: Default bound of one state change, s. The drive itself answers within a few ms; the rest is
+#: the link: a state change is several SDO round trips, and each lost frame costs a resend after
+#: 0.3 s, 0.6 s, 1.2 s (:class:`drive_link.sdo.SdoChannel`). 3 s ran out at 5 % frame loss on a
+#: busy host (full suite, CI); 10 s bounds a refusal just as well.
+STATE_TIMEOUT_S = 10.0
 
 #: modes_of_operation (0x6060) values by host name (values from the EDS enumeration).
 MODES: dict[str, int] = {
@@ -131,7 +138,7 @@ class StateMachine:
         self.write_controlword(cw)
         return self._wait(targets, timeout, what)
 
-    def enable(self, timeout: float = 3.0) -> str:
+    def enable(self, timeout: float = STATE_TIMEOUT_S) -> str:
         """Go to OPERATION ENABLED via the shortest legal path (transitions 2, 3, 4 / 16)."""
         deadline = time.monotonic() + timeout
         what = "enable"
@@ -161,7 +168,7 @@ class StateMachine:
             return state
         raise DriveTimeout(f"enable: drive stayed in {state} for {timeout:g} s")
 
-    def disable(self, timeout: float = 3.0) -> str:
+    def disable(self, timeout: float = STATE_TIMEOUT_S) -> str:
         """Disable the power stage: OPERATION ENABLED → SWITCHED ON (transition 5).
 
         From QUICK STOP ACTIVE the voltage is disabled instead (transition 12).
@@ -175,13 +182,13 @@ class StateMachine:
             CW_DISABLE_OPERATION, (SWITCHED_ON, SWITCH_ON_DISABLED), timeout, "disable"
         )
 
-    def disable_voltage(self, timeout: float = 3.0) -> str:
+    def disable_voltage(self, timeout: float = STATE_TIMEOUT_S) -> str:
         """Go to SWITCH ON DISABLED (transitions 7, 9, 10, 12)."""
         if self.state in (SWITCH_ON_DISABLED, FAULT):
             return self.state
         return self._step(CW_DISABLE_VOLTAGE, (SWITCH_ON_DISABLED,), timeout, "disable voltage")
 
-    def quick_stop(self, timeout: float = 3.0) -> str:
+    def quick_stop(self, timeout: float = STATE_TIMEOUT_S) -> str:
         """Quick stop (transition 11); returns QUICK STOP ACTIVE or, after the stop,
         SWITCH ON DISABLED (quick_stop_option_code 0..4)."""
         state = self.state
@@ -191,7 +198,7 @@ class StateMachine:
             CW_QUICK_STOP, (QUICK_STOP_ACTIVE, SWITCH_ON_DISABLED), timeout, "quick stop"
         )
 
-    def fault_reset(self, timeout: float = 3.0) -> str:
+    def fault_reset(self, timeout: float = STATE_TIMEOUT_S) -> str:
         """Reset a fault (transition 15: rising edge of controlword bit 7) to SWITCH ON DISABLED."""
         state = self.state
         if state not in (FAULT, FAULT_REACTION_ACTIVE):

@@ -484,19 +484,19 @@ class Drive:
         """Active mode: "speed", "current", "torque" (or "mode N")."""
         return cia402.mode_name(int(self.read("modes_of_operation_display")))
 
-    def enable(self, timeout: float = 3.0) -> str:
+    def enable(self, timeout: float = cia402.STATE_TIMEOUT_S) -> str:
         """Go to OPERATION ENABLED; :class:`DriveTimeout` / :class:`StateError` otherwise."""
         return self.sm.enable(timeout)
 
-    def disable(self, timeout: float = 3.0) -> str:
+    def disable(self, timeout: float = cia402.STATE_TIMEOUT_S) -> str:
         """Disable operation (power stage off, OPERATION ENABLED → SWITCHED ON)."""
         return self.sm.disable(timeout)
 
-    def quick_stop(self, timeout: float = 3.0) -> str:
+    def quick_stop(self, timeout: float = cia402.STATE_TIMEOUT_S) -> str:
         """Quick stop (ramp down per quick_stop_option_code)."""
         return self.sm.quick_stop(timeout)
 
-    def fault_reset(self, timeout: float = 3.0) -> str:
+    def fault_reset(self, timeout: float = cia402.STATE_TIMEOUT_S) -> str:
         """Reset a fault (→ SWITCH ON DISABLED); :class:`StateError` if the fault persists."""
         return self.sm.fault_reset(timeout)
 

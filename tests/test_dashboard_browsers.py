@@ -23,7 +23,7 @@ import pytest
 from fastapi.testclient import TestClient
 
 from dashboard.app import create_app
-from dashboard.browser import CHROMIUM, click, launch, text_input
+from dashboard.browser import CHROMIUM, click, launch, open_bench, text_input
 from dashboard.config import BenchConfig
 from dashboard.gui import LEASE_GRACE_S
 
@@ -55,8 +55,7 @@ def pages(api):
         for b in browsers:
             pg = b.new_page(viewport=VIEWPORT)
             pg.set_default_timeout(90_000)  # a busy host stalls the pages for tens of seconds
-            pg.goto(url)
-            pg.get_by_role("button", name="Enable").wait_for(timeout=60_000)
+            open_bench(pg, url)
             out.append(pg)
         yield out
         for b in browsers:

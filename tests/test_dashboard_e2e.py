@@ -28,6 +28,7 @@ from dashboard.browser import (
     click,
     dismiss_notifications,
     launch,
+    open_bench,
     run_dashboard,
     text_input,
 )
@@ -38,7 +39,7 @@ TS, R, L = 20e-6, 6.2e-3, 14.8e-6
 VIEWPORT = {"width": 1280, "height": 800}
 
 pytestmark = [
-    pytest.mark.timeout(300),  # one Chromium start-up and page load take up to ~70 s at load 20-30
+    pytest.mark.timeout(420),  # one Chromium start-up and page load take up to ~70 s at load 20-30
     pytest.mark.skipif(not os.path.exists(CHROMIUM), reason="needs Debian's chromium"),
 ]
 
@@ -62,8 +63,7 @@ def page(bench):
         pg.requested = []
         pg.on("request", lambda r: pg.requested.append(r.url))
         pg.on("websocket", lambda ws: pg.requested.append(ws.url))
-        pg.goto(bench[0])
-        pg.get_by_role("button", name="Enable").wait_for(timeout=90_000)  # busy host: > 30 s
+        open_bench(pg, bench[0])
         yield pg
         browser.close()
 
