@@ -16,7 +16,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from firmware_protocol import abort_codes
+from firmware_protocol import abort_codes, emcy_codes
+from firmware_protocol.enums import StoreStatus
+from firmware_protocol.index_ranges import SIMULATION
 
 from . import cia402
 from .drive import Drive
@@ -34,6 +36,8 @@ ABORT_READ_ONLY = abort_codes.WRITE_READ_ONLY
 ABORT_NO_OBJECT = abort_codes.NO_OBJECT
 ABORT_LENGTH = abort_codes.LENGTHS
 ABORT_STATE = abort_codes.DEVICE_STATE
+HEARTBEAT_LOSS = emcy_codes.HEARTBEAT_LOSS
+DATA_SET_LOST = emcy_codes.DATA_SET_LOST
 
 
 class CheckFailed(Exception):  # noqa: N818
@@ -570,16 +574,17 @@ def item_heartbeat_consumer(d: Drive, opts: dict) -> str:
         codes: list[int] = []
         while time.monotonic() < deadline:
             codes = [e.code for e in d.emcy_history[n_emcy:]]
-            if 0x8130 in codes and d.state != cia402.OPERATION_ENABLED:
+            if HEARTBEAT_LOSS in codes and d.state != cia402.OPERATION_ENABLED:
                 break
             time.sleep(0.02)
         state = d.state
-        if 0x8130 not in codes:  # the EMCY is one unconfirmed frame: 0x1003 keeps the error too
+        if HEARTBEAT_LOSS not in codes:  # the EMCY is one unconfirmed frame: 0x1003 keeps it too
             now = [e.code for e in d.error_history()]
-            if now != logged and 0x8130 in now[: max(1, len(now) - len(logged))]:
-                codes.append(0x8130)
+            if now != logged and HEARTBEAT_LOSS in now[: max(1, len(now) - len(logged))]:
+                codes.append(HEARTBEAT_LOSS)
         _expect(
-            0x8130 in codes, f"no EMCY 0x8130 after heartbeat loss (got {[hex(c) for c in codes]})"
+            HEARTBEAT_LOSS in codes,
+            f"no EMCY 0x{HEARTBEAT_LOSS:04X} after heartbeat loss (got {[hex(c) for c in codes]})",
         )
         _expect(
             state != cia402.OPERATION_ENABLED, "drive still OPERATION ENABLED after heartbeat loss"
@@ -589,7 +594,7 @@ def item_heartbeat_consumer(d: Drive, opts: dict) -> str:
             prod.stop()
         d.write("consumer_heartbeat_time.consumer_1", 0)
         _to_switch_on_disabled(d)
-    return f"EMCY 0x8130 and reaction to {state} after heartbeat loss"
+    return f"EMCY 0x{HEARTBEAT_LOSS:04X} and reaction to {state} after heartbeat loss"
 
 
 # --------------------------------------------------------------------------- issue 10 items
@@ -837,7 +842,7 @@ def _config_only_names(d: Drive) -> list[str]:
         o.name
         for o in d.table
         if getattr(o.entry, "config_only", False)
-        and not 0x5000 <= o.index <= 0x5FFF
+        and o.index not in SIMULATION
         and o.writable
         and o.fmt
     ]
@@ -892,21 +897,24 @@ def item_config_only(d: Drive, opts: dict) -> str:
 def item_store_status(d: Drive, opts: dict) -> str:
     """0x2060 store_status (U8 ro: 0 ok, 1 defaults, 2 damaged, 3 unreadable); on 2/3 the drive
     has sent EMCY 0x6310 and keeps error register bit 0 and the entry in 0x1003."""
+    obj = d.table["store_status"]
+    where = f"0x{obj.index:04X} store_status"
     try:
-        raw = d.sdo.upload(0x2060, 0, "store_status")
+        raw = d.sdo.upload(obj.index, obj.subindex, obj.name)
     except SdoAbort as exc:
-        raise CheckFailed(
-            f"0x2060 store_status not readable: abort 0x{exc.code:08X} ({exc.meaning})"
-        ) from None
-    _expect(len(raw) == 1, f"0x2060 is {len(raw)} bytes, expected 1 (U8)")
+        raise CheckFailed(f"{where} not readable: abort 0x{exc.code:08X} ({exc.meaning})") from None
+    _expect(len(raw) == 1, f"{where} is {len(raw)} bytes, expected 1 (U8)")
     value = raw[0]
-    _expect(value in (0, 1, 2, 3), f"0x2060 = {value}, expected 0..3")
-    name = {0: "ok", 1: "defaults", 2: "damaged", 3: "unreadable"}[value]
-    if value in (2, 3):
+    _expect(value in set(StoreStatus), f"{where} = {value}, expected 0..3")
+    name = StoreStatus(value).name.lower()
+    if value in (StoreStatus.DAMAGED, StoreStatus.UNREADABLE):
         reg = int(d.read("error_register"))
         _expect(bool(reg & 0x01), f"store {name} but error register 0x{reg:02X} lacks bit 0")
         codes = [e.code for e in d.error_history()]
-        _expect(0x6310 in codes, f"store {name} but no 0x6310 in 0x1003 ({codes})")
+        _expect(
+            DATA_SET_LOST in codes,
+            f"store {name} but no 0x{DATA_SET_LOST:04X} in 0x1003 ({codes})",
+        )
     return f"store_status = {value} ({name})"
 
 

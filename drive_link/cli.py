@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 from firmware_protocol import abort_codes
+from firmware_protocol.index_ranges import PDO_PARAMETERS
 
 from . import connection, od_select, units
 from .cia402 import FAULT, FAULT_REACTION_ACTIVE, OPERATION_ENABLED
@@ -1101,19 +1102,23 @@ def _apply_step_defaults(args: argparse.Namespace) -> None:
 _ABORT_STATE = abort_codes.DEVICE_STATE
 
 
+#: The trace recorder's objects: refused while a recording is armed.
+_TRACE_OBJECTS = ("trace_config", "trace_channels", "trace_data")
+
+
 def _state_hint(exc: SdoAbort) -> str:
     """The fix for an object the drive refused in its present state (abort 0x08000022)."""
     from .objects import default_table
 
     table = default_table()
     obj = table.by_index(exc.index, exc.subindex)
-    if exc.index == 0x6060:
+    if obj is not None and obj.name == "modes_of_operation":
         return "the mode changes only with the power stage off: run `drive-link disable` first"
     if obj is not None and obj.entry.config_only:
         return "this object is written only with the power stage off: `drive-link disable` first"
-    if 0x1400 <= exc.index <= 0x1BFF:
+    if exc.index in PDO_PARAMETERS:
         return "PDO settings change only in PRE-OPERATIONAL: `drive-link nmt pre-operational` first"
-    if 0x2100 <= exc.index <= 0x2103:
+    if obj is not None and obj.entry.object_name in _TRACE_OBJECTS:
         return "a trace recording is armed: wait for it (or `drive-link trace`) before changing it"
     return "the drive does not accept it in its present state (see `drive-link status`)"
 

@@ -35,6 +35,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from firmware_protocol import EDS_PATH
+from firmware_protocol.index_ranges import MANUFACTURER
 
 from .errors import DriveError, InvalidValue, StateError
 from .objects import ObjectInfo, ObjectTable, default_table
@@ -66,7 +67,11 @@ def config_objects(table: ObjectTable | None = None) -> list[ObjectInfo]:
     objs = [
         o
         for o in table
-        if o.index >= 0x2000 and o.entry.persistent and o.readable and o.writable and o.fmt
+        if o.index >= MANUFACTURER.start
+        and o.entry.persistent
+        and o.readable
+        and o.writable
+        and o.fmt
     ]
     return sorted(objs, key=lambda o: (o.index, o.subindex))
 

@@ -21,6 +21,7 @@ from typing import Any
 
 import can
 
+from firmware_protocol import load_od
 from firmware_protocol.constraints import CONSTRAINTS
 from firmware_protocol.current_stability import (
     CURRENT_KEYS,
@@ -30,6 +31,7 @@ from firmware_protocol.current_stability import (
 )
 from firmware_protocol.entry import LimitError
 from firmware_protocol.entry import f32 as _f32
+from firmware_protocol.enums import StoreStatus
 
 from . import cia402, connection
 from .emcy import Emcy, EmcyListener
@@ -53,9 +55,9 @@ __all__ = [
 ]
 
 SAVE_SIGNATURE = 0x65766173  # "save"
-#: 0x2060 store_status (U8, ro) values → name (docs: virtual_drive/node/README.md, OD.md).
-STORE_STATUS: dict[int, str] = {0: "ok", 1: "defaults", 2: "damaged", 3: "unreadable"}
-STORE_STATUS_INDEX = 0x2060
+#: 0x2060 store_status (U8, ro) values → name (the EDS enumeration, :class:`StoreStatus`).
+STORE_STATUS: dict[int, str] = {int(s): s.name.lower() for s in StoreStatus}
+STORE_STATUS_INDEX = load_od().entry("store_status").index
 LOAD_SIGNATURE = 0x64616F6C  # "load"
 _LOOP_NAMES = frozenset(
     [f"current_controller.{k}" for k in CURRENT_KEYS]

@@ -10,6 +10,8 @@ from typing import Any
 
 import can
 
+from firmware_protocol import load_od
+
 from . import connection
 from .errors import BusError
 from .nmt import NMT_STATES
@@ -47,7 +49,9 @@ RE_PROBES = 3
 #: Extra wait (s) after ``timeout`` for the heartbeat of nodes that answered SDO.
 HEARTBEAT_WAIT = 1.5
 
-_PROBE = bytes([0x40, 0x00, 0x10, 0x00, 0, 0, 0, 0])  # upload request 0x1000:00
+_DEVICE_TYPE = load_od().entry("device_type")
+#: SDO initiate-upload request (command 0x40) for device_type (0x1000:00).
+_PROBE = struct.pack("<BHB4x", 0x40, _DEVICE_TYPE.index, _DEVICE_TYPE.subindex)
 
 
 def scan(
@@ -76,7 +80,7 @@ def scan(
         if len(data) < 8:
             return
         cs, index, sub = struct.unpack_from("<BHB", data)
-        if index != 0x1000 or sub != 0:
+        if (index, sub) != (_DEVICE_TYPE.index, _DEVICE_TYPE.subindex):
             return
         with lock:
             info = found.setdefault(nid, NodeInfo(nid))

@@ -35,6 +35,9 @@ from typing import Any
 
 import canopen
 
+from firmware_protocol import load_od
+from firmware_protocol.index_ranges import COMMUNICATION, RPDO_COMM, RPDO_MAP, TPDO_COMM, TPDO_MAP
+
 from .errors import DriveError, StateError
 from .sdo import SdoChannel
 
@@ -56,9 +59,9 @@ __all__ = [
 #: Communication objects never replayed: error history, store/restore commands, read-only
 #: identity and error objects.
 NOT_JOURNALLED = frozenset({0x1001, 0x1002, 0x1003, 0x1010, 0x1011})
-ABORT_CONNECTION_OPTION = 0x6007
-CONSUMER_HEARTBEAT = 0x1016
-PRODUCER_HEARTBEAT = 0x1017
+ABORT_CONNECTION_OPTION = load_od().entry("abort_connection_option_code").index
+CONSUMER_HEARTBEAT = load_od().entry("consumer_heartbeat_time.consumer_1").index
+PRODUCER_HEARTBEAT = load_od().entry("producer_heartbeat_time").index
 #: First replayed, in this order: the reaction, then the watch itself, then the drive's heartbeat.
 SUPERVISION_FIRST = (ABORT_CONNECTION_OPTION, CONSUMER_HEARTBEAT, PRODUCER_HEARTBEAT)
 
@@ -74,7 +77,7 @@ class SupervisionError(StateError):
 
 def journalled(index: int) -> bool:
     """True if a write to ``index`` is part of the session's supervision/communication setup."""
-    return (0x1000 <= index <= 0x1FFF and index not in NOT_JOURNALLED) or (
+    return (index in COMMUNICATION and index not in NOT_JOURNALLED) or (
         index == ABORT_CONNECTION_OPTION
     )
 
@@ -85,7 +88,7 @@ def _now_iso() -> str:
 
 def _pdo_group(index: int) -> tuple[str, int] | None:
     """("rpdo"|"tpdo", k) for the communication/mapping parameter objects of PDO k (0-based)."""
-    for base_comm, base_map, kind in ((0x1400, 0x1600, "rpdo"), (0x1800, 0x1A00, "tpdo")):
+    for base_comm, base_map, kind in ((RPDO_COMM, RPDO_MAP, "rpdo"), (TPDO_COMM, TPDO_MAP, "tpdo")):
         if base_comm <= index < base_comm + 0x200:
             return kind, index - base_comm
         if base_map <= index < base_map + 0x200:
@@ -511,8 +514,8 @@ def write_pdo_group(
     invalidate the PDO, clear its mapping, write the entries, the count, the other
     communication parameters and finally the COB-ID (unsupervised transfers)."""
     kind, k = group
-    comm = (0x1400 if kind == "rpdo" else 0x1800) + k
-    mapping = (0x1600 if kind == "rpdo" else 0x1A00) + k
+    comm = (RPDO_COMM if kind == "rpdo" else TPDO_COMM) + k
+    mapping = (RPDO_MAP if kind == "rpdo" else TPDO_MAP) + k
     cob_key = (comm, 1)
     try:
         cob = values.get(cob_key) or SdoChannel.upload(sdo, comm, 1)[:4]

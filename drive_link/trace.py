@@ -17,6 +17,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from firmware_protocol import load_od
+from firmware_protocol.enums import TraceState, TraceTriggerEdge, TraceTriggerMode
+
 from .errors import DriveTimeout, InvalidValue, StateError
 
 __all__ = [
@@ -37,11 +40,14 @@ if TYPE_CHECKING:
 #: Control-loop sampling period of the drive, s (fs = 50 kHz; overview "control law").
 TS = 20e-6
 
-TRIGGER_MODES: dict[str, int] = {"immediate": 0, "signal": 1, "setpoint_step": 2, "fault": 3}
-TRIGGER_EDGES: dict[str, int] = {"rising": 0, "falling": 1, "either": 2}
-STATES: dict[int, str] = {0: "idle", 1: "armed", 2: "recording", 3: "done"}
+#: trace_config.trigger_mode / trigger_edge values by host name, trace_config.state names
+#: (the EDS enumerations, :mod:`firmware_protocol.enums`).
+TRIGGER_MODES: dict[str, int] = {m.name.lower(): int(m) for m in TraceTriggerMode}
+TRIGGER_EDGES: dict[str, int] = {e.name.lower(): int(e) for e in TraceTriggerEdge}
+STATES: dict[int, str] = {int(s): s.name.lower() for s in TraceState}
 
-TRACE_DATA = (0x2102, 0x00)
+_TRACE_DATA_ENTRY = load_od().entry("trace_data")
+TRACE_DATA = (_TRACE_DATA_ENTRY.index, _TRACE_DATA_ENTRY.subindex)
 
 
 @dataclass

@@ -7,18 +7,12 @@ from . import current_stability, stability
 from .cob_id import RESTRICTED_CAN_IDS
 from .emcy_codes import EMCY_CODES
 from .entry import Entry
+from .index_ranges import RANGES, RPDO_MAP, TPDO_MAP
 from .od import ObjectDictionaryView
 
 __all__ = ["MARKDOWN_NAME", "render_markdown"]
 
 MARKDOWN_NAME = "OD.md"
-
-_RANGES = (
-    (0x1000, 0x1FFF, "CiA 301 communication objects (0x1000-0x1FFF)"),
-    (0x2000, 0x4FFF, "Manufacturer objects, real firmware and virtual drive (0x2000-0x4FFF)"),
-    (0x5000, 0x5FFF, "Virtual-drive-only objects (0x5000-0x5FFF, not on the real firmware)"),
-    (0x6000, 0x9FFF, "CiA 402 drive profile objects (0x6000-0x9FFF)"),
-)
 
 
 def _md(text: object) -> str:
@@ -48,8 +42,8 @@ def render_markdown(view: ObjectDictionaryView) -> str:
     add("Limits are inclusive static limits; `$NODEID` defaults are shown for node-ID 1.")
     add("A nonzero REAL32 must be a normal float32 (|x| >= 1.18e-38; subnormals abort 0x06090030).")
     add("PDO = may be mapped into a PDO (and recorded by the trace).")
-    for low, high, title in _RANGES:
-        rows = [e for e in view.entries if low <= e.index <= high]
+    for index_range, title in RANGES:
+        rows = [e for e in view.entries if e.index in index_range]
         if not rows:
             continue
         add("")
@@ -83,7 +77,7 @@ def render_markdown(view: ObjectDictionaryView) -> str:
     add("")
     add("| PDO | COB-ID | transmission type | event timer | mapped objects (bits) |")
     add("|---|---|---|---|---|")
-    for kind, map_base in (("RPDO", 0x1600), ("TPDO", 0x1A00)):
+    for kind, map_base in (("RPDO", RPDO_MAP), ("TPDO", TPDO_MAP)):
         for n in range(512):
             mapping = map_base + n
             try:
