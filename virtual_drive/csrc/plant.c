@@ -120,82 +120,13 @@ int plant_advance(plant_t *p, const int mode[3], const double v_drv[3], double d
     int nseg = 0;
     const double Vd = p->V_dc, VG = p->V_G;
     const double r_over_l = p->r_over_l, inv_r = p->inv_r;
-    /* Fast path for the six-step case (same physics as the general loop below, specialised):
-     * legs a, b driven, leg z open, no switch drop.  Leg z either floats (i_z = 0, case B,
-     * while its open-circuit voltage stays inside the rails) or conducts through one diode
-     * (case A) until its current reaches zero. */
+    /* The six-step case (legs a < b driven, leg z open, no switch drop) is solved by
+     * plant_advance_six_step, the one home of its per-interval update. */
     if (VG == 0.0) {
         int z = (mode[0] == PLANT_OPEN) ? 0 : ((mode[1] == PLANT_OPEN) ? 1 : 2);
         int a = (z == 0) ? 1 : 0, b = (z == 2) ? 1 : 2;
         if (mode[z] == PLANT_OPEN && mode[a] == PLANT_DRIVEN && mode[b] == PLANT_DRIVEN) {
-            const double *e = p->e_seg;
-            const double va = v_drv[a], vb = v_drv[b];
-            while (remaining > 1e-15 && iter < 24) {
-                double Phi, G, t_seg = remaining, ia0 = p->i[a], ib0 = p->i[b], iz0 = p->i[z];
-                double ia1, ib1, iz1, vz, ai;
-                int dz;
-                ++iter;
-                if (iz0 > I_EPS) {
-                    dz = 1;
-                } else if (iz0 < -I_EPS) {
-                    dz = -1;
-                } else {
-                    double v_open = 0.5 * (va + vb - e[a] - e[b]) + e[z];
-                    iz0 = 0.0;
-                    dz = (v_open > Vd) ? -1 : ((v_open < 0.0) ? 1 : 0);
-                }
-                if (dz == 0) { /* case B: one loop current through a and b */
-                    double ul = 0.5 * (va - vb - e[a] + e[b]);
-                    phi_g(r_over_l, inv_r, t_seg, &Phi, &G);
-                    ia1 = Phi * ia0 + G * ul;
-                    ib1 = -ia1;
-                    iz1 = 0.0;
-                    ia0 = 0.5 * (ia0 - ib0);
-                } else { /* case A: leg z clamped by its diode */
-                    double vn, ua, ub, uz;
-                    vz = (dz > 0) ? 0.0 : Vd;
-                    vn = (va + vb + vz - e[0] - e[1] - e[2]) * (1.0 / 3.0);
-                    ua = va - vn - e[a];
-                    ub = vb - vn - e[b];
-                    uz = vz - vn - e[z];
-                    if (uz * dz < 0.0 && iz0 != 0.0
-                        && fabs(iz0) * p->L < t_seg * (fabs(uz) + p->R * fabs(iz0))) {
-                        double t_star = log1p(-iz0 * p->R / uz) / r_over_l;
-                        if (t_star < t_seg) {
-                            t_seg = t_star;
-                        }
-                    }
-                    phi_g(r_over_l, inv_r, t_seg, &Phi, &G);
-                    iz1 = (t_seg < remaining) ? 0.0 : Phi * iz0 + G * uz;
-                    ia1 = Phi * ia0 + G * ua;
-                    ib1 = Phi * ib0 + G * ub;
-                    { /* star constraint against rounding */
-                        double r = 0.5 * (ia1 + ib1 + iz1);
-                        ia1 -= r;
-                        ib1 -= r;
-                    }
-                }
-                p->Te_int += p->k_e * 0.5 * t_seg
-                             * (p->F_seg[a] * (ia0 + ia1) + p->F_seg[b] * (ib0 + ib1)
-                                + p->F_seg[z] * (iz0 + iz1));
-                p->i[a] = ia1;
-                p->i[b] = ib1;
-                p->i[z] = iz1;
-                ai = fabs(ia1) > fabs(ib1) ? fabs(ia1) : fabs(ib1);
-                if (fabs(iz1) > ai) {
-                    ai = fabs(iz1);
-                }
-                if (ai > p->i_abs_max) {
-                    p->i_abs_max = ai;
-                }
-                if (!(ai == ai) || ai > 1e12) {
-                    p->nonfinite = 1;
-                    break;
-                }
-                remaining -= t_seg;
-                ++nseg;
-            }
-            return nseg;
+            return plant_advance_six_step(p, z, &v_drv[a], &v_drv[b], &dt, 1);
         }
     }
     while (remaining > 1e-15 && iter < 24) {
