@@ -75,7 +75,7 @@ __all__ = [
 
 #: Default bound of one state change, s. The drive itself answers within a few ms; the rest is
 #: the link: a state change is several SDO round trips, and each lost frame costs a resend after
-#: 0.3 s, 0.6 s, 1.2 s (:class:`drive_link.sdo.SdoChannel`). 3 s ran out at 5 % frame loss on a
+#: 0.3 s, 0.6 s, 1.2 s (:class:`drive_link._sdo.SdoChannel`). 3 s ran out at 5 % frame loss on a
 #: busy host (full suite, CI); 10 s bounds a refusal just as well.
 STATE_TIMEOUT_S = 10.0
 

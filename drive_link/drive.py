@@ -3,11 +3,11 @@
 It does not know (nor ask) whether the node is the DSP or the virtual drive: everything goes
 through the object dictionary of docs/contracts.md §1.
 
-Built on canopen's :class:`~canopen.RemoteNode` (``Drive.node``, see :mod:`drive_link.remote`):
+Built on canopen's :class:`~canopen.RemoteNode` (``Drive.node``, see :mod:`drive_link._remote`):
 NMT commands (``node.nmt``), the EMCY consumer (``node.emcy``), the TPDO configuration
 (``node.tpdo.read()``) and value encoding (the OD's ``ODVariable``) are canopen's. Kept as thin
-layers of our own: the per-channel SDO lock with resends (:mod:`drive_link.sdo`, also serving
-``node.sdo``), the block-upload client (:mod:`drive_link.sdo_block`), the NMT state / OFFLINE
+layers of our own: the per-channel SDO lock with resends (:mod:`drive_link._sdo`, also serving
+``node.sdo``), the block-upload client (:mod:`drive_link._sdo_block`), the NMT state / OFFLINE
 detection from heartbeats (:mod:`drive_link.nmt`) and the supervision re-arm
 (:mod:`drive_link.supervision`).
 """
@@ -34,13 +34,13 @@ from firmware_protocol.entry import f32 as _f32
 from firmware_protocol.enums import StoreStatus
 
 from . import cia402, connection
+from ._remote import remote_node
+from ._sdo import SdoChannel
 from .emcy import Emcy, EmcyListener
 from .errors import DriveError, DriveTimeout, InvalidValue, NodeNotFound, StateError
 from .live import LiveStreams, TpdoConfig, read_tpdo_configs
 from .nmt import HeartbeatMonitor, HeartbeatProducer, send_command
 from .objects import ObjectInfo, ObjectTable, default_table
-from .remote import remote_node
-from .sdo import SdoChannel
 from .supervision import SupervisedSdoChannel, Supervisor
 from .trace import Recorder
 

@@ -78,7 +78,7 @@ class SdoFollower:
     ((index, sub) → raw bytes), completed block and segmented uploads into ``uploads``
     (a segment repeating the previous toggle bit is the answer to a resent request: dropped).
 
-    Block uploads are followed as the client takes them (:mod:`drive_link.sdo_block`): a
+    Block uploads are followed as the client takes them (:mod:`drive_link._sdo_block`): a
     sub-block starts at seqno 1 (segments still arriving from the previous one are dropped),
     the acknowledgement's ``ackseq`` says how many segments count, and an acknowledgement that
     repeats the previous one's number (reserved byte 3, drive_link's extension; 0 = none) is a

@@ -38,8 +38,8 @@ import canopen
 from firmware_protocol import load_od
 from firmware_protocol.index_ranges import COMMUNICATION, RPDO_COMM, RPDO_MAP, TPDO_COMM, TPDO_MAP
 
+from ._sdo import SdoChannel
 from .errors import DriveError, StateError
-from .sdo import SdoChannel
 
 __all__ = [
     "ABORT_CONNECTION_OPTION",

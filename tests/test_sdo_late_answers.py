@@ -14,7 +14,7 @@ import struct
 import pytest
 from canopen.sdo.exceptions import SdoAbortedError
 
-from drive_link import sdo_segmented
+from drive_link import _sdo_segmented as sdo_segmented
 
 pytestmark = pytest.mark.timeout(30)
 
@@ -31,7 +31,7 @@ def _upload_answer(value: float) -> bytes:
 
 
 class _ScriptedClient:
-    """Just what :mod:`drive_link.sdo_segmented` uses of canopen's ``SdoClient``: ``rx_cobid``,
+    """Just what :mod:`drive_link._sdo_segmented` uses of canopen's ``SdoClient``: ``rx_cobid``,
     ``responses`` and ``network.send_message``; ``script[k]`` = frames queued after the k-th
     request."""
 

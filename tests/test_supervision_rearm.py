@@ -19,7 +19,7 @@ import pytest
 from can.interfaces.virtual import VirtualBus
 
 from drive_link import Drive
-from drive_link.sdo import SdoChannel
+from drive_link._sdo import SdoChannel
 from drive_link.supervision import SupervisionError
 
 pytestmark = pytest.mark.timeout(90)

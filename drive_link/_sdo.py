@@ -8,7 +8,7 @@ upload never blocks status reads.
 Two levels of recovery:
 
 - a request that gets no answer is sent again (``retries`` times, waiting ``timeout``,
-  2 × ``timeout``, … s; :mod:`drive_link.sdo_segmented`, :mod:`drive_link.sdo_block`); block
+  2 × ``timeout``, … s; :mod:`drive_link._sdo_segmented`, :mod:`drive_link._sdo_block`); block
   uploads also recover lost segments through ``ackseq``;
 - a transfer that still breaks in the middle (lost sync, a protocol abort such as 0x05040001,
   0x05040003 or 0x05040004, CRC or length mismatch) is started again from its beginning, up to
@@ -36,10 +36,10 @@ from canopen.sdo.exceptions import SdoAbortedError, SdoCommunicationError
 
 from firmware_protocol import abort_codes
 
-from . import sdo_segmented
+from . import _sdo_segmented
+from ._sdo_block import block_upload
+from ._sdo_segmented import NoAnswer
 from .errors import BusError, DriveTimeout, SdoAbort
-from .sdo_block import block_upload
-from .sdo_segmented import NoAnswer
 
 __all__ = [
     "PROTOCOL_ABORTS",
@@ -179,7 +179,7 @@ class SdoChannel:
         """Read an object (expedited or segmented) and return its raw bytes."""
 
         def go(deadline: float) -> bytes:
-            return sdo_segmented.upload(
+            return _sdo_segmented.upload(
                 self.client, index, subindex, self.client.RESPONSE_TIMEOUT, self.retries
             )
 
@@ -187,10 +187,10 @@ class SdoChannel:
 
     def download(self, index: int, subindex: int, data: bytes, name: str = "") -> None:
         """Write raw bytes to an object (expedited if ≤ 4 bytes, else segmented). A request is
-        sent again only when it got no answer (see :mod:`drive_link.sdo_segmented`)."""
+        sent again only when it got no answer (see :mod:`drive_link._sdo_segmented`)."""
 
         def go(deadline: float) -> None:
-            sdo_segmented.download(
+            _sdo_segmented.download(
                 self.client, index, subindex, bytes(data), self.client.RESPONSE_TIMEOUT,
                 self.retries,
             )  # fmt: skip

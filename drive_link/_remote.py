@@ -6,7 +6,7 @@ canopen's ``RemoteNode`` brings the pieces a host needs — ``node.nmt`` (NMT ma
 lock (canopen #125, #143) and does not resend a lost request. :func:`remote_node` builds the node
 with :class:`NodeSdo` as ``node.sdo``: the same canopen client interface (``upload``,
 ``download``, ``node.sdo[index][sub].raw``), every transfer made by a
-:class:`~drive_link.sdo.SdoChannel` (per-channel lock, resends, restarts). So canopen's own code
+:class:`~drive_link._sdo.SdoChannel` (per-channel lock, resends, restarts). So canopen's own code
 (e.g. ``TPDO.read()``) and ours share one channel and never collide.
 
 ``node.emcy`` is :class:`~drive_link.emcy.EmcyListener` (canopen's consumer, hardened).
@@ -23,15 +23,15 @@ from canopen.pdo import PDO, RPDO, TPDO
 from canopen.sdo import SdoClient
 from canopen.sdo.exceptions import SdoAbortedError
 
+from ._sdo import SdoChannel
 from .emcy import EmcyListener
 from .errors import SdoAbort
-from .sdo import SdoChannel
 
 __all__ = ["NodeSdo", "remote_node"]
 
 
 class NodeSdo(SdoClient):
-    """canopen's SDO client interface on top of a :class:`~drive_link.sdo.SdoChannel`.
+    """canopen's SDO client interface on top of a :class:`~drive_link._sdo.SdoChannel`.
 
     It never listens to the bus itself (the channel does), so canopen callers and ours share
     the channel's lock. Refusals are raised as canopen's :class:`SdoAbortedError` (what canopen's

@@ -24,7 +24,7 @@ Never accepts wrong data: the total length is checked against the size the serve
 and, when the server supports it, the CRC-16/CCITT (``binascii.crc_hqx``, init 0) of the whole
 data. With a server without the extension a late answer can still make it skip a sub-block:
 the length or CRC check then fails with :class:`SdoCommunicationError` and the caller
-(:class:`drive_link.sdo.SdoChannel`) restarts the upload.
+(:class:`drive_link._sdo.SdoChannel`) restarts the upload.
 
 A server without block transfer (abort 0x05040001 to the initiate) or one that switches
 protocol (a normal upload response) is read by segmented upload instead.
@@ -42,7 +42,7 @@ from canopen.sdo.exceptions import SdoAbortedError, SdoCommunicationError
 
 from firmware_protocol import abort_codes
 
-from .sdo_segmented import Exchange, NoAnswer, continue_upload, upload
+from ._sdo_segmented import Exchange, NoAnswer, continue_upload, upload
 
 CCS_BLOCK_UPLOAD = 0xA0  # client command specifier 5
 SCS_BLOCK_UPLOAD = 0xC0  # server command specifier 6
