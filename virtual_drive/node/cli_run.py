@@ -32,8 +32,10 @@ import time
 from pathlib import Path
 
 import can
+import can.cli
 
 __all__ = [
+    "BUS_GROUP_TITLE",
     "add_parser",
     "add_run_arguments",
     "bus_kwargs",
@@ -63,11 +65,39 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     return p
 
 
+#: Title of the bus options' group (the same as drive-link's).
+BUS_GROUP_TITLE = "bus (unset = python-can config / CAN_* environment)"
+
+#: One-line help for python-can's options (its own texts run to several lines each).
+_SHORT_HELP = {
+    "channel": "python-can channel (can0, vcan0; socketcand: the hub's bus)",
+    "interface": "python-can interface (socketcan, socketcand, pcan, virtual, ...)",
+    "bitrate": "bit/s",
+    "fd": "CAN FD",
+    "data_bitrate": "CAN FD data phase bit/s",
+    "timing": "bit timing KEY=VALUE ... (can.BitTiming / BitTimingFd fields)",
+    "bus_kwargs": "KEY=VALUE ... passed on to can.Bus",
+}
+
+#: python-can options :func:`bus_kwargs` passes on to ``can.Bus`` when given.
+_BUS_KEYS = ("interface", "channel", "bitrate", "fd", "data_bitrate", "timing", "host", "port")
+
+
 def add_run_arguments(p: argparse.ArgumentParser) -> None:
-    bus = p.add_argument_group("bus (python-can)")
-    bus.add_argument("-i", "--interface", help="python-can interface, e.g. socketcand, socketcan")
-    bus.add_argument("-c", "--channel", help="channel, e.g. vcan0 (socketcand: the hub's bus)")
-    bus.add_argument("-b", "--bitrate", type=int, help="bit rate, bit/s")
+    """The options of ``virtual-drive run``: python-can's own bus options
+    (:func:`can.cli.add_bus_arguments`, the spelling drive-link shares: ``-i/--interface``,
+    ``-c/--channel``, ``-b/--bitrate``, ``--fd``, ``--data-bitrate``, ``--timing``,
+    ``--bus-kwargs``), the loopback hub's ``--host``/``--port``/``--hub``/``--hub-port``, then
+    the node options."""
+    before = len(p._actions)
+    can.cli.add_bus_arguments(p, group_title=BUS_GROUP_TITLE)
+    for action in p._actions[before:]:
+        action.help = _SHORT_HELP.get(action.dest, action.help)
+        if action.dest == "interface":
+            # no choices: can.Bus names an unknown interface itself (one line, exit 1) and
+            # the usage line stays short
+            action.choices = None
+    bus = p.add_argument_group("loopback hub (socketcand rawmode on 127.0.0.1)")
     bus.add_argument("--host", help="socketcand host (the loopback hub: 127.0.0.1)")
     bus.add_argument("--port", type=int, help="socketcand TCP port")
     bus.add_argument(
@@ -106,12 +136,14 @@ def add_run_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def bus_kwargs(args: argparse.Namespace) -> dict:
-    """``can.Bus`` keyword arguments from the options actually given."""
+    """``can.Bus`` keyword arguments from the options actually given (``--bus-kwargs``
+    merged in; an option not given is absent, so python-can's configuration fills it)."""
     kw: dict = {}
-    for key in ("interface", "channel", "bitrate", "host", "port"):
+    for key in _BUS_KEYS:
         value = getattr(args, key, None)
-        if value is not None:
+        if value is not None and value is not False:
             kw[key] = value
+    kw.update(getattr(args, "bus_kwargs", None) or {})
     return kw
 
 
@@ -228,7 +260,8 @@ def run_command(args: argparse.Namespace) -> int:
         from virtual_drive.hub import Hub
 
         try:
-            hub = Hub(port=args.hub_port, bitrate=args.bitrate or 1_000_000).start()
+            bitrate = getattr(args, "bitrate", None) or 1_000_000
+            hub = Hub(port=args.hub_port, bitrate=bitrate).start()
         except (OSError, ValueError) as exc:
             return _fail(f"cannot start the hub on 127.0.0.1:{args.hub_port}: {exc}")
         args.interface, args.host, args.port = "socketcand", "127.0.0.1", hub.port
