@@ -28,8 +28,8 @@ from firmware_protocol.enums import (
     TraceTriggerMode,
 )
 
+from ._emcy import Emcy
 from .drive import Drive, Gains
-from .emcy import Emcy
 from .errors import (
     BusError,
     DriveError,

@@ -9,9 +9,9 @@ with :class:`NodeSdo` as ``node.sdo``: the same canopen client interface (``uplo
 :class:`~drive_link._sdo.SdoChannel` (per-channel lock, resends, restarts). So canopen's own code
 (e.g. ``TPDO.read()``) and ours share one channel and never collide.
 
-``node.emcy`` is :class:`~drive_link.emcy.EmcyListener` (canopen's consumer, hardened).
+``node.emcy`` is :class:`~drive_link._emcy.EmcyListener` (canopen's consumer, hardened).
 ``node.nmt`` sends NMT commands; the node's NMT *state* is tracked by
-:class:`~drive_link.nmt.HeartbeatMonitor` (see :mod:`drive_link.nmt` for why not canopen's).
+:class:`~drive_link._nmt.HeartbeatMonitor` (see :mod:`drive_link._nmt` for why not canopen's).
 """
 
 from __future__ import annotations
@@ -23,8 +23,8 @@ from canopen.pdo import PDO, RPDO, TPDO
 from canopen.sdo import SdoClient
 from canopen.sdo.exceptions import SdoAbortedError
 
+from ._emcy import EmcyListener
 from ._sdo import SdoChannel
-from .emcy import EmcyListener
 from .errors import SdoAbort
 
 __all__ = ["NodeSdo", "remote_node"]
@@ -71,7 +71,7 @@ def remote_node(
     channel: SdoChannel,
 ) -> canopen.RemoteNode:
     """A ``RemoteNode`` for ``node_id`` on ``network`` with ``node.sdo`` = :class:`NodeSdo` on
-    ``channel`` and ``node.emcy`` = :class:`~drive_link.emcy.EmcyListener`; subscribed to its
+    ``channel`` and ``node.emcy`` = :class:`~drive_link._emcy.EmcyListener`; subscribed to its
     heartbeat (``node.nmt``) and EMCY (0x80 + N) frames. Undo with ``node.remove_network()``.
 
     The node is not added to ``network.nodes``: several sessions may watch one node-ID.

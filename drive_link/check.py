@@ -21,9 +21,9 @@ from firmware_protocol.enums import StoreStatus
 from firmware_protocol.index_ranges import SIMULATION
 
 from . import cia402
+from ._nmt import HeartbeatProducer
 from .drive import Drive
 from .errors import DriveError, DriveTimeout, SdoAbort
-from .nmt import HeartbeatProducer
 
 __all__ = ["ITEMS", "CheckFailed", "CheckResult", "run_checks"]
 

@@ -25,7 +25,7 @@ from typing import Any, NoReturn
 from firmware_protocol import abort_codes
 from firmware_protocol.index_ranges import PDO_PARAMETERS
 
-from . import connection, od_select, units
+from . import _connection, _od_select, units
 from .cia402 import FAULT, FAULT_REACTION_ACTIVE, OPERATION_ENABLED
 from .cli_connect import (
     add_hidden_aliases,
@@ -144,11 +144,11 @@ def _gain_value(name: str, text: str) -> float | int | str:
 def cmd_scan(args: argparse.Namespace) -> int:
     from .scan import scan
 
-    conn = connection.acquire(**bus_settings_from_args(args))  # --fd, --bus-kwargs ... too
+    conn = _connection.acquire(**bus_settings_from_args(args))  # --fd, --bus-kwargs ... too
     try:
         nodes = scan(conn.bus, timeout=_timeout(args, 1.0))
     finally:
-        connection.release(conn)
+        _connection.release(conn)
     data = [
         {
             "node_id": n.node_id,
@@ -194,7 +194,7 @@ def _status_text(st: dict) -> str:
         elif k == "supervision_rearmed_at" and v is None:
             v = "never (no restart seen)"
         elif k == "error_code" and isinstance(v, int):
-            from .emcy import describe
+            from ._emcy import describe
 
             v = f"0x{v:04X} ({describe(v)})" if v else "0x0000"
         elif k in ("statusword", "error_register") and isinstance(v, int):
@@ -301,7 +301,7 @@ def _with_unit(obj: Any, v: Any) -> str:
 
 
 def cmd_read(args: argparse.Namespace, d: Drive) -> int:
-    objs = [od_select.select(n, d.table) for n in args.names]
+    objs = [_od_select.select(n, d.table) for n in args.names]
     out = {o.name: d.read(o.name) for o in objs}
     by_name = {o.name: o for o in objs}
     _emit(
@@ -313,7 +313,7 @@ def cmd_read(args: argparse.Namespace, d: Drive) -> int:
 
 
 def cmd_write(args: argparse.Namespace, d: Drive) -> int:
-    obj = od_select.select(args.name, d.table)
+    obj = _od_select.select(args.name, d.table)
     value = units.parse_for(obj, args.value)
     d.write(obj.name, value)
     back = d.read(obj.name) if obj.readable else value
@@ -322,13 +322,13 @@ def cmd_write(args: argparse.Namespace, d: Drive) -> int:
 
 
 def cmd_objects(args: argparse.Namespace) -> int:
-    objs = od_select.search(args.pattern)
+    objs = _od_select.search(args.pattern)
     if not objs:
         raise InvalidValue(f"no object matches {args.pattern!r} (try a part of a name or 0x20)")
     _emit(
         args,
-        [od_select.describe(o) for o in objs],
-        lambda: od_select.table_text(objs),
+        [_od_select.describe(o) for o in objs],
+        lambda: _od_select.table_text(objs),
     )
     return 0
 

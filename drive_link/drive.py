@@ -8,7 +8,7 @@ NMT commands (``node.nmt``), the EMCY consumer (``node.emcy``), the TPDO configu
 (``node.tpdo.read()``) and value encoding (the OD's ``ODVariable``) are canopen's. Kept as thin
 layers of our own: the per-channel SDO lock with resends (:mod:`drive_link._sdo`, also serving
 ``node.sdo``), the block-upload client (:mod:`drive_link._sdo_block`), the NMT state / OFFLINE
-detection from heartbeats (:mod:`drive_link.nmt`) and the supervision re-arm
+detection from heartbeats (:mod:`drive_link._nmt`) and the supervision re-arm
 (:mod:`drive_link.supervision`).
 """
 
@@ -33,13 +33,13 @@ from firmware_protocol.entry import LimitError
 from firmware_protocol.entry import f32 as _f32
 from firmware_protocol.enums import StoreStatus
 
-from . import cia402, connection
+from . import _connection, cia402
+from ._emcy import Emcy, EmcyListener
+from ._nmt import HeartbeatMonitor, HeartbeatProducer, send_command
 from ._remote import remote_node
 from ._sdo import SdoChannel
-from .emcy import Emcy, EmcyListener
 from .errors import DriveError, DriveTimeout, InvalidValue, NodeNotFound, StateError
 from .live import LiveStreams, TpdoConfig, read_tpdo_configs
-from .nmt import HeartbeatMonitor, HeartbeatProducer, send_command
 from .objects import ObjectInfo, ObjectTable, default_table
 from .supervision import SupervisedSdoChannel, Supervisor
 from .trace import Recorder
@@ -129,7 +129,7 @@ class Drive:
 
     def __init__(
         self,
-        conn: connection.Connection,
+        conn: _connection.Connection,
         node_id: int,
         table: ObjectTable | None = None,
         sdo_timeout: float = 0.3,
@@ -193,7 +193,7 @@ class Drive:
         the drive's consumer (None = none); configure the consumer with
         :meth:`configure_heartbeat_consumer`. Raises :class:`NodeNotFound` if nobody answers.
         """
-        conn = connection.acquire(
+        conn = _connection.acquire(
             bus=bus,
             interface=interface,
             channel=channel,
@@ -205,7 +205,7 @@ class Drive:
         try:
             drive = cls(conn, node_id, sdo_timeout=sdo_timeout, retries=retries)
         except Exception:
-            connection.release(conn)
+            _connection.release(conn)
             raise
         try:
             drive._probe()
@@ -287,7 +287,7 @@ class Drive:
         if self.sdo_trace is not self.sdo:
             self.sdo_trace.close()
         self._conn.active_nodes.pop(self.node_id, None)
-        connection.release(self._conn)
+        _connection.release(self._conn)
 
     def __enter__(self) -> Drive:
         return self
@@ -644,7 +644,7 @@ class Drive:
     def bus_health(self) -> dict[str, str | int]:
         """``bus_state`` ("ERROR_ACTIVE", "ERROR_PASSIVE", "BUS_OFF" or "UNKNOWN") and
         ``bus_error_frames`` (error frames received since the bus was opened); see
-        :mod:`drive_link.bus_health`."""
+        :mod:`drive_link._bus_health`."""
         return self._conn.health.snapshot()
 
     # ------------------------------------------------------------------ summary

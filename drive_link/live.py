@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 import canopen
 import numpy as np
 
-from .connection import BusMonitor
+from ._connection import BusMonitor
 from .objects import ObjectTable
 
 __all__ = ["LiveStreams", "MappedField", "TpdoConfig", "read_tpdo_configs"]

@@ -12,9 +12,9 @@ import can
 
 from firmware_protocol import load_od
 
-from . import connection
+from . import _connection
+from ._nmt import NMT_STATES
 from .errors import BusError
-from .nmt import NMT_STATES
 
 __all__ = [
     "HEARTBEAT_WAIT",
@@ -63,7 +63,7 @@ def scan(
 ) -> list[NodeInfo]:
     """Find nodes: probe device_type (0x1000) by SDO on every ID in ``node_ids`` (sent back to
     back; a full SocketCAN transmit queue is waited out, see
-    :class:`~drive_link.connection.PacedNetwork`), and listen ``timeout`` s for SDO answers and
+    :class:`~drive_link._connection.PacedNetwork`), and listen ``timeout`` s for SDO answers and
     heartbeats, then up to :data:`HEARTBEAT_WAIT` s more for the heartbeat of nodes that
     answered. Nodes with an open :class:`Drive` on the same bus can be passed in ``skip`` (their
     SDO channel is not probed, so an ongoing transfer is not disturbed) — they are still found
@@ -71,7 +71,7 @@ def scan(
 
     ``bus`` or python-can settings (``interface``, ``channel``, ``bitrate``, ``host``, ``port``).
     """
-    conn = connection.acquire(bus=bus, **settings)
+    conn = _connection.acquire(bus=bus, **settings)
     found: dict[int, NodeInfo] = {}
     lock = threading.Lock()
 
@@ -151,7 +151,7 @@ def scan(
                 net.unsubscribe(cob, cb)
             except (KeyError, ValueError):
                 pass
-        connection.release(conn)
+        _connection.release(conn)
     with lock:
         for nid, device_type in conn.active_nodes.items():  # known from the open Drive
             if nid in node_ids and nid not in skip:

@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 
 from drive_link import cia402
+from drive_link._connection import acquire, release
 from drive_link._sdo import SdoChannel
 from drive_link.bus import bus_settings, open_bus
-from drive_link.connection import acquire, release
 from drive_link.errors import BusError, DriveTimeout, InvalidValue, SdoAbort, UnknownObject
 from drive_link.live import LiveStreams, MappedField, TpdoConfig
 from drive_link.objects import default_table
@@ -309,8 +309,8 @@ def test_drop_estimate_ignores_jitter_and_pauses(lost, pause_s, want):
 def test_remote_node_shares_the_locked_channel_and_canopen_pieces_work(local_node):
     """drive_link._remote: canopen's TPDO.read(), NMT master and EMCY consumer on our channel,
     against canopen's own LocalNode (its OD and NMT state read in-process are the truth)."""
+    from drive_link._nmt import send_command
     from drive_link._remote import remote_node
-    from drive_link.nmt import send_command
 
     srv, conn = local_node
     sdo = SdoChannel(conn.network, 5, 0x605, 0x585, timeout=0.5)

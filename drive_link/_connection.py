@@ -2,7 +2,7 @@
 
 python-can allows one reader per bus, so all drives (and scans) on one bus share one Network and
 its Notifier thread. :class:`BusMonitor` counts every frame for rates and bus load,
-:class:`~drive_link.bus_health.BusHealth` error frames and the bus state. Frames are sent through
+:class:`~drive_link._bus_health.BusHealth` error frames and the bus state. Frames are sent through
 :class:`PacedNetwork`, which waits out a full transmit queue instead of failing.
 """
 
@@ -19,8 +19,8 @@ import canopen
 
 from firmware_protocol.can_bits import frame_bits, frame_bits_fast
 
+from ._bus_health import BusHealth
 from .bus import open_bus
-from .bus_health import BusHealth
 
 __all__ = [
     "SEND_DEADLINE",
