@@ -28,7 +28,7 @@ from dashboard.models import (
     TraceIn,
 )
 from dashboard.security import LeaseError
-from drive_link.jsonable import jsonable
+from drive_link import jsonable
 
 __all__ = ["router"]
 

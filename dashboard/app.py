@@ -17,7 +17,7 @@ from dashboard import api, stream
 from dashboard.bench import Bench
 from dashboard.config import BenchConfig
 from dashboard.security import allowed_hosts, allowed_origins, bearer, host_ok, token_ok
-from drive_link.jsonable import jsonable
+from drive_link import jsonable
 
 __all__ = ["STATE_CHANGING", "BenchOpener", "create_app"]
 

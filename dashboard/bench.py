@@ -18,7 +18,7 @@ import numpy as np
 
 from dashboard.actions import Found, LongAction
 from dashboard.security import ControlLease
-from drive_link.jsonable import jsonable
+from drive_link import jsonable
 from firmware_protocol import emcy_codes
 from firmware_protocol.od import load_od
 

@@ -17,7 +17,7 @@ from starlette.concurrency import run_in_threadpool
 
 from dashboard.bench import Bench
 from dashboard.security import allowed_hosts, host_ok, origin_ok, token_ok
-from drive_link.jsonable import jsonable
+from drive_link import jsonable
 
 __all__ = ["AUTH_TIMEOUT_S", "router"]
 

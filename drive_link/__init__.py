@@ -29,6 +29,7 @@ from firmware_protocol.enums import (
 )
 
 from ._emcy import Emcy
+from ._jsonable import jsonable
 from .drive import Drive, Gains
 from .errors import (
     BusError,
@@ -40,7 +41,6 @@ from .errors import (
     StateError,
     UnknownObject,
 )
-from .jsonable import jsonable
 from .scan import NodeInfo, scan
 from .supervision import SupervisionError
 from .trace import Trace, Trigger

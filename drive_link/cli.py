@@ -26,6 +26,7 @@ from firmware_protocol import abort_codes
 from firmware_protocol.index_ranges import PDO_PARAMETERS
 
 from . import _connection, _od_select, units
+from ._jsonable import jsonable as _jsonable
 from .cia402 import FAULT, FAULT_REACTION_ACTIVE, OPERATION_ENABLED
 from .cli_connect import (
     add_hidden_aliases,
@@ -43,7 +44,6 @@ from .errors import (
     SdoAbort,
     StateError,
 )
-from .jsonable import jsonable as _jsonable
 from .restore import leave_as_found
 
 __all__ = [
@@ -1074,15 +1074,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="allowed relative rate error (unitless, 0.25 = 25 %%)",
     )
     _config_parsers(add)
-    from .cli_tools import register_tools
+    from ._cli_tools import register_tools
 
     register_tools(sub, bus)
-    try:
-        from . import cli_design
-    except ImportError:
-        cli_design = None
-    if cli_design is not None:
-        cli_design.add_parsers(sub)
+    from ._cli_design import add_parsers as add_design_parsers
+
+    add_design_parsers(sub)
     return ap
 
 

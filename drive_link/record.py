@@ -131,7 +131,7 @@ def record_bus(
 
 
 def _bus_kwargs(args: argparse.Namespace) -> dict[str, Any]:
-    from .cli_tools import bus_settings
+    from ._cli_tools import bus_settings
 
     return bus_settings(args)
 

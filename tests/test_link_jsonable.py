@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 
-from drive_link.jsonable import jsonable
+from drive_link import jsonable
 
 
 def _strict_loads(text: str):

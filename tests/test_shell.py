@@ -18,8 +18,8 @@ import time
 import pytest
 
 from drive_link import cli
+from drive_link._shell import Shell
 from drive_link.drive import Drive
-from drive_link.shell import Shell
 
 pytestmark = pytest.mark.timeout(200)
 

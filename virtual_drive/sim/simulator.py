@@ -463,6 +463,15 @@ class Simulator:
                 self._last = last
             return dict(self._last)
 
+    def run_into(self, n_samples: int, out: dict[str, float]) -> None:
+        """Run ``n_samples`` samples (0 < n <= 2**20) without recording and write the latest
+        value of every signal into ``out`` (as :meth:`update_state`): the pacing loop's chunk,
+        one lock and one C call."""
+        with self._lock:
+            lib.loop_run(self._L, n_samples, ffi.NULL, ffi.NULL)
+            self._last = None
+            out.update(zip(SIGNALS, self._last_view.tolist()))
+
     def update_state(self, out: dict[str, float]) -> None:
         """Write the latest value of every signal (SIGNALS names, float; hall_sector too) into
         ``out``: the per-chunk path of the node, without building or copying a dict."""

@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import TextIO
 
 from . import cli
-from .cli_tools import bus_settings
+from ._cli_tools import bus_settings
 from .drive import Drive
 from .errors import DriveError, InvalidValue, SdoAbort
 

@@ -470,7 +470,7 @@ def cmd_replay(args: argparse.Namespace) -> int:
         out["trace_png"] = saved
     plot: list[str] = []
     if args.plot:
-        from .live_plot import render, resolve_signals
+        from ._live_plot import render, resolve_signals
 
         sigs = resolve_signals(rep.live, args.plot)
         plot = render(rep.live, sigs, max(rep.duration, 1e-3), args.width, args.height)

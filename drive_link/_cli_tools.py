@@ -1,8 +1,8 @@
 """The tool sub-commands of ``drive-link``: ``shell``, ``live --plot``, ``record``, ``replay``.
 
 :func:`register_tools` adds them to :func:`drive_link.cli.build_parser`'s sub-parsers (one hook
-call there), so the tools live in their own modules (:mod:`drive_link.shell`,
-:mod:`drive_link.live_plot`, :mod:`drive_link.record`, :mod:`drive_link.replay`) and the
+call there), so the tools live in their own modules (:mod:`drive_link._shell`,
+:mod:`drive_link._live_plot`, :mod:`drive_link.record`, :mod:`drive_link._replay`) and the
 one-shot CLI stays one module. Each module is imported only when its command runs.
 """
 
@@ -62,7 +62,7 @@ def register_tools(sub: argparse._SubParsersAction, bus: argparse.ArgumentParser
 
     p = add(
         "shell",
-        _lazy("shell", "cmd_shell"),
+        _lazy("_shell", "cmd_shell"),
         "interactive session on one connection: the drive-link commands without the prefix, "
         "history and TAB completion of commands and object names; 'help', 'exit' or Ctrl-D",
         needs_drive=False,  # connects itself, with the session's heartbeat supervision
@@ -98,7 +98,7 @@ def register_tools(sub: argparse._SubParsersAction, bus: argparse.ArgumentParser
 
     p = add(
         "replay",
-        _lazy("replay", "cmd_replay"),
+        _lazy("_replay", "cmd_replay"),
         "decode a bus recording offline (any python-can log format): TPDO signals as in "
         "'live' (summary, --csv, --plot), SDO block uploads, trace uploads reassembled",
         needs_drive=False,
@@ -153,7 +153,7 @@ def _add_live_plot(p: argparse.ArgumentParser) -> None:
 
     def run(args: argparse.Namespace, d: Any) -> int:
         if args.plot:
-            return _lazy("live_plot", "cmd_live_plot")(args, d)
+            return _lazy("_live_plot", "cmd_live_plot")(args, d)
         return summary(args, d)
 
     p.set_defaults(func=run)

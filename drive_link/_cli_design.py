@@ -28,9 +28,9 @@ from typing import Any, NoReturn
 import numpy as np
 
 from drive_link import design
+from drive_link._jsonable import jsonable as _clean
 from drive_link.design import analyse_current_loop
 from drive_link.identify import fit_first_order
-from drive_link.jsonable import jsonable as _clean
 from drive_link.metrics import step_metrics
 
 
