@@ -17,10 +17,10 @@ import statistics
 import threading
 import time
 
+from drive_link import scan
 from drive_link.cli_connect import add_bus_arguments, connect_from_args
 from drive_link.drive import Drive
 from drive_link.errors import DriveError
-from drive_link.scan import scan
 from virtual_drive.launch import virtual_bench
 
 

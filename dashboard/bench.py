@@ -52,7 +52,7 @@ LIVE_NAMES: dict[str, str] = {
     "speed_current_limit": "speed_controller.current_limit",
 }
 
-#: Live plot signals in drive_link.live.window() (OD names of the TPDO2/TPDO3 objects).
+#: Live plot signals in Drive.live.window() (OD names of the TPDO2/TPDO3 objects).
 LIVE_SIGNALS = (
     "measurements.speed",
     "measurements.speed_ref",

@@ -1,7 +1,7 @@
 """What the live plots send: decimated windows (at most a few hundred points per series) and
 the data's freshness. No viser here: plain arrays in, plain arrays out.
 
-Units: t in s (host clock, as drive_link.live stamps frames), values in the series' own units.
+Units: t in s (host clock, as Drive.live stamps frames), values in the series' own units.
 """
 
 from __future__ import annotations

@@ -30,6 +30,9 @@ from firmware_protocol.enums import (
 
 from ._emcy import Emcy
 from ._jsonable import jsonable
+from ._live import LiveStreams
+from ._objects import ObjectInfo, ObjectTable
+from ._scan import NodeInfo, scan
 from .drive import Drive, Gains
 from .errors import (
     BusError,
@@ -41,7 +44,6 @@ from .errors import (
     StateError,
     UnknownObject,
 )
-from .scan import NodeInfo, scan
 from .supervision import SupervisionError
 from .trace import Trace, Trigger
 
@@ -68,9 +70,12 @@ __all__ = [
     "Gains",
     "GainsRefused",
     "InvalidValue",
+    "LiveStreams",
     "ModeOfOperation",
     "NodeInfo",
     "NodeNotFound",
+    "ObjectInfo",
+    "ObjectTable",
     "SdoAbort",
     "SimFault",
     "SimModel",

@@ -77,7 +77,7 @@ def _fmt(x: float | None, spec: str = ".4g", unit: str = "") -> str:
 # --------------------------------------------------------------------------- design
 def _drive_limits_problem(k_p: float, k_i: float) -> str | None:
     """None if the drive's EDS limits of 0x2020 k_p/k_i admit the gains, else one line."""
-    from drive_link.objects import default_table
+    from drive_link._objects import default_table
 
     table = default_table()
     for name, v in (("speed_controller.k_p", k_p), ("speed_controller.k_i", k_i)):

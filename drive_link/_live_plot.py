@@ -1,7 +1,7 @@
 """``drive-link live --plot SIGNAL...``: a live terminal plot of TPDO signals (moteus tview-like).
 
 One panel per signal, stacked, the last ``--window`` s of the drive's TPDO streams
-(:class:`~drive_link.live.LiveStreams`: i_p, speed from TPDO2, i_p_ref, speed_ref from TPDO3 …),
+(:class:`~drive_link._live.LiveStreams`: i_p, speed from TPDO2, i_p_ref, speed_ref from TPDO3 …),
 each with its unit, latest value and range; a status line with the frame counts, the dropped
 frames (estimated from the event-timer cadence, per TPDO) and the bus load.
 
@@ -23,9 +23,9 @@ from typing import TextIO
 
 import numpy as np
 
+from ._live import LiveStreams
 from .drive import Drive
 from .errors import InvalidValue
-from .live import LiveStreams
 
 __all__ = [
     "KEYS",

@@ -1,7 +1,7 @@
 """Objects by what a user types: a name (``current_controller.L_c``), an index (``0x6041``,
 ``0x2010:2``, ``0x2010sub2``, ``24641``) or a search pattern (``objects L_c``, ``objects 0x20*``).
 
-:func:`select` returns the one :class:`~drive_link.objects.ObjectInfo` meant, or raises
+:func:`select` returns the one :class:`~drive_link._objects.ObjectInfo` meant, or raises
 :class:`~drive_link.errors.UnknownObject` in one line; :func:`search` lists the objects a
 pattern matches (a case-insensitive substring or shell pattern of the name, the index text
 ``0x2010:02`` or the description) and :func:`describe` gives one object's row for
@@ -14,8 +14,8 @@ import fnmatch
 import re
 from typing import Any
 
+from ._objects import ObjectInfo, ObjectTable, default_table
 from .errors import UnknownObject
-from .objects import ObjectInfo, ObjectTable, default_table
 
 __all__ = ["describe", "index_text", "search", "select", "table_text"]
 

@@ -3,7 +3,7 @@
 The file is read once with :class:`can.LogReader` (any format python-can reads: .asc, .blf, .log,
 .csv, .trc, .mf4 with asammdf), so recordings from Vector tools, SavvyCAN or candump work too.
 
-* TPDOs are decoded by the same :class:`~drive_link.live.LiveStreams` the live view uses, fed
+* TPDOs are decoded by the same :class:`~drive_link._live.LiveStreams` the live view uses, fed
   from the file instead of the bus. The mapping is the one the drive reported in the recording
   (SDO reads of 0x1800+k/0x1A00+k, as ``drive-link`` does when its live view starts) or, if the
   recording has none, the object dictionary's defaults for node ``--node``.
@@ -28,9 +28,9 @@ import can
 import canopen
 import numpy as np
 
+from ._live import LiveStreams, MappedField, TpdoConfig
+from ._objects import ObjectTable, default_table
 from .errors import InvalidValue
-from .live import LiveStreams, MappedField, TpdoConfig
-from .objects import ObjectTable, default_table
 from .trace import TRACE_DATA, TS, Trace
 
 __all__ = ["BlockUpload", "Replay", "SdoFollower", "cmd_replay", "replay_file"]

@@ -131,8 +131,8 @@ def _gain_value(name: str, text: str) -> float | int | str:
     """A typed gain (``L_c=20uH``, ``speed_current_limit=50A``) in its object's unit
     (:func:`drive_link.units.parse_value`); text that is no number passes through for
     ``type`` (``type=pi``)."""
+    from ._objects import default_table
     from .drive import _GAIN_OBJECTS
-    from .objects import default_table
 
     obj = default_table()[_GAIN_OBJECTS[name][1]]
     if name == "type" and _parse_value(text) == text:
@@ -142,7 +142,7 @@ def _gain_value(name: str, text: str) -> float | int | str:
 
 # --------------------------------------------------------------------------- commands
 def cmd_scan(args: argparse.Namespace) -> int:
-    from .scan import scan
+    from ._scan import scan
 
     conn = _connection.acquire(**bus_settings_from_args(args))  # --fd, --bus-kwargs ... too
     try:
@@ -729,7 +729,7 @@ def quantity(unit: str, integer: bool = False) -> Callable[[str], float | int]:
 
 def _object_value(name: str) -> Callable[[str], float | int]:
     """argparse ``type=`` for a value of the OD object ``name`` (its unit and integer type)."""
-    from .objects import default_table
+    from ._objects import default_table
 
     obj = default_table()[name]
     return quantity(obj.unit, integer=not obj.is_float)
@@ -1105,7 +1105,7 @@ _TRACE_OBJECTS = ("trace_config", "trace_channels", "trace_data")
 
 def _state_hint(exc: SdoAbort) -> str:
     """The fix for an object the drive refused in its present state (abort 0x08000022)."""
-    from .objects import default_table
+    from ._objects import default_table
 
     table = default_table()
     obj = table.by_index(exc.index, exc.subindex)

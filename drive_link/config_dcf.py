@@ -37,8 +37,8 @@ from typing import TYPE_CHECKING, Any
 from firmware_protocol import EDS_PATH
 from firmware_protocol.index_ranges import MANUFACTURER
 
+from ._objects import ObjectInfo, ObjectTable, default_table
 from .errors import DriveError, InvalidValue, StateError
-from .objects import ObjectInfo, ObjectTable, default_table
 
 if TYPE_CHECKING:
     from .drive import Drive

@@ -35,12 +35,12 @@ from firmware_protocol.enums import StoreStatus
 
 from . import _connection, cia402
 from ._emcy import Emcy, EmcyListener
+from ._live import LiveStreams, TpdoConfig, read_tpdo_configs
 from ._nmt import HeartbeatMonitor, HeartbeatProducer, send_command
+from ._objects import ObjectInfo, ObjectTable, default_table
 from ._remote import remote_node
 from ._sdo import SdoChannel
 from .errors import DriveError, DriveTimeout, InvalidValue, NodeNotFound, StateError
-from .live import LiveStreams, TpdoConfig, read_tpdo_configs
-from .objects import ObjectInfo, ObjectTable, default_table
 from .supervision import SupervisedSdoChannel, Supervisor
 from .trace import Recorder
 

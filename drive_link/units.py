@@ -25,7 +25,7 @@ from .errors import InvalidValue
 if TYPE_CHECKING:
     import pint
 
-    from .objects import ObjectInfo
+    from ._objects import ObjectInfo
 
 __all__ = [
     "parse_for",
@@ -186,11 +186,11 @@ def _looks_numeric(s: str) -> bool:
 
 
 def parse_for(obj: ObjectInfo | str, text: str | float | int) -> float | int | str:
-    """Value for the OD object ``obj`` (an :class:`~drive_link.objects.ObjectInfo` or its name)
+    """Value for the OD object ``obj`` (an :class:`~drive_link._objects.ObjectInfo` or its name)
     from typed ``text``, in the object's unit and type (strings pass through for VISIBLE_STRING),
     then checked against its limits (:meth:`ObjectInfo.check`). The dashboard's entry point."""
     if isinstance(obj, str):
-        from .objects import default_table
+        from ._objects import default_table
 
         obj = default_table()[obj]
     if not obj.fmt:

@@ -16,11 +16,11 @@ import pytest
 
 from drive_link import cia402
 from drive_link._connection import acquire, release
+from drive_link._live import LiveStreams, MappedField, TpdoConfig
+from drive_link._objects import default_table
 from drive_link._sdo import SdoChannel
 from drive_link.bus import bus_settings, open_bus
 from drive_link.errors import BusError, DriveTimeout, InvalidValue, SdoAbort, UnknownObject
-from drive_link.live import LiveStreams, MappedField, TpdoConfig
-from drive_link.objects import default_table
 from firmware_protocol import EDS_PATH
 
 pytestmark = pytest.mark.timeout(60)
@@ -344,7 +344,7 @@ def test_remote_node_shares_the_locked_channel_and_canopen_pieces_work(local_nod
 
     # a mapping naming an object the EDS lacks: canopen raises KeyError, the field is kept by
     # its index (not decoded) and the other fields keep their offsets
-    from drive_link.live import read_tpdo_configs
+    from drive_link._live import read_tpdo_configs
 
     srv.sdo[0x1A00][0].raw = 2
     srv.sdo[0x1A00][1].raw = 0x5FFF0010

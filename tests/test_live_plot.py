@@ -193,8 +193,8 @@ def test_render_of_a_known_ramp_with_lost_frames():
     import canopen
     import numpy as np
 
+    from drive_link._live import LiveStreams, MappedField, TpdoConfig
     from drive_link._live_plot import render
-    from drive_link.live import LiveStreams, MappedField, TpdoConfig
 
     cfg = TpdoConfig(2, 0x281, 0xFF, 1, [MappedField("measurements.speed", 0x2040, 5, 0, 32,
                                                      "<f", "rpm")])

@@ -11,8 +11,8 @@ import math
 import pint
 import pytest
 
+from drive_link._objects import default_table
 from drive_link.errors import InvalidValue
-from drive_link.objects import default_table
 from drive_link.units import parse_for, parse_value
 
 ureg = pint.UnitRegistry()

@@ -19,7 +19,7 @@ import canopen
 import numpy as np
 
 from ._connection import BusMonitor
-from .objects import ObjectTable
+from ._objects import ObjectTable
 
 __all__ = ["LiveStreams", "MappedField", "TpdoConfig", "read_tpdo_configs"]
 
