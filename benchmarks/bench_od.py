@@ -13,8 +13,7 @@ import time
 import timeit
 from collections.abc import Callable
 
-from firmware_protocol.c_header import render_header
-from firmware_protocol.markdown import render_markdown
+from firmware_protocol.generate import render_header, render_markdown
 from firmware_protocol.od import EDS_PATH, _load_cached, load_od  # _load_cached: the uncached parse
 
 __all__ = ["main"]

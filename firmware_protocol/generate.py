@@ -18,10 +18,10 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from .c_header import HEADER_NAME, render_header
-from .markdown import MARKDOWN_NAME, render_markdown
+from ._c_header import HEADER_NAME, render_header
+from ._markdown import MARKDOWN_NAME, render_markdown
+from ._strict_eds import CIA306_OBJECT_KEYS, render_strict_eds
 from .od import EDS_PATH, ObjectDictionaryView, load_od
-from .strict_eds import CIA306_OBJECT_KEYS, render_strict_eds
 
 __all__ = [
     "CIA306_OBJECT_KEYS",
