@@ -353,10 +353,11 @@ class VirtualDrive:
         need_rec = bool(self.taps) or recorder.state in (ARMED, RECORDING)
         with self.sim_lock:
             ramps.prepare_chunk(self, n)
-            rec = self.sim.run(n, record=need_rec)
+            if need_rec:
+                rec = self.sim.run(n, record=True)
+            else:  # the last values only, no dict built or copied
+                self.sim.run_into(n, self.live)
             fault = self.sim.fault
-            if not need_rec:
-                self.sim.update_state(self.live)  # the last values, no dict built or copied
         live = self.live
         if need_rec:
             for name in MEASUREMENTS.values():

@@ -40,10 +40,11 @@ _MAX_PARTIAL = 4096  #: bytes of an unfinished element kept before the buffer is
 
 def format_send(cob_id: int, data: bytes, is_extended: bool = False) -> bytes:
     """``< send <id> <len> <b0> ... >`` as bytes (ids: 3 hex digits standard, 8 extended)."""
-    ident = f"{cob_id:08X}" if is_extended else f"{cob_id:03X}"
     if data:
-        return f"< send {ident} {len(data):X} {data.hex(' ')} >".encode("ascii")
-    return f"< send {ident} 0 >".encode("ascii")
+        if is_extended:
+            return b"< send %08X %X %s >" % (cob_id, len(data), data.hex(" ").encode())
+        return b"< send %03X %X %s >" % (cob_id, len(data), data.hex(" ").encode())
+    return b"< send %08X 0 >" % cob_id if is_extended else b"< send %03X 0 >" % cob_id
 
 
 class HubBus(can.BusABC):

@@ -32,6 +32,7 @@ fits 64 bits (0x06040042). Mapping and COB-IDs may be changed in PRE-OPERATIONAL
 from __future__ import annotations
 
 import logging
+import operator
 import struct
 import threading
 import time
@@ -93,6 +94,10 @@ class _Tpdo:
     inhibit_s: float
     pack: Callable[..., bytes]
     getters: list[Callable[[], float | int]]
+    #: when every mapped object is a live measurement: the dict they live in and an
+    #: ``operator.itemgetter`` returning their values as a tuple (one C call per frame)
+    live: dict | None = None
+    pick: Callable[[dict], tuple] | None = None
     next_due: float = 0.0  # monotonic time of the next transmission (event-driven types)
     last_sent: float = -1e9
     sync_count: int = 0
@@ -207,6 +212,10 @@ class PdoEngine:
                 fmt += _FMT[obj.data_type]
                 getters.append(self._getter(index, sub, obj))
             event_ms = self._u(TPDO_COMM + k, 5)
+            items = [getattr(g, "live_item", None) for g in getters]
+            live = items[0][0] if items and items[0] is not None else None
+            if len(items) < 2 or any(it is None or it[0] is not live for it in items):
+                live = None
             tpdos.append(
                 _Tpdo(
                     number=k + 1,
@@ -216,6 +225,8 @@ class PdoEngine:
                     inhibit_s=self._u(TPDO_COMM + k, 3) * 100e-6,
                     pack=struct.Struct(fmt).pack,
                     getters=getters,
+                    live=live,
+                    pick=None if live is None else operator.itemgetter(*(n for _, n in items)),
                     next_due=self._align(now + event_ms / 1000.0),
                 )
             )
@@ -395,6 +406,8 @@ class PdoEngine:
 
     def _payload(self, t: _Tpdo) -> bytes | None:
         try:
+            if t.live is not None:
+                return t.pack(*t.pick(t.live))  # type: ignore[misc]
             return t.pack(*[g() for g in t.getters])
         except (struct.error, SdoAbortedError) as exc:
             logger.warning("TPDO%d not sent: %s", t.number, exc)

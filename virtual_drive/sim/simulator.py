@@ -343,6 +343,8 @@ class Simulator:
     def set_current_ref(self, i_p_ref: float) -> None:
         """Pseudo-current reference (A), finite, |.| <= 1000 (current mode)."""
         v = float(i_p_ref)
+        if v == self._L.i_ref_set:
+            return  # unchanged (the pacing loop sets it every chunk): no lock needed
         if not math.isfinite(v) or abs(v) > 1000.0:
             raise ValueError(f"i_p_ref must be finite and |i_p_ref| <= 1000 A, got {i_p_ref!r}")
         with self._lock:
@@ -351,6 +353,8 @@ class Simulator:
     def set_speed_ref(self, rpm: float) -> None:
         """Speed reference (rpm), finite, |.| <= 20000 (speed mode)."""
         v = float(rpm)
+        if v == self._L.w_ref_set:
+            return  # unchanged (the pacing loop sets it every chunk): no lock needed
         if not math.isfinite(v) or abs(v) > 20000.0:
             raise ValueError(f"speed_ref must be finite and |speed_ref| <= 20000 rpm, got {rpm!r}")
         with self._lock:
@@ -464,13 +468,17 @@ class Simulator:
             return dict(self._last)
 
     def run_into(self, n_samples: int, out: dict[str, float]) -> None:
-        """Run ``n_samples`` samples (0 < n <= 2**20) without recording and write the latest
+        """Run ``n_samples`` samples (an int >= 0) without recording and write the latest
         value of every signal into ``out`` (as :meth:`update_state`): the pacing loop's chunk,
         one lock and one C call."""
+        n = n_samples
         with self._lock:
-            lib.loop_run(self._L, n_samples, ffi.NULL, ffi.NULL)
+            while n > 0:
+                m = n if n <= 1 << 20 else 1 << 20
+                lib.loop_run(self._L, m, ffi.NULL, ffi.NULL)
+                n -= m
             self._last = None
-            out.update(zip(SIGNALS, self._last_view.tolist()))
+            out.update(zip(SIGNALS, self._last_view.tolist(), strict=True))
 
     def update_state(self, out: dict[str, float]) -> None:
         """Write the latest value of every signal (SIGNALS names, float; hall_sector too) into
