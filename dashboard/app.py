@@ -13,10 +13,11 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import HTMLResponse, JSONResponse, RedirectResponse
 from starlette.concurrency import run_in_threadpool
 
-from dashboard import api, stream
-from dashboard.bench import Bench
+from dashboard import _api as api
+from dashboard import _stream as stream
+from dashboard._bench import Bench
+from dashboard._security import allowed_hosts, allowed_origins, bearer, host_ok, token_ok
 from dashboard.config import BenchConfig
-from dashboard.security import allowed_hosts, allowed_origins, bearer, host_ok, token_ok
 from drive_link import jsonable
 
 __all__ = ["STATE_CHANGING", "BenchOpener", "create_app"]
@@ -34,10 +35,10 @@ def create_app(
     on_ready: Callable[[FastAPI], None] | None = None,
 ) -> FastAPI:
     """Build the app. The lifespan opens the bench (``open_bench``, default
-    :func:`dashboard.virtual.open_bench`) and starts the viser GUI on ``config.gui_port``."""
+    :func:`dashboard._virtual.open_bench`) and starts the viser GUI on ``config.gui_port``."""
     config.validate()
     if open_bench is None:
-        from dashboard.virtual import open_bench as default_open
+        from dashboard._virtual import open_bench as default_open
 
         open_bench = default_open
 

@@ -10,7 +10,7 @@ gets the strip between them. Status texts: :mod:`dashboard.gui_status`.
 
 Streaming cannot die silently: the plot loop catches every failure of a tick (counted, shown),
 a watchdog in the status loop restarts a plot thread that died or stopped beating, and the page
-says "STALE" with the data's age when no fresh data arrives (see :mod:`dashboard.live_plot`).
+says "STALE" with the data's age when no fresh data arrives (see :mod:`dashboard._live_plot`).
 Every viser send goes through one lock (:mod:`dashboard.gui_guard`).
 
 Control lease: a browser takes control by its first action (or "Take control"); a browser whose
@@ -32,8 +32,9 @@ from typing import Any
 import numpy as np
 import viser
 
-from dashboard import live_plot
-from dashboard.bench import LIVE_SIGNALS, Bench
+from dashboard import _live_plot as live_plot
+from dashboard._bench import LIVE_SIGNALS, Bench
+from dashboard._security import LeaseError, allowed_hosts, allowed_origins
 from dashboard.config import BenchConfig
 from dashboard.gui_field import CURRENT_COLORS, SPEED_COLORS
 from dashboard.gui_field import fmt as _fmt
@@ -42,7 +43,6 @@ from dashboard.gui_panel import Panel
 from dashboard.gui_scene import RotorScene
 from dashboard.gui_scene import background as scene_background
 from dashboard.gui_status import DROP_WINDOW_S, controller_text, legend, status_html
-from dashboard.security import LeaseError, allowed_hosts, allowed_origins
 
 log = logging.getLogger(__name__)
 
@@ -57,7 +57,7 @@ IDLE_WAIT_S = 1.0  #: with no browser the plot thread wakes this often (s), for 
 WATCHDOG_S = 3.0  #: a plot thread silent for this long is replaced (s)
 
 # re-exported for tests and older imports
-from dashboard.live_plot import min_span_envelope  # noqa: E402
+from dashboard._live_plot import min_span_envelope  # noqa: E402
 
 __all__ = ["LEASE_GRACE_S", "BenchGui", "min_span_envelope"]
 

@@ -1,7 +1,7 @@
 """Pieces every tab of the viser GUI uses: a typed number field with its error line, number
 formatting, the plot colours and uPlot series/plot helpers.
 
-Units: whatever the field's :class:`~dashboard.fields.NumberSpec` label states (rpm, A, µH, …).
+Units: whatever the field's :class:`~dashboard._fields.NumberSpec` label states (rpm, A, µH, …).
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import viser.uplot as uplot
 
-from dashboard.fields import FieldError, NumberSpec, show
+from dashboard._fields import FieldError, NumberSpec, show
 
 if TYPE_CHECKING:
     from dashboard.gui_panel import Panel

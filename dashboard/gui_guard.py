@@ -34,7 +34,7 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
-from dashboard.security import host_ok, origin_ok
+from dashboard._security import host_ok, origin_ok
 
 __all__ = [
     "SEND_LOCK",

@@ -3,7 +3,7 @@
 Every browser gets its own handles, so what one browser types never appears in another, and an
 action applies exactly the values of the browser that pressed the button (and only if that
 browser holds the control lease). Typed numbers are text fields parsed strictly
-(:mod:`dashboard.fields`): an invalid entry shows a message right under the field and nothing is
+(:mod:`dashboard._fields`): an invalid entry shows a message right under the field and nothing is
 sent. After Apply or Read back the fields show the drive's read-back. Notices appear under the
 control that caused them.
 
@@ -25,7 +25,8 @@ from typing import TYPE_CHECKING, Any
 
 import viser
 
-from dashboard.fields import FieldError
+from dashboard._fields import FieldError
+from dashboard._security import token_ok
 from dashboard.gui_field import CURRENT_COLORS, SPEED_COLORS, Field, fmt
 from dashboard.gui_tabs import (
     CapturesTab,
@@ -37,7 +38,6 @@ from dashboard.gui_tabs import (
     TuningTab,
     parse_sequence,
 )
-from dashboard.security import token_ok
 
 if TYPE_CHECKING:
     from dashboard.gui import BenchGui

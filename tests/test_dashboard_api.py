@@ -243,7 +243,7 @@ def test_gains_preview_matches_python_control(client):
         assert len(c["crossovers"]) == 2
         assert c["S_inf"] == pytest.approx(s_inf, rel=2e-3)
     # the GUI's text follows the same convention (Table 1: ±41.6°; computed 41.59°/41.37°)
-    from dashboard.tuning import preview_markdown
+    from dashboard._tuning import preview_markdown
 
     p = client.post("/api/gains/preview", json={"L_c": 1.5 * L}).json()
     md = preview_markdown(p)

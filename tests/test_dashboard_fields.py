@@ -8,10 +8,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from dashboard.fields import FieldError, NumberSpec, show
+from dashboard._fields import FieldError, NumberSpec, show
+from dashboard._live_plot import decimate, freshness_text
+from dashboard._tuning import display, preview_markdown
 from dashboard.gui_panel import parse_sequence
-from dashboard.live_plot import decimate, freshness_text
-from dashboard.tuning import display, preview_markdown
 
 RATIO = NumberSpec("L_c / L", 0.0, 3.0, lo_open=True)
 LC_UH = NumberSpec("L_c (µH)", 0.0, 2000.0, lo_open=True)

@@ -1,4 +1,4 @@
-"""The tuning view's curves (dashboard.loop_view on drive_link.design) against python-control
+"""The tuning view's curves (dashboard._loop_view on drive_link.design) against python-control
 (test-only oracle): Bode magnitude/phase of the open current and speed loops and the closed-loop
 poles, for each controller law, and the z-plane data layout uPlot needs (one ascending x array)."""
 
@@ -10,7 +10,7 @@ import control as ct
 import numpy as np
 import pytest
 
-from dashboard import loop_view
+from dashboard import _loop_view as loop_view
 
 TS, R, L = 20e-6, 6.2e-3, 14.8e-6
 A, B = 0.9999785, 3.33715e-4

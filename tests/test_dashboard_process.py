@@ -63,7 +63,7 @@ def test_child_stopped_when_opening_the_bench_fails(monkeypatch):
     """An error after the child started (here: the host library cannot connect) stops it."""
     import drive_link
     import virtual_drive.node.process as vp
-    from dashboard.virtual import open_bench
+    from dashboard._virtual import open_bench
 
     started = []
     real_spawn = vp.spawn_virtual_drive
@@ -89,7 +89,7 @@ def test_in_process_drive_is_opt_in():
     """--virtual-in-process keeps the drive in this process: no child, the bench still works."""
     import os
 
-    from dashboard.virtual import open_bench
+    from dashboard._virtual import open_bench
 
     before = set(children(os.getpid()))
     with open_bench(BenchConfig(virtual=True, virtual_in_process=True)) as bench:

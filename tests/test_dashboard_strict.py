@@ -136,7 +136,7 @@ def test_cancelled_identification_puts_the_drive_back(client, hdr):
 
 
 def test_action_past_its_deadline_restores_and_frees_the_bench(client, hdr):
-    from dashboard.actions import ActionTimeoutError
+    from dashboard._actions import ActionTimeoutError
 
     bench = client.app.state.bench
     d = bench.drive

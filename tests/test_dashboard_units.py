@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 from pydantic import ValidationError
 
+from dashboard._models import GainsIn, SequenceIn, TraceIn
+from dashboard._security import ControlLease, LeaseError, allowed_origins, origin_ok
 from dashboard.cli import main
 from dashboard.config import BenchConfig
-from dashboard.models import GainsIn, SequenceIn, TraceIn
-from dashboard.security import ControlLease, LeaseError, allowed_origins, origin_ok
 
 pytestmark = pytest.mark.timeout(30)
 

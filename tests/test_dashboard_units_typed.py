@@ -14,11 +14,11 @@ import pint
 import pytest
 from fastapi.testclient import TestClient
 
+from dashboard._fields import FieldError, NumberSpec
+from dashboard._models import GainsIn, SequenceIn, TraceIn
 from dashboard.app import create_app
 from dashboard.config import BenchConfig
-from dashboard.fields import FieldError, NumberSpec
 from dashboard.gui_tabs.speed import parse_sequence
-from dashboard.models import GainsIn, SequenceIn, TraceIn
 
 pytestmark = pytest.mark.timeout(120)
 

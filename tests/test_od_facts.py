@@ -142,7 +142,7 @@ def test_controller_name_literals_follow_the_enum() -> None:
     """Static ``Literal`` annotations cannot import the map: they are pinned to it here."""
     import typing
 
-    from dashboard.models import GainsIn
+    from dashboard._models import GainsIn
     from drive_link import design
 
     literal = next(a for a in typing.get_args(GainsIn.model_fields["type"].annotation) if a)

@@ -12,7 +12,7 @@ import pytest
 from annotated_types import Ge, Le
 from pydantic import ValidationError
 
-from dashboard import models
+from dashboard import _models as models
 from firmware_protocol.od import EDS_PATH
 from virtual_drive.node import plant
 from virtual_drive.sim import params as sim_params

@@ -8,10 +8,10 @@ from __future__ import annotations
 
 from typing import Any
 
-from dashboard import experiments
-from dashboard.fields import NumberSpec
+from dashboard import _experiments as experiments
+from dashboard._fields import NumberSpec
+from dashboard._models import TraceIn, field_bounds
 from dashboard.gui_field import Field
-from dashboard.models import TraceIn, field_bounds
 
 __all__ = ["CapturesTab"]
 
@@ -69,7 +69,7 @@ class CapturesTab:
             self.show_capture_plot(caps[-1])
 
     def _download(self, event: Any) -> None:
-        from dashboard.export import capture_csv, capture_png
+        from dashboard._export import capture_csv, capture_png
 
         cap = self._picked()
         if cap is None:

@@ -10,10 +10,10 @@ from typing import Any
 
 import numpy as np
 
-from dashboard import experiments
-from dashboard.fields import NumberSpec
+from dashboard import _experiments as experiments
+from dashboard._fields import NumberSpec
+from dashboard._models import CurrentIn, CurrentStepIn, field_bounds
 from dashboard.gui_field import Field, fmt
-from dashboard.models import CurrentIn, CurrentStepIn, field_bounds
 
 __all__ = ["CurrentTab"]
 

@@ -8,10 +8,10 @@ from __future__ import annotations
 
 from typing import Any
 
-from dashboard import experiments
-from dashboard.fields import NumberSpec
+from dashboard import _experiments as experiments
+from dashboard._fields import NumberSpec
+from dashboard._models import IdentifyIn, field_bounds
 from dashboard.gui_field import Field, fmt
-from dashboard.models import IdentifyIn, field_bounds
 
 __all__ = ["IdentifyTab"]
 

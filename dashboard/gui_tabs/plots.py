@@ -20,11 +20,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import viser.uplot as uplot
 
-from dashboard import loop_view
+from dashboard import _loop_view as loop_view
 from dashboard.gui_field import CURRENT_COLORS, PLOT_HEIGHT_PX, SPEED_COLORS, series
 
 if TYPE_CHECKING:
-    from dashboard.bench import Capture
+    from dashboard._bench import Capture
 
 __all__ = ["PLOT_AREA_WIDTH_PX", "PlotArea", "capture_view"]
 

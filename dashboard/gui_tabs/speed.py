@@ -7,9 +7,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from dashboard.fields import FieldError, NumberSpec
+from dashboard._fields import FieldError, NumberSpec
+from dashboard._models import LoadIn, SequenceStep, SpeedIn, SpeedStepIn, field_bounds
 from dashboard.gui_field import Field
-from dashboard.models import LoadIn, SequenceStep, SpeedIn, SpeedStepIn, field_bounds
 
 __all__ = ["SpeedTab", "parse_sequence"]
 

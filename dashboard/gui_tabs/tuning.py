@@ -11,10 +11,10 @@ from __future__ import annotations
 
 from typing import Any
 
-from dashboard import tuning
-from dashboard.fields import FieldError, NumberSpec
+from dashboard import _tuning as tuning
+from dashboard._fields import FieldError, NumberSpec
+from dashboard._models import CONTROLLER_TYPES, GainsIn, field_bounds
 from dashboard.gui_field import Field
-from dashboard.models import CONTROLLER_TYPES, GainsIn, field_bounds
 from firmware_protocol import paper
 
 __all__ = ["TuningTab"]

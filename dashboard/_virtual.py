@@ -14,7 +14,7 @@ import contextlib
 import time
 from collections.abc import Iterator
 
-from dashboard.bench import Bench
+from dashboard._bench import Bench
 from dashboard.config import BenchConfig
 
 __all__ = ["open_bench"]

@@ -3,7 +3,7 @@
 
 A thin adapter of :mod:`drive_link.design`'s loop responses to uPlot's data layout, no GUI.
 Units: frequency Hz, magnitude dB, phase degrees (unwrapped), poles as complex z (Ts = 20 µs).
-A gain set is the dictionary of :func:`dashboard.tuning.read_gains` (``type``, ``L_c`` H,
+A gain set is the dictionary of :func:`dashboard._tuning.read_gains` (``type``, ``L_c`` H,
 ``R_c`` Ω, ``k_p``/``k_i``
 V/A, ``speed_k_p`` A/rpm, ``speed_k_i`` 1/sample, ``motor_R`` Ω, ``motor_L`` H).
 """

@@ -21,7 +21,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validat
 from firmware_protocol.enums import CONTROLLER_NAMES, CONTROLLER_TYPES
 from firmware_protocol.od import load_od
 
-from .fields import unit_part
+from ._fields import unit_part
 
 __all__ = [
     "CONTROLLER_TYPES",

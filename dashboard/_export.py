@@ -6,7 +6,7 @@ import io
 
 import numpy as np
 
-from dashboard.bench import Capture
+from dashboard._bench import Capture
 
 __all__ = ["capture_csv", "capture_png"]
 

@@ -7,11 +7,12 @@ from typing import Annotated, Any, TypeVar
 
 from fastapi import APIRouter, Depends, Header, HTTPException, Request, Response
 
-from dashboard import experiments, tuning
-from dashboard.bench import Bench
-from dashboard.errors import http_error
-from dashboard.export import capture_csv, capture_png
-from dashboard.models import (
+from dashboard import _experiments as experiments
+from dashboard import _tuning as tuning
+from dashboard._bench import Bench
+from dashboard._errors import http_error
+from dashboard._export import capture_csv, capture_png
+from dashboard._models import (
     CommandIn,
     ControlIn,
     ControlOut,
@@ -27,7 +28,7 @@ from dashboard.models import (
     SpeedStepIn,
     TraceIn,
 )
-from dashboard.security import LeaseError
+from dashboard._security import LeaseError
 from drive_link import jsonable
 
 __all__ = ["router"]

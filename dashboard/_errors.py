@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from fastapi import HTTPException
 
-from dashboard.security import LeaseError
+from dashboard._security import LeaseError
 from drive_link.errors import DriveTimeout, InvalidValue, SdoAbort, StateError, UnknownObject
 from firmware_protocol import abort_codes
 

@@ -12,8 +12,8 @@ import math
 import time
 from typing import Any
 
-from dashboard.bench import LIVE_NAMES, Bench, as_dict
-from dashboard.models import TYPE_NAMES
+from dashboard._bench import LIVE_NAMES, Bench, as_dict
+from dashboard._models import TYPE_NAMES
 from drive_link import design
 from drive_link import gains as link_gains
 from firmware_protocol import paper

@@ -15,8 +15,8 @@ import numpy as np
 from fastapi import APIRouter, WebSocket, WebSocketDisconnect
 from starlette.concurrency import run_in_threadpool
 
-from dashboard.bench import Bench
-from dashboard.security import allowed_hosts, host_ok, origin_ok, token_ok
+from dashboard._bench import Bench
+from dashboard._security import allowed_hosts, host_ok, origin_ok, token_ok
 from drive_link import jsonable
 
 __all__ = ["AUTH_TIMEOUT_S", "router"]

@@ -14,9 +14,9 @@ from typing import Any
 
 import numpy as np
 
-from dashboard.actions import LongAction
-from dashboard.bench import Bench, Capture, as_dict
-from dashboard.models import CurrentStepIn, IdentifyIn, TraceIn
+from dashboard._actions import LongAction
+from dashboard._bench import Bench, Capture, as_dict
+from dashboard._models import CurrentStepIn, IdentifyIn, TraceIn
 from drive_link import Trigger, metrics, steps
 from drive_link.trace import TS
 

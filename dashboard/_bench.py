@@ -16,8 +16,8 @@ from typing import Any
 
 import numpy as np
 
-from dashboard.actions import Found, LongAction
-from dashboard.security import ControlLease
+from dashboard._actions import Found, LongAction
+from dashboard._security import ControlLease
 from drive_link import jsonable
 from firmware_protocol import emcy_codes
 from firmware_protocol.od import load_od
@@ -139,7 +139,7 @@ class Bench:
         self.last_step_t: float | None = None  # time.monotonic() of the last setpoint step
         self.listeners: list[Callable[[str, dict], None]] = []
         self.busy: str | None = None  # a long operation under way (capture, identify ...)
-        from dashboard.models import TraceIn
+        from dashboard._models import TraceIn
 
         self.trace_config = TraceIn()  # default for POST /api/trace/capture without a body
         self.sequence_progress: dict[str, Any] | None = None
