@@ -20,8 +20,8 @@ Modules (one job each):
 - :mod:`dashboard._experiments` — trace capture, current step test (Fig. 13) and identification
   (Fig. 16): drive_link's (:mod:`drive_link.steps`) run as a long action, turned into plots.
 - :mod:`dashboard._export` — captures as CSV and PNG.
-- :mod:`dashboard.gui` / :mod:`dashboard.gui_tabs` (one module per tab) /
-  :mod:`dashboard.gui_scene` — the viser GUI and the 3D rotor.
+- :mod:`dashboard._gui` / :mod:`dashboard._gui_tabs` (one module per tab) /
+  :mod:`dashboard._gui_scene` — the viser GUI and the 3D rotor.
 - :mod:`dashboard._virtual` — opens the bench (real bus, running hub, or hub + virtual drive).
 - :mod:`dashboard.browser` — headless /usr/bin/chromium and a child ``drive-dashboard`` (shared
   by the e2e test, the screenshot command and the benchmark).

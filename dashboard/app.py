@@ -54,7 +54,7 @@ def create_app(
             app.state.bench = bench
             app.state.gui = None
             if gui:
-                from dashboard.gui import BenchGui
+                from dashboard._gui import BenchGui
 
                 g = BenchGui(bench, config)
                 await run_in_threadpool(g.start)

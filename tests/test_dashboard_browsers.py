@@ -22,10 +22,10 @@ import time
 import pytest
 from fastapi.testclient import TestClient
 
+from dashboard._gui import LEASE_GRACE_S
 from dashboard.app import create_app
 from dashboard.browser import CHROMIUM, click, launch, open_bench, text_input
 from dashboard.config import BenchConfig
-from dashboard.gui import LEASE_GRACE_S
 
 pytestmark = [
     pytest.mark.timeout(600),  # two Chromium start-ups take minutes at load 20-30

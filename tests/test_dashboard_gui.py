@@ -18,9 +18,9 @@ from fastapi.testclient import TestClient
 from websockets.exceptions import InvalidStatus
 from websockets.sync.client import connect
 
+from dashboard._gui_guard import SEND_LOCK
 from dashboard.app import create_app
 from dashboard.config import BenchConfig
-from dashboard.gui_guard import SEND_LOCK
 
 pytestmark = pytest.mark.timeout(90)
 
@@ -98,7 +98,7 @@ class _FakeClient:
 
 
 def test_with_a_token_the_gui_must_sign_in_before_it_changes_anything(app_client):
-    from dashboard.gui_panel import Panel
+    from dashboard._gui_panel import Panel
 
     gui = app_client.app.state.gui
     bench = app_client.app.state.bench
@@ -144,7 +144,7 @@ def test_config_tab_saves_a_dcf_canopen_reads_and_loads_it_back(app_client, tmp_
     import canopen
     from viser._gui_handles import UploadedFile
 
-    from dashboard.gui_panel import Panel
+    from dashboard._gui_panel import Panel
 
     gui = app_client.app.state.gui
     drive = app_client.app.state.bench.drive
@@ -195,7 +195,7 @@ def test_config_tab_records_the_bus_for_other_can_tools(app_client):
     """Truth: python-can's own reader opens the downloaded .asc and finds the drive's TPDOs."""
     import can
 
-    from dashboard.gui_panel import Panel
+    from dashboard._gui_panel import Panel
 
     gui = app_client.app.state.gui
     client = _DownloadClient(gui.server.gui, 992)

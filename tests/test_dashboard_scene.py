@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import viser
 
-from dashboard.gui_scene import DIM, PHASE_COLORS, SIX_STEP, RotorScene, _tube, background
+from dashboard._gui_scene import DIM, PHASE_COLORS, SIX_STEP, RotorScene, _tube, background
 
 pytestmark = pytest.mark.timeout(60)
 

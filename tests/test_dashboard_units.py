@@ -120,7 +120,7 @@ def test_sequence_and_trace_validation():
 def test_min_span_envelope_widens_only_flat_plots():
     """uPlot auto-scales y to the min/max of all series: the envelope makes that span at least
     min_span around flat data, keeps the data inside, and leaves large swings alone."""
-    from dashboard.gui import min_span_envelope
+    from dashboard._gui import min_span_envelope
 
     rng = np.random.default_rng(1)
     speed = 500.0 + 0.01 * rng.standard_normal(200)

@@ -15,10 +15,10 @@ import pytest
 from fastapi.testclient import TestClient
 
 from dashboard._fields import FieldError, NumberSpec
+from dashboard._gui_tabs.speed import parse_sequence
 from dashboard._models import GainsIn, SequenceIn, TraceIn
 from dashboard.app import create_app
 from dashboard.config import BenchConfig
-from dashboard.gui_tabs.speed import parse_sequence
 
 pytestmark = pytest.mark.timeout(120)
 

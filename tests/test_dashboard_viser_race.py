@@ -20,7 +20,7 @@ import pytest
 from viser import _messages
 from viser.infra._async_message_buffer import AsyncMessageBuffer
 
-from dashboard.gui_guard import LoopSafeEvent
+from dashboard._gui_guard import LoopSafeEvent
 
 pytestmark = pytest.mark.timeout(120)
 

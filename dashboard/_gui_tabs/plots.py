@@ -21,7 +21,7 @@ import numpy as np
 import viser.uplot as uplot
 
 from dashboard import _loop_view as loop_view
-from dashboard.gui_field import CURRENT_COLORS, PLOT_HEIGHT_PX, SPEED_COLORS, series
+from dashboard._gui_field import CURRENT_COLORS, PLOT_HEIGHT_PX, SPEED_COLORS, series
 
 if TYPE_CHECKING:
     from dashboard._bench import Capture
@@ -72,7 +72,7 @@ def _capture_series(labels: list[str] | tuple[str, ...], x_label: str) -> tuple[
 
 
 class PlotArea:
-    """Mixin of :class:`dashboard.gui_panel.Panel`: builds and fills the main plot area."""
+    """Mixin of :class:`dashboard._gui_panel.Panel`: builds and fills the main plot area."""
 
     gui: Any
     config: Any

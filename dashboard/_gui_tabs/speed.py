@@ -8,14 +8,14 @@ from __future__ import annotations
 from typing import Any
 
 from dashboard._fields import FieldError, NumberSpec
+from dashboard._gui_field import Field
 from dashboard._models import LoadIn, SequenceStep, SpeedIn, SpeedStepIn, field_bounds
-from dashboard.gui_field import Field
 
 __all__ = ["SpeedTab", "parse_sequence"]
 
 
 class SpeedTab:
-    """Mixin of :class:`dashboard.gui_panel.Panel`: the Speed tab."""
+    """Mixin of :class:`dashboard._gui_panel.Panel`: the Speed tab."""
 
     gui: Any
     bench: Any

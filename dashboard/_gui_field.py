@@ -14,7 +14,7 @@ import viser.uplot as uplot
 from dashboard._fields import FieldError, NumberSpec, show
 
 if TYPE_CHECKING:
-    from dashboard.gui_panel import Panel
+    from dashboard._gui_panel import Panel
 
 __all__ = [
     "CURRENT_COLORS",

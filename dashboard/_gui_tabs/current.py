@@ -12,14 +12,14 @@ import numpy as np
 
 from dashboard import _experiments as experiments
 from dashboard._fields import NumberSpec
+from dashboard._gui_field import Field, fmt
 from dashboard._models import CurrentIn, CurrentStepIn, field_bounds
-from dashboard.gui_field import Field, fmt
 
 __all__ = ["CurrentTab"]
 
 
 class CurrentTab:
-    """Mixin of :class:`dashboard.gui_panel.Panel`: the Current tab."""
+    """Mixin of :class:`dashboard._gui_panel.Panel`: the Current tab."""
 
     gui: Any
     bench: Any

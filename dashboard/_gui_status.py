@@ -10,7 +10,7 @@ import html
 import time
 from typing import Any
 
-from dashboard.gui_field import fmt as _fmt
+from dashboard._gui_field import fmt as _fmt
 
 __all__ = ["DROP_WINDOW_S", "controller_text", "legend", "status_html"]
 

@@ -7,10 +7,10 @@ browser holds the control lease). Typed numbers are text fields parsed strictly
 sent. After Apply or Read back the fields show the drive's read-back. Notices appear under the
 control that caused them.
 
-Layout: the main area (plots, :mod:`dashboard.gui_tabs.plots`) is a wide panel docked left; the
+Layout: the main area (plots, :mod:`dashboard._gui_tabs.plots`) is a wide panel docked left; the
 control panel (docked right) holds status, control, the drive buttons, progress, then the tabs
 Speed · Current · Tuning · Identify · Captures · Config (one module each in
-:mod:`dashboard.gui_tabs`).
+:mod:`dashboard._gui_tabs`).
 Units: rpm, A, µH, mΩ, V/A, A/rpm, 1/sample, N·m, s.
 """
 
@@ -26,9 +26,8 @@ from typing import TYPE_CHECKING, Any
 import viser
 
 from dashboard._fields import FieldError
-from dashboard._security import token_ok
-from dashboard.gui_field import CURRENT_COLORS, SPEED_COLORS, Field, fmt
-from dashboard.gui_tabs import (
+from dashboard._gui_field import CURRENT_COLORS, SPEED_COLORS, Field, fmt
+from dashboard._gui_tabs import (
     CapturesTab,
     ConfigTab,
     CurrentTab,
@@ -38,9 +37,10 @@ from dashboard.gui_tabs import (
     TuningTab,
     parse_sequence,
 )
+from dashboard._security import token_ok
 
 if TYPE_CHECKING:
-    from dashboard.gui import BenchGui
+    from dashboard._gui import BenchGui
 
 _fmt = fmt  # older name
 

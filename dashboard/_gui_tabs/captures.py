@@ -10,14 +10,14 @@ from typing import Any
 
 from dashboard import _experiments as experiments
 from dashboard._fields import NumberSpec
+from dashboard._gui_field import Field
 from dashboard._models import TraceIn, field_bounds
-from dashboard.gui_field import Field
 
 __all__ = ["CapturesTab"]
 
 
 class CapturesTab:
-    """Mixin of :class:`dashboard.gui_panel.Panel`: the Captures tab."""
+    """Mixin of :class:`dashboard._gui_panel.Panel`: the Captures tab."""
 
     gui: Any
     bench: Any

@@ -1,17 +1,17 @@
-"""The viser GUI: one panel per browser (:mod:`dashboard.gui_panel`), the shared 3D rotor, and
+"""The viser GUI: one panel per browser (:mod:`dashboard._gui_panel`), the shared 3D rotor, and
 the two background loops that keep every panel live.
 
 Layout: the plots are the main area, a wide per-browser panel docked left (tabs Live ·
-Capture · Loop, :mod:`dashboard.gui_tabs.plots`); the control panel is docked right (status,
+Capture · Loop, :mod:`dashboard._gui_tabs.plots`); the control panel is docked right (status,
 who controls, Take control, Drive buttons, progress/cancel of a long action, then tabs Speed ·
 Current · Tuning · Identify · Captures · Config, one module each in
-:mod:`dashboard.gui_tabs`); the 3D rotor (:mod:`dashboard.gui_scene`, off with ``--no-3d``)
-gets the strip between them. Status texts: :mod:`dashboard.gui_status`.
+:mod:`dashboard._gui_tabs`); the 3D rotor (:mod:`dashboard._gui_scene`, off with ``--no-3d``)
+gets the strip between them. Status texts: :mod:`dashboard._gui_status`.
 
 Streaming cannot die silently: the plot loop catches every failure of a tick (counted, shown),
 a watchdog in the status loop restarts a plot thread that died or stopped beating, and the page
 says "STALE" with the data's age when no fresh data arrives (see :mod:`dashboard._live_plot`).
-Every viser send goes through one lock (:mod:`dashboard.gui_guard`).
+Every viser send goes through one lock (:mod:`dashboard._gui_guard`).
 
 Control lease: a browser takes control by its first action (or "Take control"); a browser whose
 WebSocket closes keeps it LEASE_GRACE_S seconds (a reload), then loses it. A tab that goes
@@ -34,15 +34,15 @@ import viser
 
 from dashboard import _live_plot as live_plot
 from dashboard._bench import LIVE_SIGNALS, Bench
+from dashboard._gui_field import CURRENT_COLORS, SPEED_COLORS
+from dashboard._gui_field import fmt as _fmt
+from dashboard._gui_guard import guard_handshake, install_send_lock, refuse_share_url
+from dashboard._gui_panel import Panel
+from dashboard._gui_scene import RotorScene
+from dashboard._gui_scene import background as scene_background
+from dashboard._gui_status import DROP_WINDOW_S, controller_text, legend, status_html
 from dashboard._security import LeaseError, allowed_hosts, allowed_origins
 from dashboard.config import BenchConfig
-from dashboard.gui_field import CURRENT_COLORS, SPEED_COLORS
-from dashboard.gui_field import fmt as _fmt
-from dashboard.gui_guard import guard_handshake, install_send_lock, refuse_share_url
-from dashboard.gui_panel import Panel
-from dashboard.gui_scene import RotorScene
-from dashboard.gui_scene import background as scene_background
-from dashboard.gui_status import DROP_WINDOW_S, controller_text, legend, status_html
 
 log = logging.getLogger(__name__)
 

@@ -10,14 +10,14 @@ from typing import Any
 
 from dashboard import _experiments as experiments
 from dashboard._fields import NumberSpec
+from dashboard._gui_field import Field, fmt
 from dashboard._models import IdentifyIn, field_bounds
-from dashboard.gui_field import Field, fmt
 
 __all__ = ["IdentifyTab"]
 
 
 class IdentifyTab:
-    """Mixin of :class:`dashboard.gui_panel.Panel`: the Identify tab."""
+    """Mixin of :class:`dashboard._gui_panel.Panel`: the Identify tab."""
 
     gui: Any
     bench: Any

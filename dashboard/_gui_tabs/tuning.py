@@ -13,15 +13,15 @@ from typing import Any
 
 from dashboard import _tuning as tuning
 from dashboard._fields import FieldError, NumberSpec
+from dashboard._gui_field import Field
 from dashboard._models import CONTROLLER_TYPES, GainsIn, field_bounds
-from dashboard.gui_field import Field
 from firmware_protocol import paper
 
 __all__ = ["TuningTab"]
 
 
 class TuningTab:
-    """Mixin of :class:`dashboard.gui_panel.Panel`: the Tuning tab."""
+    """Mixin of :class:`dashboard._gui_panel.Panel`: the Tuning tab."""
 
     gui: Any
     bench: Any

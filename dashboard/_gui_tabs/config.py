@@ -32,7 +32,7 @@ def bus_kwargs(config: Any, hub_port: int | None) -> dict[str, Any]:
 
 
 class ConfigTab:
-    """Mixin of :class:`dashboard.gui_panel.Panel`: the Config tab."""
+    """Mixin of :class:`dashboard._gui_panel.Panel`: the Config tab."""
 
     gui: Any
     bench: Any
