@@ -5,30 +5,25 @@ process) or ``drive-dashboard --interface socketcan --channel can0 --node 1`` (a
 then open the one URL it prints. Everything goes through :mod:`drive_link`; no CAN details
 live here.
 
-Modules (one job each):
+Public (the package's ``__all__`` and the commands): :func:`create_app` (:mod:`dashboard.app`),
+:class:`BenchConfig` (:mod:`dashboard.config`), :mod:`dashboard.cli` (``drive-dashboard``),
+:mod:`dashboard.screenshot` (``python -m dashboard.screenshot docs/bench.png``) and
+:mod:`dashboard.browser` (headless /usr/bin/chromium + a child ``drive-dashboard``, shared by the
+e2e test, the screenshot command and the benchmarks). ``from dashboard import BenchConfig,
+create_app`` imports them on first use, so ``import dashboard`` does not load FastAPI and viser.
+The REST API (``/openapi.json``) is the interface for other programs.
 
-- :mod:`dashboard.cli` — the ``drive-dashboard`` command (argument checks, uvicorn).
-- :mod:`dashboard.app` — FastAPI app, lifespan (bench + GUI), access/JSON/Origin middleware,
-  the self-made ``/docs`` page (renders ``/openapi.json``, no CDN).
-- :mod:`dashboard._api` / :mod:`dashboard._stream` — REST routes and the ``/api/stream`` WebSocket.
-- :mod:`dashboard._models` — request bodies (pydantic; bad input is a 422, nothing applied).
-- :mod:`dashboard._bench` — one drive shared by all clients: commands, setpoints, sequences.
-- :mod:`dashboard._security` — control lease (one controller, visible take-over), Origin, token.
-- :mod:`dashboard._tuning` — gains read-back, preview and apply through
-  :func:`drive_link.gains.apply_gains`, IP design from ξ, ω_n (eqs. 28–31), store, live-vs-stored
-  diff; :mod:`dashboard._loop_view` — Bode and pole curves from :mod:`drive_link.design`.
-- :mod:`dashboard._experiments` — trace capture, current step test (Fig. 13) and identification
-  (Fig. 16): drive_link's (:mod:`drive_link.steps`) run as a long action, turned into plots.
-- :mod:`dashboard._export` — captures as CSV and PNG.
-- :mod:`dashboard._gui` / :mod:`dashboard._gui_tabs` (one module per tab) /
-  :mod:`dashboard._gui_scene` — the viser GUI and the 3D rotor.
-- :mod:`dashboard._virtual` — opens the bench (real bus, running hub, or hub + virtual drive).
-- :mod:`dashboard.browser` — headless /usr/bin/chromium and a child ``drive-dashboard`` (shared
-  by the e2e test, the screenshot command and the benchmark).
-- :mod:`dashboard.screenshot` — ``python -m dashboard.screenshot docs/bench.png`` (README picture).
-
-Scripting: ``from dashboard import BenchConfig, create_app`` (imported on first use, so
-``import dashboard._fields`` does not load FastAPI and viser). See ``docs/architecture.md``.
+Private modules (one job each; they may change without notice):
+``_api`` / ``_stream`` (REST routes, the ``/api/stream`` WebSocket), ``_models`` (request bodies,
+pydantic, limits from the EDS: bad input is a 422, nothing applied), ``_errors`` (errors → HTTP),
+``_bench`` (one drive shared by all clients), ``_actions`` (long actions), ``_security`` (control
+lease, Origin, token), ``_tuning`` (gains through :func:`drive_link.apply_gains`, IP design
+eqs. 28–31) and ``_loop_view`` (Bode and pole curves from :mod:`drive_link.design`),
+``_experiments`` (:mod:`drive_link.steps` run as a long action, turned into plots), ``_export``
+(CSV, PNG), ``_fields`` (number fields with units), ``_live_plot``, ``_virtual`` (opens the
+bench: real bus, running hub, or hub + virtual drive), ``_gui`` + ``_gui_panel`` +
+``_gui_tabs/`` (one module per tab) + ``_gui_field``, ``_gui_scene`` (3D rotor), ``_gui_guard``,
+``_gui_status``. See ``docs/architecture.md``.
 """
 
 from __future__ import annotations

@@ -8,6 +8,17 @@ the enumerations of the object dictionary (IntEnums from :mod:`firmware_protocol
 gain facade (:func:`check_gains`, :func:`apply_gains`) and the design facade
 (:mod:`drive_link.design`). The gain and design names are imported on first use, so
 ``import drive_link`` stays light.
+
+Public modules (scripts import from them; documented in ``docs/architecture.md``):
+:mod:`~drive_link.drive`, :mod:`~drive_link.errors`, :mod:`~drive_link.trace`,
+:mod:`~drive_link.gains`, :mod:`~drive_link.design`, :mod:`~drive_link.steps`,
+:mod:`~drive_link.identify`, :mod:`~drive_link.metrics`, :mod:`~drive_link.units`,
+:mod:`~drive_link.restore`, :mod:`~drive_link.config_dcf`, :mod:`~drive_link.record`,
+:mod:`~drive_link.check`, :mod:`~drive_link.bus`, :mod:`~drive_link.cia402`,
+:mod:`~drive_link.supervision`, :mod:`~drive_link.cli` (``drive-link``) and
+:mod:`~drive_link.cli_connect` (the bus options every command line shares). Modules whose name
+starts with ``_`` (the SDO client, connection, NMT, TPDO decoding, the CLI's tools …) are
+implementation and may change without notice.
 """
 
 from __future__ import annotations

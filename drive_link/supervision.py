@@ -58,7 +58,18 @@ __all__ = [
 
 #: Communication objects never replayed: error history, store/restore commands, read-only
 #: identity and error objects.
-NOT_JOURNALLED = frozenset({0x1001, 0x1002, 0x1003, 0x1010, 0x1011})
+NOT_JOURNALLED = frozenset(
+    {0x1002}  # manufacturer status register (CiA 301; not in this drive's OD)
+    | {
+        load_od().entry(n).index
+        for n in (
+            "error_register",
+            "pre_defined_error_field.number_of_errors",
+            "store_parameters.save_all",
+            "restore_default_parameters.restore_all",
+        )
+    }
+)
 ABORT_CONNECTION_OPTION = load_od().entry("abort_connection_option_code").index
 CONSUMER_HEARTBEAT = load_od().entry("consumer_heartbeat_time.consumer_1").index
 PRODUCER_HEARTBEAT = load_od().entry("producer_heartbeat_time").index

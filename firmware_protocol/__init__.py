@@ -13,10 +13,13 @@ This package is the one home of every protocol fact; other packages import, neve
 :mod:`~firmware_protocol.abort_codes` (SDO abort codes and meanings, on canopen's table),
 :mod:`~firmware_protocol.emcy_codes` (EMCY codes sent and their meanings),
 :mod:`~firmware_protocol.enums` (enumerated object values, the controller-type names),
-:mod:`~firmware_protocol.cia402` (statusword/controlword), :mod:`~firmware_protocol.paper`
-(Table 2 motor, Ts, the speed model a/b, the paper's gains) and the objects' limits
+:mod:`~firmware_protocol.cia402` (statusword/controlword),
+:mod:`~firmware_protocol.index_ranges` (which part of the OD an index is in, PDO parameter
+bases), :mod:`~firmware_protocol.paper` (Table 2 motor, Ts, the speed model a/b, the paper's
+gains) and the objects' limits
 (``load_od().entry(name).low/.high``: the dashboard's pydantic models and the simulator's
-parameter checks read them).
+parameter checks read them). The renderers behind ``generate`` (``_c_header``, ``_markdown``,
+``_strict_eds``) are private.
 
 >>> from firmware_protocol import load_od
 >>> od = load_od()
@@ -26,7 +29,7 @@ parameter checks read them).
 '0x20400120'
 """
 
-from . import abort_codes, emcy_codes, paper
+from . import abort_codes, emcy_codes, index_ranges, paper
 from .constraints import CONSTRAINTS, Constraint
 from .entry import LimitError
 from .enums import (
@@ -66,6 +69,7 @@ __all__ = [
     "TraceTriggerMode",
     "abort_codes",
     "emcy_codes",
+    "index_ranges",
     "load_od",
     "paper",
 ]
