@@ -13,6 +13,7 @@ from __future__ import annotations
 import struct
 import threading
 import time
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 import canopen
@@ -21,7 +22,7 @@ import numpy as np
 from ._connection import BusMonitor
 from ._objects import ObjectTable
 
-__all__ = ["LiveStreams", "MappedField", "TpdoConfig", "read_tpdo_configs"]
+__all__ = ["LiveStreams", "MappedField", "TpdoConfig", "mapped_fields", "read_tpdo_configs"]
 
 #: A TPDO silence longer than this (s) is a pause (NMT state, drive restart), not lost frames.
 _PAUSE_S = 1.0
@@ -52,6 +53,21 @@ class TpdoConfig:
     event_timer_ms: int
     fields: list[MappedField] = field(default_factory=list)
     valid: bool = True
+
+
+def mapped_fields(mapped: Iterable[tuple[int, int, int]], table: ObjectTable) -> list[MappedField]:
+    """The fields of a PDO mapping given as (index, sub-index, bits) in order: named and typed
+    from ``table`` where the object exists with that length, else ``0xIIII:SS`` (not decoded)."""
+    flds = []
+    offset = 0
+    for index, sub, bits in mapped:
+        obj = table.by_index(index, sub)
+        if obj is not None and obj.bits == bits:
+            flds.append(MappedField(obj.name, index, sub, offset, bits, obj.fmt, obj.unit))
+        else:
+            flds.append(MappedField(f"0x{index:04X}:{sub:02X}", index, sub, offset, bits, ""))
+        offset += bits
+    return flds
 
 
 def read_tpdo_configs(node: canopen.RemoteNode, table: ObjectTable) -> list[TpdoConfig]:
@@ -86,15 +102,7 @@ def read_tpdo_configs(node: canopen.RemoteNode, table: ObjectTable) -> list[Tpdo
                 node.network.unsubscribe(pdo_map.cob_id, pdo_map.on_message)
             except (KeyError, ValueError):
                 pass
-        flds = []
-        offset = 0
-        for index, sub, bits in mapped:
-            obj = table.by_index(index, sub)
-            if obj is not None and obj.bits == bits:
-                flds.append(MappedField(obj.name, index, sub, offset, bits, obj.fmt, obj.unit))
-            else:
-                flds.append(MappedField(f"0x{index:04X}:{sub:02X}", index, sub, offset, bits, ""))
-            offset += bits
+        flds = mapped_fields(mapped, table)
         out.append(
             TpdoConfig(
                 number,

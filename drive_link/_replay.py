@@ -28,7 +28,7 @@ import can
 import canopen
 import numpy as np
 
-from ._live import LiveStreams, MappedField, TpdoConfig
+from ._live import LiveStreams, TpdoConfig, mapped_fields
 from ._objects import ObjectTable, default_table
 from .errors import InvalidValue
 from .trace import TRACE_DATA, TS, Trace
@@ -241,17 +241,11 @@ def tpdo_configs(known: _Known) -> list[TpdoConfig]:
         if f"{comm}.cob_id" not in table:
             break
         cob = known.int(f"{comm}.cob_id")
-        flds = []
-        offset = 0
-        for i in range(1, known.int(f"tpdo{k}_mapping.number_of_mapped_objects") + 1):
-            ref = known.int(f"tpdo{k}_mapping.mapped_object_{i}")
-            index, sub, bits = ref >> 16, (ref >> 8) & 0xFF, ref & 0xFF
-            obj = table.by_index(index, sub)
-            if obj is not None and obj.bits == bits:
-                flds.append(MappedField(obj.name, index, sub, offset, bits, obj.fmt, obj.unit))
-            else:
-                flds.append(MappedField(f"0x{index:04X}:{sub:02X}", index, sub, offset, bits, ""))
-            offset += bits
+        refs = [
+            known.int(f"tpdo{k}_mapping.mapped_object_{i}")
+            for i in range(1, known.int(f"tpdo{k}_mapping.number_of_mapped_objects") + 1)
+        ]
+        flds = mapped_fields(((r >> 16, (r >> 8) & 0xFF, r & 0xFF) for r in refs), table)
         out.append(
             TpdoConfig(
                 k,
@@ -452,22 +446,16 @@ def cmd_replay(args: argparse.Namespace) -> int:
     out = rep.summary()
     if args.csv:
         out["csv"] = str(_write_csv(Path(args.csv), rep.table(), rep.live.units))
-    if args.trace_csv:
+    for key, path in (("trace_csv", args.trace_csv), ("trace_png", args.trace_png)):
+        if not path:
+            continue
         saved = []
         for i, tr in enumerate(rep.traces):
-            p = Path(args.trace_csv)
+            p = Path(path)
             if len(rep.traces) > 1:
                 p = p.with_name(f"{p.stem}_{i + 1}{p.suffix}")
-            saved.append(str(tr.to_csv(p)))
-        out["trace_csv"] = saved
-    if args.trace_png:
-        saved = []
-        for i, tr in enumerate(rep.traces):
-            p = Path(args.trace_png)
-            if len(rep.traces) > 1:
-                p = p.with_name(f"{p.stem}_{i + 1}{p.suffix}")
-            saved.append(str(tr.to_png(p)))
-        out["trace_png"] = saved
+            saved.append(str(tr.to_csv(p) if key == "trace_csv" else tr.to_png(p)))
+        out[key] = saved
     plot: list[str] = []
     if args.plot:
         from ._live_plot import render, resolve_signals
