@@ -292,7 +292,13 @@ int loop_run(loop_t *L, int n, float **sig, double *t_out)
 {
     int k;
     const double Ts = L->Ts;
+    float *sp[LOOP_NSIG];
+    int all_sig = (sig != NULL);
     plant_update(&L->p); /* R, L may have been changed between chunks */
+    for (k = 0; all_sig && k < LOOP_NSIG; ++k) {
+        sp[k] = sig[k];
+        all_sig = (sig[k] != NULL);
+    }
     for (k = 0; k < n; ++k) {
         plant_t *p = &L->p;
         int sec = plant_hall_sector(p->theta_e);
@@ -327,7 +333,12 @@ int loop_run(loop_t *L, int n, float **sig, double *t_out)
                 trip(L, 0x3220, 4);
             }
         }
-        p->i_abs_max = fmax(fabs(p->i[0]), fmax(fabs(p->i[1]), fabs(p->i[2])));
+        {
+            /* (a NaN current has set p->nonfinite, which zeroes the state below: no fmax) */
+            double a0 = fabs(p->i[0]), a1 = fabs(p->i[1]), a2 = fabs(p->i[2]);
+            double a12 = (a1 > a2) ? a1 : a2;
+            p->i_abs_max = (a0 > a12) ? a0 : a12;
+        }
         if (p->nonfinite) {
             /* keep the record finite: a tripped, diverged plant is frozen at zero */
             p->i[0] = p->i[1] = p->i[2] = 0.0;
@@ -379,7 +390,12 @@ int loop_run(loop_t *L, int n, float **sig, double *t_out)
         L->last[SIG_V_DC] = (float)p->V_dc;
         L->last[SIG_T_E] = (float)Te;
         L->last[SIG_THETA_E] = (float)p->theta_e;
-        if (sig != NULL) {
+        if (all_sig) { /* every signal recorded (the common case): no test per signal */
+            int j;
+            for (j = 0; j < LOOP_NSIG; ++j) {
+                sp[j][k] = L->last[j];
+            }
+        } else if (sig != NULL) {
             int j;
             for (j = 0; j < LOOP_NSIG; ++j) {
                 if (sig[j] != NULL) {
