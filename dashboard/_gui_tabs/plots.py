@@ -153,24 +153,20 @@ class PlotArea:
         }
         labels = ("current, typed", "current, applied", "speed, typed", "speed, applied")
         colors = (TYPED, APPLIED, SPEED_TYPED, SPEED_APPLIED)
-        self.bode_mag = gui.add_uplot(
-            (f, nan, nan, nan, nan),
-            tuple(series(labels, colors, "f (Hz)")),
-            scales=log_x,
-            axes=(uplot.Axis(label="f (Hz)"), uplot.Axis(label="|L| (dB)", size=60)),
-            cursor=_cursor("bode"),
-            title="Open loops: magnitude",
-            height=int(PLOT_HEIGHT_PX * 0.85),
-        )
-        self.bode_phase = gui.add_uplot(
-            (f, nan, nan, nan, nan),
-            tuple(series(labels, colors, "f (Hz)")),
-            scales=log_x,
-            axes=(uplot.Axis(label="f (Hz)"), uplot.Axis(label="∠L (°)", size=60)),
-            cursor=_cursor("bode"),
-            title="Open loops: phase",
-            height=int(PLOT_HEIGHT_PX * 0.85),
-        )
+
+        def bode(y_label: str, title: str) -> Any:
+            return gui.add_uplot(
+                (f, nan, nan, nan, nan),
+                tuple(series(labels, colors, "f (Hz)")),
+                scales=log_x,
+                axes=(uplot.Axis(label="f (Hz)"), uplot.Axis(label=y_label, size=60)),
+                cursor=_cursor("bode"),
+                title=title,
+                height=int(PLOT_HEIGHT_PX * 0.85),
+            )
+
+        self.bode_mag = bode("|L| (dB)", "Open loops: magnitude")
+        self.bode_phase = bode("∠L (°)", "Open loops: phase")
         z0 = loop_view.z_plane_data(np.zeros(0), np.zeros(0), np.zeros(0))
         dot = {"show": True, "size": 9, "width": 2}
         self.z_plane = gui.add_uplot(
