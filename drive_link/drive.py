@@ -22,6 +22,7 @@ from typing import Any
 import can
 
 from firmware_protocol import load_od
+from firmware_protocol.cia301 import LOAD_SIGNATURE, SAVE_SIGNATURE
 from firmware_protocol.constraints import CONSTRAINTS
 from firmware_protocol.current_stability import (
     CURRENT_KEYS,
@@ -54,11 +55,9 @@ __all__ = [
     "Gains",
 ]
 
-SAVE_SIGNATURE = 0x65766173  # "save"
 #: 0x2060 store_status (U8, ro) values → name (the EDS enumeration, :class:`StoreStatus`).
 STORE_STATUS: dict[int, str] = {int(s): s.name.lower() for s in StoreStatus}
 STORE_STATUS_INDEX = load_od().entry("store_status").index
-LOAD_SIGNATURE = 0x64616F6C  # "load"
 _LOOP_NAMES = frozenset(
     [f"current_controller.{k}" for k in CURRENT_KEYS]
     + [f"motor.{k}" for k in MOTOR_KEYS]

@@ -13,7 +13,8 @@ This package is the one home of every protocol fact; other packages import, neve
 :mod:`~firmware_protocol.abort_codes` (SDO abort codes and meanings, on canopen's table),
 :mod:`~firmware_protocol.emcy_codes` (EMCY codes sent and their meanings),
 :mod:`~firmware_protocol.enums` (enumerated object values, the controller-type names),
-:mod:`~firmware_protocol.cia402` (statusword/controlword),
+:mod:`~firmware_protocol.cia402` (statusword/controlword), :mod:`~firmware_protocol.cia301`
+(the store/restore signatures),
 :mod:`~firmware_protocol.index_ranges` (which part of the OD an index is in, PDO parameter
 bases), :mod:`~firmware_protocol.paper` (Table 2 motor, Ts, the speed model a/b, the paper's
 gains) and the objects' limits

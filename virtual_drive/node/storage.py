@@ -17,6 +17,7 @@ import os
 import tempfile
 from pathlib import Path
 
+from firmware_protocol.cia301 import LOAD_SIGNATURE, SAVE_SIGNATURE
 from firmware_protocol.enums import StoreStatus
 
 __all__ = [
@@ -38,9 +39,6 @@ logger = logging.getLogger(__name__)
 FORMAT = "bldc-bench-drive-parameters"
 VERSION = 1
 
-#: "save" / "load" signatures (CiA 301 §7.5.2.13/14)
-SAVE_SIGNATURE = 0x65766173
-LOAD_SIGNATURE = 0x64616F6C
 
 
 class StoreCorruptError(ValueError):
