@@ -2,8 +2,9 @@
 ``_modules`` used only inside their own package, and no protocol fact copied as a literal.
 
 The truth for the last point is the EDS (``firmware_protocol.load_od``: every object index) and
-the EMCY code table the drive sends (``firmware_protocol.emcy_codes.EMCY_CODES``): a hex literal
-in ``drive_link`` or ``dashboard`` code equal to one of them is a copy of a fact that has a home.
+the EMCY code table the drive sends (``firmware_protocol.emcy_codes.EMCY_CODES``) and the CiA 301
+store/restore signatures (``firmware_protocol.cia301``): a hex literal in ``drive_link`` or
+``dashboard`` code equal to one of them is a copy of a fact that has a home.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from pathlib import Path
 
 import pytest
 
-from firmware_protocol import emcy_codes, load_od
+from firmware_protocol import cia301, emcy_codes, load_od
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("firmware_protocol", "drive_link", "dashboard")
@@ -82,7 +83,7 @@ def _hex_literals(path: Path) -> list[tuple[int, int]]:
 
 def test_host_code_takes_object_indices_and_emcy_codes_from_firmware_protocol() -> None:
     indices = {e.index for e in load_od() if e.index >= 0x1000}
-    codes = set(emcy_codes.EMCY_CODES)
+    codes = set(emcy_codes.EMCY_CODES) | {cia301.SAVE_SIGNATURE, cia301.LOAD_SIGNATURE}
     found = []
     for path in _sources(*HOST):
         for line, value in _hex_literals(path):
