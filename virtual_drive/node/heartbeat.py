@@ -53,17 +53,16 @@ class HeartbeatProducer:
         self._next = now + self.period_ms / 1000.0
 
     def tick(self, now: float) -> None:
-        if self.period_ms <= 0:
+        if self.period_ms <= 0 or now < self._next:  # (called every pacing tick: cheap first)
             return
         state = self._state()
         if state == 0:  # INITIALISING: no heartbeat
             return
-        if now >= self._next:
-            self._send(0x700 + self.node_id, bytes([state]))
-            period = self.period_ms / 1000.0
-            self._next += period
-            if self._next <= now:  # fell behind (e.g. paused): no burst of catch-up frames
-                self._next = now + period
+        self._send(0x700 + self.node_id, bytes([state]))
+        period = self.period_ms / 1000.0
+        self._next += period
+        if self._next <= now:  # fell behind (e.g. paused): no burst of catch-up frames
+            self._next = now + period
 
 
 @dataclass
@@ -148,6 +147,8 @@ class HeartbeatConsumer:
             self._on_resume(watch.node_id)
 
     def tick(self, now: float) -> None:
+        if not self._watches:  # (called every pacing tick: nothing to copy when none is set)
+            return
         for watch in list(self._watches.values()):
             if watch.last is None or watch.timed_out:
                 continue
