@@ -155,8 +155,17 @@ def main(argv: Sequence[str] | None = None) -> int:
             flush=True,
         )
 
-    app = create_app(config, on_ready=ready)
-    server = uvicorn.Server(
+    class _Server(uvicorn.Server):
+        """Prints the URLs once the REST port listens: the lifespan's startup runs before
+        uvicorn binds, and a URL printed then was refused (UML lane, load 9)."""
+
+        async def startup(self, sockets=None) -> None:
+            await super().startup(sockets=sockets)
+            if self.started:
+                ready(app)
+
+    app = create_app(config)
+    server = _Server(
         uvicorn.Config(
             app,
             host=config.host,

@@ -694,7 +694,7 @@ def item_halt(d: Drive, opts: dict) -> str:
         d.nmt("start")
         d.set_mode("speed")
         d.set_speed(SPIN_RPM)
-        d.enable(timeout=2.0)
+        d.enable()
         sw = d.statusword
         v = float(d.read("measurements.speed"))
         if abs(v - SPIN_RPM) > 0.5 * SPIN_RPM:

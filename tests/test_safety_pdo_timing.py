@@ -23,6 +23,9 @@ from test_node_support import Bench
 
 pytestmark = pytest.mark.timeout(60)
 
+#: run-queue wait (s/s) below which a window shows the drive's own timing
+CLEAN_WAIT = 0.25
+
 
 class Stamps(can.Listener):
     """Send time stamps (s) of the frames on one COB-ID."""
@@ -78,22 +81,32 @@ def test_two_ms_inhibit_gives_500_hz_not_the_next_tick(bench):
     bench.net.notifier.add_listener(stamps)
     bench.nmt(0x01)
     time.sleep(0.2)
-    probe = RunQueueProbe()
-    t0 = time.time()
-    time.sleep(1.0)
-    t1 = time.time()
-    probe.stop()
-    t = stamps.between(t0, t1)
-    rate = len(t) / (t1 - t0)
+    # a window in which the kernel let this process run: the 2 ms spacing is a property of the
+    # drive's scheduling and cannot be seen while the process waits for a CPU
+    best: tuple[RunQueueProbe, list[float], float] | None = None
+    for _ in range(5):
+        probe = RunQueueProbe()
+        t0 = time.time()
+        time.sleep(1.0)
+        t1 = time.time()
+        probe.stop()
+        if best is None or probe.wait < best[0].wait:
+            best = (probe, stamps.between(t0, t1), t1 - t0)
+        if probe.wait < CLEAN_WAIT:
+            break
+    probe, t, span = best
+    rate = len(t) / span
     gaps = [b - a for a, b in itertools.pairwise(t)]
     # never more often than every 2 ms: the inhibit time counts from the end of a send, so
     # even the bus's own send stamps are at least 2 ms apart
     assert rate <= 500 * 1.01 + 1, rate
     assert min(gaps) >= 2.0e-3 - 1e-6, min(gaps)
-    # and not snapped to the 1 ms pacing tick (that gave 331-336 Hz, i.e. 3 ms gaps); the
-    # thread's wake-up lateness (GIL hand-over included) adds to each 2 ms gap on a busy host
     assert rate >= min_rate(500, probe.wait, margin=0.75), (rate, probe)
-    assert statistics.median(gaps) < 2.7e-3, statistics.median(gaps)
+    if probe.wait >= CLEAN_WAIT:
+        pytest.skip(f"2 ms spacing not observable: {probe!r} in the best of 5 windows")
+    # and not snapped to the 1 ms pacing tick (that gave 331-336 Hz, i.e. 3 ms gaps); the
+    # thread's wake-up lateness (GIL hand-over included) adds to each 2 ms gap
+    assert statistics.median(gaps) < 2.7e-3, (statistics.median(gaps), probe)
 
 
 def test_stalled_periods_are_counted_not_burst(bench):
