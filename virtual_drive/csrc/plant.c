@@ -47,7 +47,7 @@ double plant_emf_shape(double theta, double w)
     if (w > 0.0 && x > -0.5 * w && x < 0.5 * w) {
         /* moving average of width w across a slope change of -slope */
         double y = x + 0.5 * w;
-        T -= slope * (y * y / (2.0 * w) - (x > 0.0 ? x : 0.0));
+        T -= slope * (y * y * (0.5 / w) - (x > 0.0 ? x : 0.0));
     }
     return sgn * T;
 }
@@ -380,7 +380,7 @@ int plant_advance_six_step(plant_t *p, int z, const double *va_seg, const double
 
 void plant_mech_step(plant_t *p, double Ts, double a_m)
 {
-    double Te = p->Te_int / Ts;
+    double Te = p->Te_int * (1.0 / Ts);
     double w0 = p->omega;
     if (p->B_tot > 0.0) {
         p->omega = a_m * w0 + p->mech_gain * (Te - p->T_load);
