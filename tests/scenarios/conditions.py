@@ -160,35 +160,6 @@ class CpuHog:
 
 
 # --------------------------------------------------------------------------------------------
-# the stand-ins for hardware get the CPU first
-# --------------------------------------------------------------------------------------------
-
-#: nice value given to the virtual drive and hub processes (every thread). On a bench the drive
-#: is a DSP and the bus a wire, each with its own clock: what a busy host starves is the host
-#: side (drive_link, the CLI, the browser), and that is what the conditions test. A virtual
-#: drive that waits more for a CPU than it runs (run-queue wait 1.0-1.1 s/s at load 20 in the
-#: busy full run) misses its own PDO periods, which no host code can make up for.
-STAND_IN_NICE = -10
-
-
-def favour(pid: int, nice: int = STAND_IN_NICE) -> bool:
-    """Give every thread of process ``pid`` the nice value ``nice`` (threads created later
-    inherit it from their creator). False where the kernel refuses (no CAP_SYS_NICE: a
-    non-root run keeps the default priority, and the conditions are then harsher)."""
-    try:
-        tids = [int(t) for t in os.listdir(f"/proc/{pid}/task")]
-    except OSError:
-        return False
-    ok = True
-    for tid in tids:
-        try:
-            os.setpriority(os.PRIO_PROCESS, tid, nice)
-        except (PermissionError, ProcessLookupError):
-            ok = False
-    return ok
-
-
-# --------------------------------------------------------------------------------------------
 # the bench: bus + virtual drive (+ busy CPU)
 # --------------------------------------------------------------------------------------------
 
@@ -238,9 +209,6 @@ class Bench:
                 )
                 self.hub, self.hub_port = self.settings.hub, self.settings.port
                 self.proc = self.settings.drives[self.node_id]
-                if self.settings.hub_process is not None:
-                    favour(self.settings.hub_process.pid)
-                favour(self.proc.proc.pid)
                 apply_tpdo_event_timers(self)
             else:
                 self._spawn()
@@ -264,14 +232,12 @@ class Bench:
             store=self.store,
             timeout=self._timeout,
         )
-        favour(self.proc.proc.pid)
         apply_tpdo_event_timers(self)
 
     def restart(self) -> None:
         """Stop the drive process (SIGTERM) and start it again on the same store file."""
         if self.settings is not None:
             self.proc = self.settings.restart_drive(self.node_id)
-            favour(self.proc.proc.pid)
             apply_tpdo_event_timers(self)
             return
         if self.proc is not None:
