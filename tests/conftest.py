@@ -18,21 +18,32 @@ from pathlib import Path
 import pytest
 
 
-def _schedstat(pid: int) -> tuple[float, float]:
-    """(s on a CPU, s waiting on a run queue) summed over the threads of ``pid`` (0, 0 if the
-    kernel has no schedstat)."""
-    cpu = wait = 0
+def _schedstat(pid: int) -> dict[str, tuple[int, int]]:
+    """Thread id → (ns on a CPU, ns waiting on a run queue) of the threads of ``pid`` (empty if
+    the kernel has no schedstat)."""
+    out: dict[str, tuple[int, int]] = {}
     try:
         tasks = list(Path(f"/proc/{pid}/task").iterdir())
     except OSError:
-        return 0.0, 0.0
+        return out
     for t in tasks:
         try:
             fields = (t / "schedstat").read_text().split()
         except OSError:
             continue  # thread gone
-        cpu += int(fields[0])
-        wait += int(fields[1])
+        out[t.name] = (int(fields[0]), int(fields[1]))
+    return out
+
+
+def _delta(a: dict[str, tuple[int, int]], b: dict[str, tuple[int, int]]) -> tuple[float, float]:
+    """(s on a CPU, s waiting) between two readings; a thread that started meanwhile counts
+    from zero, one that ended is left out (its totals left with it: summing the totals of
+    whatever threads exist gave a negative wait in the busy full run)."""
+    cpu = wait = 0
+    for tid, (c1, w1) in b.items():
+        c0, w0 = a.get(tid, (0, 0))
+        cpu += max(0, c1 - c0)
+        wait += max(0, w1 - w0)
     return cpu / 1e9, wait / 1e9
 
 
@@ -43,14 +54,13 @@ class RunQueueProbe:
     def __init__(self, pid: int | None = None) -> None:
         self.pid = os.getpid() if pid is None else pid
         self._t0 = time.monotonic()
-        self._cpu0, self._wait0 = _schedstat(self.pid)
+        self._start = _schedstat(self.pid)
         self.cpu = self.wait = 0.0
 
     def stop(self) -> float:
         dt = max(time.monotonic() - self._t0, 1e-9)
-        cpu1, wait1 = _schedstat(self.pid)
-        self.cpu = (cpu1 - self._cpu0) / dt
-        self.wait = (wait1 - self._wait0) / dt
+        cpu, wait = _delta(self._start, _schedstat(self.pid))
+        self.cpu, self.wait = cpu / dt, wait / dt
         return self.wait
 
     def __repr__(self) -> str:
