@@ -196,6 +196,15 @@ def _wait_done(drive: Drive, timeout: float, hooks: Hooks, poll_s: float = 0.02)
         state = drive.trace.state
 
 
+def _settle_speed(drive: Drive, w: float, tol: float, timeout: float, hooks: Hooks) -> None:
+    """Wait until |measured speed − ``w``| ≤ ``tol`` (rpm), at most ``timeout`` s."""
+    deadline = time.monotonic() + timeout
+    while abs(float(drive.read("measurements.speed")) - w) > tol:
+        if time.monotonic() >= deadline:
+            raise DriveTimeout(f"speed not back within {tol:g} rpm of {w:g} rpm in {timeout:g} s")
+        hooks.sleep(0.05)
+
+
 def _upload(drive: Drive, hooks: Hooks) -> Trace:
     def progress(done: int, total: int | None) -> None:
         if total:
@@ -230,7 +239,7 @@ def record(
         drive.trace.arm()
         if action is not None:
             if pre_trigger:
-                h.sleep(3.0 * pre_trigger * divider * TS + 0.02)
+                drive.trace.wait_ready(10.0 + 20.0 * pre_trigger * divider * TS, sleep=h.sleep)
             action()
         h.report(0.3, "recording")
         _wait_done(drive, timeout, h)
@@ -252,24 +261,25 @@ def record_setpoint_step(
     """Record ``channels`` around a setpoint step made by ``set_after``.
 
     Configures the recorder (``divider`` loop samples per trace sample, ``length`` samples,
-    ``pre_trigger`` before the step) on "setpoint step", arms, waits for the pre-trigger part
-    to fill, steps, waits (``timeout`` s, default 1 s + 3 × the recording) and uploads, all
-    under the trace lock. The recorder ignores a step while its pre-trigger part is still
-    filling (state "armed" either way), so the wait is ``3 × pre-trigger time + 20 ms``; if
-    the step was still too early ``set_before`` puts the setpoint back and the step is
-    repeated (``attempts`` times). Waits and progress go through ``hooks``.
+    ``pre_trigger`` before the step) on "setpoint step", arms, waits until the drive reports
+    its pre-trigger part full (:meth:`~drive_link.trace.Recorder.wait_ready`: in the drive's
+    own time, which a slow bus or a starved virtual drive stretches), steps, waits
+    (``timeout`` s, default 1 s + 3 × the recording) and uploads, all under the trace lock.
+    If the recording still does not finish, ``set_before`` puts the setpoint back (and waits
+    for the plant to follow, if it does so) and the step is repeated (``attempts`` times).
+    Waits and progress go through ``hooks``.
     """
     h = hooks or Hooks()
     pre_s = pre_trigger * divider * TS
     record_s = length * divider * TS
     if timeout is None:
         timeout = 1.0 + 3.0 * record_s
-    wait_pre = 3.0 * pre_s + 0.02
+    ready_timeout = 10.0 + 20.0 * pre_s  # the drive's time may run far behind the wall clock
     with drive.trace.lock:
         drive.trace.configure(channels, divider, length, pre_trigger, Trigger("setpoint_step"))
         for attempt in range(attempts):
             drive.trace.arm()
-            h.sleep(wait_pre * (attempt + 1))
+            drive.trace.wait_ready(ready_timeout, sleep=h.sleep)
             set_after()
             h.report(0.3, "recording")
             try:
@@ -279,7 +289,6 @@ def record_setpoint_step(
                     raise
                 drive.trace.stop()
                 set_before()
-                h.sleep(wait_pre)
                 continue
             return _upload(drive, h)
     raise AssertionError("unreachable")
@@ -491,10 +500,15 @@ def speed_step(
     _require_enabled(drive, enable)
     h = hooks or Hooks()
     h.sleep(settle_s)
+    def back_to_w0() -> None:  # a retried step starts from rest at w0 again
+        drive.set_speed(w0)
+        _settle_speed(drive, w0, max(5.0, 0.02 * abs(w1 - w0)), 10.0, h)
+        h.sleep(settle_s)
+
     tr = record_setpoint_step(
         drive,
         ["speed", "speed_ref", "i_p_ref", "i_p"],
-        lambda: drive.set_speed(w0),
+        back_to_w0,
         lambda: drive.set_speed(w1),
         divider,
         length,

@@ -17,10 +17,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from firmware_protocol import load_od
+from firmware_protocol import abort_codes, load_od
 from firmware_protocol.enums import TraceState, TraceTriggerEdge, TraceTriggerMode
 
-from .errors import DriveTimeout, InvalidValue, StateError
+from .errors import DriveTimeout, InvalidValue, SdoAbort, StateError
 
 __all__ = [
     "STATES",
@@ -250,6 +250,53 @@ class Recorder:
                 raise DriveTimeout(f"trace not done after {timeout:g} s (recorder {state})")
             time.sleep(poll_s)
             state = self.state
+
+    def wait_ready(
+        self, timeout: float, poll_s: float = 0.02, sleep: Callable[[float], None] = time.sleep
+    ) -> float:
+        """Wait until the armed recorder holds its whole pre-trigger part, so that a setpoint
+        step or crossing made now is taken as the trigger; returns the s waited.
+
+        The drive fills that part in its own time (``pre_trigger × divider × 20 µs`` after
+        arm, read back as ``trace_config.pre_trigger_filled``): a slow bus, or a virtual drive
+        whose simulation lags the wall clock on a busy host, takes longer than a fixed sleep
+        assumes. Firmware without that object (SDO abort 0x06090011) gets the fixed sleep:
+        3 × the pre-trigger time + 20 ms. ``sleep`` waits between polls (s; may raise to
+        cancel).
+
+        :raises DriveTimeout: not full after ``timeout`` s.
+        :raises StateError: the recorder is idle (not armed, or stopped meanwhile).
+        """
+        d = self._drive
+        t0 = time.monotonic()
+        pre = int(d.read("trace_config.pre_trigger"))
+        if pre == 0:
+            return time.monotonic() - t0
+        deadline = t0 + timeout
+        polls = 0
+        while True:
+            try:
+                filled = int(d.read("trace_config.pre_trigger_filled"))
+            except SdoAbort as exc:
+                if exc.code != abort_codes.NO_SUBINDEX:
+                    raise
+                divider = int(d.read("trace_config.divider"))
+                sleep(3.0 * pre * divider * TS + 0.02)
+                return time.monotonic() - t0
+            if filled >= pre:
+                return time.monotonic() - t0
+            polls += 1
+            if polls % 5 == 1:  # already triggered (e.g. "immediate"), or not armed at all?
+                state = self.state
+                if state in ("recording", "done"):
+                    return time.monotonic() - t0
+                if state == "idle":
+                    raise StateError("trace recorder is idle: arm it before waiting for it")
+            if time.monotonic() >= deadline:
+                raise DriveTimeout(
+                    f"trace pre-trigger part {filled}/{pre} samples after {timeout:g} s"
+                )
+            sleep(poll_s)
 
     def upload(self, progress: Callable[[int, int | None], None] | None = None) -> Trace:
         """Upload the recorded data by SDO block upload on the second SDO channel."""

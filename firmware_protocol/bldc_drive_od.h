@@ -2057,7 +2057,7 @@
 #define OD_TRACE_CONFIG__HIGHEST_SUB_INDEX_CTYPE                 uint16_t
 #define OD_TRACE_CONFIG__HIGHEST_SUB_INDEX_ACCESS                OD_ACCESS_CONST
 #define OD_TRACE_CONFIG__HIGHEST_SUB_INDEX_PDO                   0u
-#define OD_TRACE_CONFIG__HIGHEST_SUB_INDEX_DEFAULT               12u
+#define OD_TRACE_CONFIG__HIGHEST_SUB_INDEX_DEFAULT               13u
 #define OD_TRACE_CONFIG__HIGHEST_SUB_INDEX_REF                   0x21000008UL
 /* 0x2100:01 trace_config.channel_count UNSIGNED8 rw [1] */
 #define OD_TRACE_CONFIG__CHANNEL_COUNT_INDEX                     0x2100u
@@ -2199,6 +2199,17 @@
 #define OD_TRACE_CONFIG__CAPACITY_PDO                            0u
 #define OD_TRACE_CONFIG__CAPACITY_DEFAULT                        0x00004000UL /* samples */
 #define OD_TRACE_CONFIG__CAPACITY_REF                            0x21000C20UL
+/* 0x2100:0D trace_config.pre_trigger_filled UNSIGNED16 ro [samples] - trace samples held before the trigger: rises from 0 after arm to pre_trigger (in drive time, divider loop periods per sample); a crossing or setpoint-step trigger is accepted only once it equals pre_trigger; 0 when idle */
+#define OD_TRACE_CONFIG__PRE_TRIGGER_FILLED_INDEX                0x2100u
+#define OD_TRACE_CONFIG__PRE_TRIGGER_FILLED_SUB                  0x0Du
+#define OD_TRACE_CONFIG__PRE_TRIGGER_FILLED_TYPE                 OD_TYPE_U16
+#define OD_TRACE_CONFIG__PRE_TRIGGER_FILLED_CTYPE                uint16_t
+#define OD_TRACE_CONFIG__PRE_TRIGGER_FILLED_ACCESS               OD_ACCESS_RO
+#define OD_TRACE_CONFIG__PRE_TRIGGER_FILLED_PDO                  0u
+#define OD_TRACE_CONFIG__PRE_TRIGGER_FILLED_DEFAULT              0u /* samples */
+#define OD_TRACE_CONFIG__PRE_TRIGGER_FILLED_MIN                  0u /* samples */
+#define OD_TRACE_CONFIG__PRE_TRIGGER_FILLED_MAX                  16384u /* samples */
+#define OD_TRACE_CONFIG__PRE_TRIGGER_FILLED_REF                  0x21000D10UL
 
 /* ---- 0x2101 trace_channels ---- */
 #define OD_TRACE_CHANNELS_INDEX                                  0x2101u

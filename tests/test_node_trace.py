@@ -123,6 +123,36 @@ def test_crossing_trigger_with_divider(bench):
     bench.write("setpoints.i_p_ref", 15.0)
 
 
+def test_pre_trigger_filled_follows_the_drive_samples(bench):
+    """0x2100:13 counts the pre-trigger samples the drive holds: 0 when idle, rising to
+    pre_trigger no sooner than (pre_trigger − 1) × divider + 1 loop samples after arm; a step
+    made as soon as it is full is the trigger (at trigger_position = pre_trigger)."""
+    bench.write("trace_config.command", 0)
+    configure(bench, [REF_I_P, REF_I_P_REF], length=400, pre=150, divider=4, mode=2)
+    bench.write("setpoints.i_p_ref", 15.0)
+    held = bench.read("trace_config.pre_trigger_filled")  # idle: 0; done: the last capture's
+    last = bench.read("trace_config.trigger_position")
+    assert held == (0 if bench.read("trace_config.state") == 0 else last), (held, last)
+    s0 = bench.drive.runner.stats.samples
+    bench.write("trace_config.command", 1)
+    seen = []
+    assert bench.wait(
+        lambda: seen.append(bench.read("trace_config.pre_trigger_filled")) or seen[-1] == 150,
+        10.0,
+    ), f"pre_trigger_filled went {seen[:5]} … {seen[-5:]}"
+    ran = bench.drive.runner.stats.samples - s0
+    # the first sample is taken at the arm instant, the 150th 149 × 4 loop samples later
+    assert ran >= 149 * 4 + 1, f"full after only {ran} loop samples (149 × divider 4 + 1)"
+    assert all(0 <= v <= 150 for v in seen) and seen == sorted(seen), seen
+    assert bench.read("trace_config.state") == 1  # still armed: no step yet
+    bench.write("setpoints.i_p_ref", 20.0)
+    assert bench.wait(lambda: bench.read("trace_config.state") == 3, 2.0)
+    assert bench.read("trace_config.trigger_position") == 150
+    assert bench.read("trace_config.pre_trigger_filled") == 150
+    bench.write("trace_config.command", 0)
+    bench.write("setpoints.i_p_ref", 15.0)
+
+
 def test_forced_trigger_and_no_data_before_done(bench):
     configure(bench, [REF_I_P, REF_SPEED], length=3000, pre=10, mode=1, level=1e5)
     bench.write("trace_config.command", 1)

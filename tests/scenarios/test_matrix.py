@@ -169,6 +169,7 @@ def test_current_step_with_full_64k_trace(bench):
         length, pre, quiet = cap // len(channels), 2048, 600
         g = d.read_gains()
         R, L = float(d.read("motor.R")), float(d.read("motor.L"))
+        tries: list[str] = []  # why a try was redone (e_L before the step, first change)
         for _ in range(5):
             _at_rest(d)
             d.set_mode("speed")
@@ -182,7 +183,7 @@ def test_current_step_with_full_64k_trace(bench):
             d.enable()
             for _ in range(3):  # a step while the pre-trigger part fills is not a trigger
                 d.trace.arm()
-                time.sleep(3 * pre * TS + 0.02)
+                d.trace.wait_ready(10.0 * slow)  # in the drive's time: it may lag the wall clock
                 d.set_current(20.0)
                 try:
                     d.trace.wait(5.0 * slow)
@@ -201,8 +202,9 @@ def test_current_step_with_full_64k_trace(bench):
             clean = min(50, int(off[0]) - quiet if len(off) else 50)
             if clean >= 20:
                 break
+            tries.append(f"e_L {e_pre:.3f} V, {int(off[0]) - quiet if len(off) else 'no'} change")
         else:
-            pytest.fail(f"{_tag(bench)} no quiet e_L around the step in 5 tries")
+            pytest.fail(f"{_tag(bench)} no quiet e_L around the step in 5 tries: {tries}")
         again = d.trace.upload()  # the same recording a second time: byte-identical
         _at_rest(d)
     # structure: 4 channels × 4096 samples, finite, trigger where configured

@@ -43,6 +43,7 @@ def make_live_getters(d: VirtualDrive) -> dict[tuple[int, int], Callable[[], Any
         (0x2100, 10): lambda: d.recorder.state,
         (0x2100, 11): lambda: d.recorder.trigger_position,
         (0x2100, 12): lambda: d.recorder.capacity,
+        (0x2100, 13): lambda: d.recorder.pre_trigger_filled,
         (0x2102, 0): d.recorder.data_bytes,
         (0x5030, 1): lambda: float(d.sim.time),
         (0x5030, 2): lambda: d.speed,

@@ -121,6 +121,16 @@ class TraceRecorder:
             else:
                 self.state = ARMED
 
+    @property
+    def pre_trigger_filled(self) -> int:
+        """Samples held before the trigger (0x2100:13): the ring's fill while armed (0 →
+        ``pre_trigger``), the capture's pre-trigger part once triggered, 0 when idle."""
+        if self.state == ARMED:
+            return self._ring_n if self.pre_trigger else 0
+        if self.state in (RECORDING, DONE):
+            return self.trigger_position
+        return 0
+
     def stop(self) -> None:
         with self._lock:
             if self.state in (ARMED, RECORDING):
