@@ -83,6 +83,7 @@ def test_current_step_matches_paper_loop(drive, ratio):
             drift = np.flatnonzero(np.abs(e_L[k0:] - e0) > 0.01 * abs(e0) + 0.01)
             if drift.size:
                 clean = min(clean, int(drift[0]))
+            clean = min(clean, 50)  # the pre-step error is constant only over ≤ 50 samples
             if clean >= 25:
                 break
         else:
