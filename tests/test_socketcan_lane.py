@@ -81,11 +81,10 @@ def test_socketcan_lane():
     if res["problem"]:
         pytest.fail(f"SocketCAN lane did not run: {res['problem']}", pytrace=False)
     output = res["output"]
-    summary = [ln for ln in output.splitlines() if ln.startswith(("FAILED", "ERROR"))]
     last = (output.strip().splitlines() or ["no output"])[-1]
     print(f"SocketCAN lane: {last} ({res['seconds']:.0f} s in UML, load {load})")
     print("---- output inside UML (end) ----\n" + output[-8000:])
-    assert res["rc"] == 0, "SocketCAN lane (inside UML): " + "; ".join(summary or [last])
+    assert res["rc"] == 0, lane.failure_message(output)  # one line, then each failure's reason
 
 
 def test_lane_without_uml_says_so_in_one_line(monkeypatch):
