@@ -55,6 +55,12 @@ from .emcy import EmcyManager
 from .heartbeat import HeartbeatConsumer, HeartbeatProducer
 from .local_node import DriveLocalNode, RpdoRefusedError
 from .nmt import OPERATIONAL, NmtSlave
+from .od_addresses import (
+    DISABLE_OPERATION_OPTION,
+    FAULT_REACTION_OPTION,
+    QUICK_STOP_OPTION,
+    SHUTDOWN_OPTION,
+)
 from .od_maps import (
     CURRENT_WINDOW_A,
     MEASUREMENTS,
@@ -271,8 +277,17 @@ class VirtualDrive:
         e = self.view.entry(name)
         return self.node.stored(e.index, e.subindex)
 
+    def _param(self, address: tuple[int, int]) -> Any:
+        """Present parameter value at ``address`` = ``(index, sub)`` (an :mod:`.od_addresses`
+        constant; cached, every write to the data store clears the cache)."""
+        try:
+            return self._pcache[address]
+        except KeyError:
+            value = self._pcache[address] = self.node.stored(*address)
+            return value
+
     def _value(self, index: int, sub: int = 0) -> Any:
-        """Present parameter value (cached; every write to the data store clears the cache)."""
+        """Present parameter value at ``index``/``sub`` (as :meth:`_param`)."""
         key = (index, sub)
         try:
             return self._pcache[key]
@@ -309,10 +324,10 @@ class VirtualDrive:
     # -- 402 hooks ------------------------------------------------------------------------
     def _options(self) -> dict[str, int]:
         return {
-            "quick_stop": self._value(0x605A),
-            "shutdown": self._value(0x605B),
-            "disable_operation": self._value(0x605C),
-            "fault_reaction": self._value(0x605E),
+            "quick_stop": self._param(QUICK_STOP_OPTION),
+            "shutdown": self._param(SHUTDOWN_OPTION),
+            "disable_operation": self._param(DISABLE_OPERATION_OPTION),
+            "fault_reaction": self._param(FAULT_REACTION_OPTION),
         }
 
     def _reset_fault(self) -> bool:

@@ -14,6 +14,21 @@ from typing import TYPE_CHECKING
 from firmware_protocol.cia402 import CW_HALT
 
 from . import cia402 as sm
+from .od_addresses import (
+    HALT_OPTION,
+    MAX_CURRENT,
+    MOTOR_K_RPM,
+    MOTOR_RATED_CURRENT,
+    PROFILE_ACCELERATION,
+    PROFILE_DECELERATION,
+    QUICK_STOP_DECELERATION,
+    SETPOINT_I_P_REF,
+    SIM_LOAD_J,
+    SPEED_CURRENT_LIMIT,
+    TARGET_TORQUE,
+    TARGET_VELOCITY,
+    TORQUE_SLOPE,
+)
 from .od_maps import MODE_PROFILE_TORQUE, MODE_PROFILE_VELOCITY, SPEED_ZERO_RPM
 from .runner import TS
 
@@ -47,13 +62,13 @@ def prepare_chunk(d: VirtualDrive, n: int) -> None:
     if mode == MODE_PROFILE_VELOCITY:
         set_sim_mode(d, "speed")
         if halt:  # 0x605D: 1 slow-down ramp (0x6084), 2..4 quick-stop ramp (0x6085)
-            rate = d._value(0x6084) if d._value(0x605D) == 1 else d._value(0x6085)
+            slow = d._param(HALT_OPTION) == 1
+            rate = d._param(PROFILE_DECELERATION if slow else QUICK_STOP_DECELERATION)
             d._speed_ref = ramp_towards(d._speed_ref, 0.0, rate, rate, dt)
         else:
-            target = float(d._value(0x60FF))
-            d._speed_ref = ramp_towards(
-                d._speed_ref, target, d._value(0x6083), d._value(0x6084), dt
-            )
+            target = float(d._param(TARGET_VELOCITY))
+            accel, decel = d._param(PROFILE_ACCELERATION), d._param(PROFILE_DECELERATION)
+            d._speed_ref = ramp_towards(d._speed_ref, target, accel, decel, dt)
         d.sim.set_speed_ref(d._speed_ref)
     else:
         set_sim_mode(d, "current")
@@ -63,15 +78,15 @@ def prepare_chunk(d: VirtualDrive, n: int) -> None:
 def current_ref(d: VirtualDrive, mode: int, halt: bool = False, dt: float = 0.0) -> float:
     """i_p* (A) of the current modes: profile torque follows 0x6087 (per mille of rated per s,
     0 = step) toward target_torque, or toward 0 on halt; mode -1 steps to i_p_ref."""
-    rated = d._value(0x6075) / 1000.0
-    cap = d._value(0x6073) / 1000.0 * rated
+    rated = d._param(MOTOR_RATED_CURRENT) / 1000.0
+    cap = d._param(MAX_CURRENT) / 1000.0 * rated
     if mode == MODE_PROFILE_TORQUE:
-        target = 0.0 if halt else d._value(0x6071) / 1000.0 * rated
-        slope = d._value(0x6087) / 1000.0 * rated  # A/s
+        target = 0.0 if halt else d._param(TARGET_TORQUE) / 1000.0 * rated
+        slope = d._param(TORQUE_SLOPE) / 1000.0 * rated  # A/s
         target = max(-cap, min(cap, target))
         d._i_ref = ramp_towards(d._i_ref, target, slope, slope, dt)
     else:
-        target = 0.0 if halt else float(d._value(0x2030, 1))
+        target = 0.0 if halt else float(d._param(SETPOINT_I_P_REF))
         target = max(-cap, min(cap, target))
         d._i_ref = target
     d._i_target = target
@@ -94,14 +109,14 @@ def ramp_step(d: VirtualDrive, dt: float) -> None:
         d._speed_ref = 0.0
         st.ramp_done()
         return
-    decel = d._value(0x6084) if st.ramp == sm.RAMP_SLOW else 0
+    decel = d._param(PROFILE_DECELERATION) if st.ramp == sm.RAMP_SLOW else 0
     if decel == 0:
-        decel = d._value(0x6085)
+        decel = d._param(QUICK_STOP_DECELERATION)
     alpha = decel * 2.0 * math.pi / 60.0  # rad/s^2
-    K_t = d._value(0x2000, 3) * 60.0 / (2.0 * math.pi)  # N m/A (i_p)
-    J = d._value(0x5000, 3)
-    rated = d._value(0x6075) / 1000.0
-    limit = min(d._value(0x2020, 3), d._value(0x6073) / 1000.0 * rated)
+    K_t = d._param(MOTOR_K_RPM) * 60.0 / (2.0 * math.pi)  # N m/A (i_p)
+    J = d._param(SIM_LOAD_J)
+    rated = d._param(MOTOR_RATED_CURRENT) / 1000.0
+    limit = min(d._param(SPEED_CURRENT_LIMIT), d._param(MAX_CURRENT) / 1000.0 * rated)
     i_brake = min(limit, J * alpha / K_t) if decel > 0 else limit
     d.sim.set_current_ref(-math.copysign(i_brake, speed))
 

@@ -12,6 +12,30 @@ import math
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
+from .od_addresses import (
+    CURRENT_ACTUAL_VALUE,
+    DC_LINK_VOLTAGE,
+    ERROR_CODE,
+    ERROR_HISTORY_COUNT,
+    ERROR_HISTORY_FIELDS,
+    ERROR_REGISTER,
+    MEASUREMENTS_INDEX,
+    MODES_OF_OPERATION_DISPLAY,
+    MOTOR_RATED_CURRENT,
+    MOTOR_RATED_TORQUE,
+    SIM_INFO_SPEED_FACTOR,
+    SIM_INFO_TIME,
+    STATUSWORD,
+    STORE_STATUS,
+    TORQUE_ACTUAL_VALUE,
+    TPDO_MISSED_EVENTS,
+    TRACE_CAPACITY,
+    TRACE_DATA,
+    TRACE_PRE_TRIGGER_FILLED,
+    TRACE_STATE,
+    TRACE_TRIGGER_POSITION,
+    VELOCITY_ACTUAL_VALUE,
+)
 from .od_maps import MEASUREMENTS
 
 if TYPE_CHECKING:
@@ -26,35 +50,37 @@ def make_live_getters(d: VirtualDrive) -> dict[tuple[int, int], Callable[[], Any
     recorder's read-only objects and the simulator's clock."""
     live = d.live
     g: dict[tuple[int, int], Callable[[], Any]] = {
-        (0x1001, 0): lambda: d.emcy.error_register,
-        (0x2060, 0): lambda: int(d.store_status),
-        (0x2070, 1): lambda: d.pdo.missed[0],
-        (0x2070, 2): lambda: d.pdo.missed[1],
-        (0x2070, 3): lambda: d.pdo.missed[2],
-        (0x2070, 4): lambda: d.pdo.missed[3],
-        (0x1003, 0): lambda: len(d.emcy.history),
-        (0x603F, 0): lambda: d.emcy.last_code,
-        (0x6041, 0): d.statusword,
-        (0x6061, 0): lambda: d._mode,
-        (0x606C, 0): lambda: clamp_int(live["speed"], 32),
-        (0x6077, 0): lambda: clamp_int(live["T_e"] / (d._value(0x6076) / 1000.0) * 1000.0, 16),
-        (0x6078, 0): lambda: clamp_int(live["i_p"] / (d._value(0x6075) / 1000.0) * 1000.0, 16),
-        (0x6079, 0): lambda: max(0, round(live["V_dc"] * 1000.0)),
-        (0x2100, 10): lambda: d.recorder.state,
-        (0x2100, 11): lambda: d.recorder.trigger_position,
-        (0x2100, 12): lambda: d.recorder.capacity,
-        (0x2100, 13): lambda: d.recorder.pre_trigger_filled,
-        (0x2102, 0): d.recorder.data_bytes,
-        (0x5030, 1): lambda: float(d.sim.time),
-        (0x5030, 2): lambda: d.speed,
+        ERROR_REGISTER: lambda: d.emcy.error_register,
+        STORE_STATUS: lambda: int(d.store_status),
+        ERROR_HISTORY_COUNT: lambda: len(d.emcy.history),
+        ERROR_CODE: lambda: d.emcy.last_code,
+        STATUSWORD: d.statusword,
+        MODES_OF_OPERATION_DISPLAY: lambda: d._mode,
+        VELOCITY_ACTUAL_VALUE: lambda: clamp_int(live["speed"], 32),
+        TORQUE_ACTUAL_VALUE: lambda: clamp_int(
+            live["T_e"] / (d._param(MOTOR_RATED_TORQUE) / 1000.0) * 1000.0, 16
+        ),
+        CURRENT_ACTUAL_VALUE: lambda: clamp_int(
+            live["i_p"] / (d._param(MOTOR_RATED_CURRENT) / 1000.0) * 1000.0, 16
+        ),
+        DC_LINK_VOLTAGE: lambda: max(0, round(live["V_dc"] * 1000.0)),
+        TRACE_STATE: lambda: d.recorder.state,
+        TRACE_TRIGGER_POSITION: lambda: d.recorder.trigger_position,
+        TRACE_CAPACITY: lambda: d.recorder.capacity,
+        TRACE_PRE_TRIGGER_FILLED: lambda: d.recorder.pre_trigger_filled,
+        TRACE_DATA: d.recorder.data_bytes,
+        SIM_INFO_TIME: lambda: float(d.sim.time),
+        SIM_INFO_SPEED_FACTOR: lambda: d.speed,
     }
-    for k in range(1, 9):
-        g[(0x1003, k)] = lambda k=k: d.emcy.history[k - 1] if k <= len(d.emcy.history) else 0
+    for k, address in enumerate(TPDO_MISSED_EVENTS):
+        g[address] = lambda k=k: d.pdo.missed[k]
+    for k, address in enumerate(ERROR_HISTORY_FIELDS):
+        g[address] = lambda k=k: d.emcy.history[k] if k < len(d.emcy.history) else 0
     for sub, name in MEASUREMENTS.items():
         if name == "hall_sector":
-            g[(0x2040, sub)] = lambda: int(live["hall_sector"])
+            g[(MEASUREMENTS_INDEX, sub)] = lambda: int(live["hall_sector"])
         else:
-            getter = g[(0x2040, sub)] = lambda name=name: float(live[name])
+            getter = g[(MEASUREMENTS_INDEX, sub)] = lambda name=name: float(live[name])
             getter.live_item = (live, name)  # type: ignore[attr-defined]  # (see pdo: one pick)
     return g
 

@@ -13,6 +13,14 @@ from typing import TYPE_CHECKING
 
 from firmware_protocol.cia402 import CW_HALT, OPERATION_ENABLED, QUICK_STOP_ACTIVE, SW_SPEED_ZERO
 
+from .od_addresses import (
+    SPEED_CURRENT_LIMIT,
+    TARGET_VELOCITY,
+    VELOCITY_THRESHOLD,
+    VELOCITY_THRESHOLD_TIME,
+    VELOCITY_WINDOW,
+    VELOCITY_WINDOW_TIME,
+)
 from .od_maps import CURRENT_WINDOW_A, MODE_PROFILE_VELOCITY
 
 if TYPE_CHECKING:
@@ -34,12 +42,14 @@ def statusword(d: VirtualDrive) -> int:
     elif st.state == OPERATION_ENABLED or st.ramp is not None:
         if d._mode == MODE_PROFILE_VELOCITY:
             reached = velocity_reached(d)
-            limit = abs(live["i_p_ref"]) >= 0.999 * d._value(0x2020, 3)
+            limit = abs(live["i_p_ref"]) >= 0.999 * d._param(SPEED_CURRENT_LIMIT)
         else:
             reached = (
                 d._i_ref == d._i_target and abs(live["i_p"] - live["i_p_ref"]) <= CURRENT_WINDOW_A
             )
-    if d._mode == MODE_PROFILE_VELOCITY and held(d, d._threshold_since, d._value(0x6070)):
+    if d._mode == MODE_PROFILE_VELOCITY and held(
+        d, d._threshold_since, d._param(VELOCITY_THRESHOLD_TIME)
+    ):
         mode_bits |= SW_SPEED_ZERO
     return st.statusword(
         target_reached=reached,
@@ -54,7 +64,7 @@ def velocity_target(d: VirtualDrive) -> float:
     st = d.cia402
     if st.ramp is not None or st.controlword & CW_HALT:
         return 0.0
-    return float(d._value(0x60FF))
+    return float(d._param(TARGET_VELOCITY))
 
 
 def held(d: VirtualDrive, since: float | None, time_ms: int) -> bool:
@@ -66,7 +76,7 @@ def velocity_reached(d: VirtualDrive) -> bool:
     """|speed - target| <= 0x606D continuously for 0x606E ms, for the present target."""
     if velocity_target(d) != d._window_target:
         return False  # target changed since the last chunk: not measured yet
-    return held(d, d._window_since, d._value(0x606E))
+    return held(d, d._window_since, d._param(VELOCITY_WINDOW_TIME))
 
 
 def update_windows(d: VirtualDrive) -> None:
@@ -74,13 +84,13 @@ def update_windows(d: VirtualDrive) -> None:
     t = float(d.sim.time)
     speed = float(d.live["speed"])
     target = velocity_target(d)
-    inside = abs(speed - target) <= d._value(0x606D)
+    inside = abs(speed - target) <= d._param(VELOCITY_WINDOW)
     if not inside or target != d._window_target:
         d._window_since = t if inside else None
     elif d._window_since is None:
         d._window_since = t
     d._window_target = target
-    if abs(speed) <= d._value(0x606F):
+    if abs(speed) <= d._param(VELOCITY_THRESHOLD):
         if d._threshold_since is None:
             d._threshold_since = t
     else:
