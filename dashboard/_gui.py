@@ -251,13 +251,15 @@ class BenchGui:
         self.push_plots()
 
     def push_plots(self, require: tuple[str, float] | None = None) -> bool:
-        """Send the decimated live window to every panel's plots; with ``require`` =
-        (signal, value) only if the window's last sample of that signal equals value. Only new
-        data is sent (nothing when no sample arrived since the last push). Returns whether the
-        data was current enough (see ``require``)."""
-        panels = self.panel_list()
-        if not panels:
-            return True  # nobody watches: no work
+        """Send the decimated live window to the plots of every panel whose page has caught up
+        (:mod:`dashboard._gui_pace`: a page behind gets the newest window once it caught up,
+        never a backlog); with ``require`` = (signal, value) only if the window's last sample
+        of that signal equals value. A panel gets only new data (nothing when no sample arrived
+        since its last push). Returns whether the data was current enough (see ``require``)."""
+        ready = [p for p in self.panel_list() if p.pace.ready()]
+        if not ready:
+            self.last_push = time.monotonic()  # the loop is alive; the pages are behind
+            return True  # nobody to send to: no work
         names = list(LIVE_SIGNALS)
         w = self.bench.drive.live.window(self.config.live_window_s, names)
         t = np.asarray(w["t"], dtype=np.float64)
@@ -273,9 +275,11 @@ class BenchGui:
             if abs(col[-1] - require[1]) > 1e-3:
                 return False
         newest = float(t[-1])
-        if self.newest_t is not None and newest <= self.newest_t and require is None:
+        if require is None:  # only pages that lack this window
+            ready = [p for p in ready if p.plot_newest is None or newest > p.plot_newest]
+        self.last_push = time.monotonic()
+        if not ready:
             return True  # nothing new: send nothing
-        self.newest_t = newest
         td, cd = live_plot.decimate(t, cols, PLOT_BUCKETS)
         x = td - newest
         n = len(x)
@@ -291,19 +295,21 @@ class BenchGui:
             cd[3],
             live_plot.min_span_envelope(n, cd[2], cd[3], min_span=MIN_SPAN_I_P_A),
         )
-        for p in panels:
+        for p in ready:
             try:
                 p.speed_plot.data = speed
                 p.current_plot.data = current
+                p.plot_newest = newest
+                p.pace.sent_update()
             except Exception as exc:  # one broken browser must not stop the others
                 self.stream_errors += 1
                 self.last_stream_error = f"{type(exc).__name__}: {exc}"
         self.frames_sent += 1
-        self.last_push = time.monotonic()
         self.last_live = w
-        if self.scene is not None:
+        if self.scene is not None and (self.newest_t is None or newest > self.newest_t):
             with contextlib.suppress(Exception):
                 self.scene.update(float(cols[0][-1]), w)
+        self.newest_t = max(newest, self.newest_t or newest)
         return True
 
     # ------------------------------------------------------------------ status
@@ -379,6 +385,8 @@ class BenchGui:
         if holder is not None and holder.token in self._gone:
             gone = LEASE_GRACE_S - (time.monotonic() - self._gone[holder.token])
         for p in panels:
+            if not p.pace.ready():
+                continue  # this page is behind: it gets the newest status once it caught up
             try:
                 p.show_status(status)
                 p.show_legends(*legends)
@@ -386,6 +394,7 @@ class BenchGui:
                 txt = controller_text(ctl, p, gone)
                 if p.controller_md.content != txt:
                     p.controller_md.content = txt
+                p.pace.sent_update()
             except Exception as exc:
                 log.warning("status for browser #%s failed: %s", p.cid, exc)
         if self.scene is not None:

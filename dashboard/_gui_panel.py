@@ -27,6 +27,7 @@ import viser
 
 from dashboard._fields import FieldError
 from dashboard._gui_field import CURRENT_COLORS, SPEED_COLORS, Field, fmt
+from dashboard._gui_pace import PagePace
 from dashboard._gui_tabs import (
     CapturesTab,
     ConfigTab,
@@ -63,6 +64,8 @@ class Panel(PlotArea, SpeedTab, CurrentTab, TuningTab, IdentifyTab, CapturesTab,
         self.gains: dict[str, Any] | None = None
         self.last_status = ""
         self.last_legends: tuple[str, str] = ("", "")
+        self.pace = PagePace(client)  # live updates only as fast as this page applies them
+        self.plot_newest: float | None = None  # host time of the newest sample sent here
         self._build()
 
     # ------------------------------------------------------------------ helpers
