@@ -4,6 +4,15 @@ Each item exercises what the object dictionary (docs/contracts.md §1), CiA 301 
 promise and reports pass/fail with a one-line detail. Items leave the drive disabled, in
 OPERATIONAL, with the parameters they touched restored; "store_restore" rewrites the drive's
 stored parameters (skip it with ``--skip store_restore`` on a tuned drive).
+
+Items that reset the node's communication (:data:`RESETS`: NMT reset communication or reset
+node) put the communication objects back as the run found them, while the node is still
+PRE-OPERATIONAL: CiA 301 §7.3.2.2 reverts 0x1000–0x1FFF to their stored values, so PDO event
+timers, mappings or a heartbeat time set without a store (a user's session; the SocketCAN
+lane slows the TPDOs from 2,200 to 60 frames/s this way) would otherwise come back at their
+defaults. Without that, the items after ``nmt_bootup`` ran on the default streams: inside
+User-Mode Linux (about 800 frames/s in all) they starved the drive's SDO server, the trace
+upload's initiate went unanswered for 5.7 s and every later item failed.
 """
 
 from __future__ import annotations
@@ -138,12 +147,17 @@ def item_nmt_bootup(d: Drive, opts: dict) -> str:
                 raise
     dt_boot = time.monotonic() - t0
     st = hb.wait_for(("PRE-OPERATIONAL",), 2.0, after=time.monotonic() - 0.001)
-    t1 = time.monotonic()
-    d.nmt("start")
+    try:
+        back = _put_back_comm(d, opts)
+    finally:
+        t1 = time.monotonic()
+        d.nmt("start")
     hb.wait_for(("OPERATIONAL",), 2.0, after=t1)
     again = f" (reset sent {attempt} times)" if attempt > 1 else ""
+    kept = f"; {back} communication objects put back as found" if back else ""
     return (
-        f"boot-up after {dt_boot * 1e3:.0f} ms{again}, heartbeat {st} then OPERATIONAL after start"
+        f"boot-up after {dt_boot * 1e3:.0f} ms{again}, heartbeat {st} then OPERATIONAL after "
+        f"start{kept}"
     )
 
 
@@ -323,10 +337,17 @@ def item_gain_set(d: Drive, opts: dict) -> str:
     return f"invalid set refused {how} with nothing changed; valid set applied and read back"
 
 
-def _persistent_snapshot(d: Drive) -> dict[str, bytes]:
-    """Raw present value of every stored (persistent, writable, numeric) object."""
+#: Communication profile area (CiA 301 §7.4.8): what NMT reset communication reverts.
+COMM_AREA = range(0x1000, 0x2000)
+
+
+def _persistent_snapshot(d: Drive, indices: range | None = None) -> dict[str, bytes]:
+    """Raw present value of every stored (persistent, writable, numeric) object (with index
+    in ``indices`` when given)."""
     out = {}
     for o in d.table:
+        if indices is not None and o.index not in indices:
+            continue
         if getattr(o.entry, "persistent", False) and o.writable and o.readable and o.fmt:
             try:
                 out[o.name] = d.sdo.upload(o.index, o.subindex, o.name)
@@ -335,14 +356,18 @@ def _persistent_snapshot(d: Drive) -> dict[str, bytes]:
     return out
 
 
-def _put_back(d: Drive, snapshot: dict[str, bytes]) -> list[str]:
+def _put_back(
+    d: Drive, snapshot: dict[str, bytes], now: dict[str, bytes] | None = None
+) -> list[str]:
     """Write back what differs from ``snapshot`` (the drive at rest): configuration objects
     first (the L_c/R_c rules read motor.L/R), gains as whole sets through gain_set (the speed-gain
-    rule judges the pair), PDOs by the CiA 301 procedure, then the rest. Returns failures."""
+    rule judges the pair), PDOs by the CiA 301 procedure, then the rest. ``now``: the present
+    values if already read. Returns failures."""
     from .drive import _GAIN_OBJECTS
     from .supervision import RearmReport, pdo_group, write_pdo_group
 
-    now = {n: d.sdo.upload(d.table[n].index, d.table[n].subindex, n) for n in snapshot}
+    if now is None:
+        now = {n: d.sdo.upload(d.table[n].index, d.table[n].subindex, n) for n in snapshot}
     differ = [n for n in snapshot if now[n] != snapshot[n]]
     failed: list[str] = []
     gain_names = {v[1]: k for k, v in _GAIN_OBJECTS.items()}
@@ -384,6 +409,28 @@ def _put_back(d: Drive, snapshot: dict[str, bytes]) -> list[str]:
         write_pdo_group(d.sdo, g, keys, values, report)
         failed += [f"{k}: {v}" for k, v in report.failed.items()]
     return failed
+
+
+#: Items that reset the node's communication (NMT reset communication / reset node).
+RESETS = ("nmt_bootup", "store_restore", "nmt_reaction")
+#: ``opts`` key of the communication objects as the run found them (name → raw bytes).
+FOUND = "comm_found"
+
+
+def _put_back_comm(d: Drive, opts: dict) -> int:
+    """After a reset of the node's communication, while it is PRE-OPERATIONAL: write the
+    communication objects back as the run found them (``opts[FOUND]``, taken by
+    :func:`run_checks`); returns how many differed. :class:`CheckFailed` naming what could
+    not be put back."""
+    found = opts.get(FOUND) or {}
+    if not found:
+        return 0
+    now = {n: d.sdo.upload(d.table[n].index, d.table[n].subindex, n) for n in found}
+    differ = sum(now[n] != found[n] for n in found)
+    failed = _put_back(d, found, now)
+    _expect(not failed, "communication objects not put back after the reset: " + "; ".join(
+        failed[:3]))
+    return differ
 
 
 def item_store_restore(d: Drive, opts: dict) -> str:
@@ -675,6 +722,10 @@ def item_nmt_reaction(d: Drive, opts: dict) -> str:
                 f"NMT {command}: drive still OPERATION ENABLED (0x6007 reaction missing)",
             )
             out.append(f"{command}: {v0:.0f} → {v:.0f} rpm, {state}")
+            if back is None:
+                back_n = _put_back_comm(d, opts)  # still PRE-OPERATIONAL after the reset
+                if back_n:
+                    out[-1] += f", {back_n} communication objects put back"
     finally:
         d.nmt("start")
         _to_switch_on_disabled(d)
@@ -944,7 +995,7 @@ def run_checks(
     only: list[str] | None = None,
     skip: list[str] | None = None,
     on_result: Callable[[CheckResult], None] | None = None,
-    **opts: float,
+    **opts: object,
 ) -> list[CheckResult]:
     """Run the items (all, or ``only``, minus ``skip``) in order; never raises for an item."""
     names = [n for n in ITEMS if (not only or n in only) and n not in (skip or [])]
@@ -952,6 +1003,12 @@ def run_checks(
     if unknown:
         raise ValueError(f"unknown check item(s) {', '.join(unknown)}; items: {', '.join(ITEMS)}")
     results = []
+    opts = dict(opts)
+    if any(n in RESETS for n in names):
+        try:  # what a reset of the communication reverts, as found (see the module doc)
+            opts[FOUND] = _persistent_snapshot(drive, COMM_AREA)
+        except DriveError:
+            opts[FOUND] = {}  # the items report the drive's silence themselves
     for n in names:
         t0 = time.monotonic()
         try:

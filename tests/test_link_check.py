@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import re
+import time
 import uuid
 
 import can
@@ -213,3 +214,33 @@ def test_pdo_rates_fails_for_a_drive_that_silently_drops_periods(virtual_node, c
     assert rc == 1 and not result["ok"], result
     m = re.match(r"TPDO1 at (\d+) Hz", result["detail"])
     assert m and 40 <= int(m[1]) <= 60, result["detail"]
+
+
+def test_resets_keep_what_a_session_set_without_a_store(virtual_node, capsys):
+    """nmt_bootup and nmt_reaction reset the node's communication (CiA 301: 0x1000-0x1FFF back
+    to their stored values); the check puts back what it found, so TPDO event timers and the
+    heartbeat time set by SDO and not stored (the SocketCAN lane's slower streams) survive, and
+    the drive sends TPDO2 at the slower rate afterwards (frames counted on the bus)."""
+    from drive_link import Drive
+
+    _, ch = virtual_node
+    with Drive.connect(interface="virtual", channel=ch, node_id=4, heartbeat_ms=None) as d:
+        d.write("tpdo2_communication.event_timer", 50)
+        d.write("producer_heartbeat_time", 250)
+    argv = ["check", "--interface", "virtual", "--channel", ch, "--node", "4"]
+    rc = cli.main([*argv, "--only", "nmt_bootup,nmt_reaction", "--json"])
+    results = json.loads(capsys.readouterr().out)
+    assert rc == 0 and all(r["ok"] for r in results), results
+    with Drive.connect(interface="virtual", channel=ch, node_id=4, heartbeat_ms=None) as d:
+        assert int(d.read("tpdo2_communication.event_timer")) == 50
+        assert int(d.read("producer_heartbeat_time")) == 250
+    with can.Bus(interface="virtual", channel=ch) as spy:
+        frames = []
+        deadline = time.monotonic() + 1.0
+        while (left := deadline - time.monotonic()) > 0:
+            m = spy.recv(left)
+            if m is not None and m.arbitration_id == 0x284:
+                frames.append(m.timestamp)
+    # 50 ms: about 20 frames in the second; the default 1 ms timer would send about 1,000
+    assert len(frames) <= 40, len(frames)
+    assert "communication objects put back as found" in results[0]["detail"]
