@@ -10,7 +10,18 @@ from __future__ import annotations
 import time
 from typing import TYPE_CHECKING
 
+from firmware_protocol.cob_id import CAN_ID_MASK, COB_INVALID
+from firmware_protocol.index_ranges import COMMUNICATION
+
 from . import storage
+from .od_addresses import (
+    COB_ID_EMCY,
+    CONSUMER_HEARTBEAT_COUNT,
+    CONSUMER_HEARTBEAT_INDEX,
+    PRODUCER_HEARTBEAT,
+    SDO_SERVER_2_RX,
+    SDO_SERVER_2_TX,
+)
 from .sdo_block import BlockSdoServer
 
 if TYPE_CHECKING:
@@ -22,28 +33,31 @@ __all__ = ["bind_sdo2", "configure_communication", "consumer_entries", "reset_co
 def configure_communication(d: VirtualDrive) -> None:
     """Heartbeat producer/consumer, EMCY COB-ID, SDO server 2 and PDOs from the present values."""
     now = time.monotonic()
-    d.hb_producer.set_period(d._value(0x1017), now)
+    d.hb_producer.set_period(d._param(PRODUCER_HEARTBEAT), now)
     d.hb_consumer.configure(consumer_entries(d))
-    d.emcy.set_cob_id(d._value(0x1014))
+    d.emcy.set_cob_id(d._param(COB_ID_EMCY))
     bind_sdo2(d)
     d.pdo.configure()
 
 
 def consumer_entries(d: VirtualDrive, sub: int = 0, value: int = 0) -> list[int]:
     """0x1016 sub 1..N present values (with ``value`` in place of ``sub`` if given)."""
-    count = d._value(0x1016, 0)
-    return [value if s == sub else d._value(0x1016, s) for s in range(1, count + 1)]
+    count = d._param(CONSUMER_HEARTBEAT_COUNT)
+    index = CONSUMER_HEARTBEAT_INDEX
+    return [value if s == sub else d._value(index, s) for s in range(1, count + 1)]
 
 
 def bind_sdo2(d: VirtualDrive) -> None:
     """(Re)bind the second SDO server to 0x1201:1/2 (bit 31 set in either: no server)."""
-    rx, tx = d._value(0x1201, 1), d._value(0x1201, 2)
+    rx, tx = d._param(SDO_SERVER_2_RX), d._param(SDO_SERVER_2_TX)
     if d.sdo2 is not None:
         d.network.unsubscribe(d.sdo2.rx_cobid, d.sdo2.on_request)
         d.sdo2 = None
-    if rx & 0x80000000 or tx & 0x80000000:
+    if rx & COB_INVALID or tx & COB_INVALID:
         return
-    d.sdo2 = BlockSdoServer(rx & 0x7FF, tx & 0x7FF, d.node, d.nmt.sdo_allowed, send=d._send)
+    d.sdo2 = BlockSdoServer(
+        rx & CAN_ID_MASK, tx & CAN_ID_MASK, d.node, d.nmt.sdo_allowed, send=d._send
+    )
     d.network.subscribe(d.sdo2.rx_cobid, d.sdo2.on_request)
 
 
@@ -55,17 +69,17 @@ def reset_communication(d: VirtualDrive) -> None:
     supervision is never dropped while the motor can turn.
     """
     keep_1016 = d.cia402.torque_enabled
-    kept = dict(d.node.data_store.get(0x1016, {})) if keep_1016 else {}
+    kept = dict(d.node.data_store.get(CONSUMER_HEARTBEAT_INDEX, {})) if keep_1016 else {}
     stored, _status, _error = storage.load_with_status(d.store_path)
-    for index in [i for i in d.node.data_store if i < 0x2000]:
+    for index in [i for i in d.node.data_store if i < COMMUNICATION.stop]:
         del d.node.data_store[index]
     for (index, sub), raw in stored.items():
-        if index < 0x2000 and index in d.od:
+        if index < COMMUNICATION.stop and index in d.od:
             d.node.data_store.setdefault(index, {})[sub] = raw
     if keep_1016:
-        d.node.data_store.pop(0x1016, None)
+        d.node.data_store.pop(CONSUMER_HEARTBEAT_INDEX, None)
         if kept:
-            d.node.data_store[0x1016] = kept
+            d.node.data_store[CONSUMER_HEARTBEAT_INDEX] = kept
     d._pcache.clear()
     d.pdo.reset_counters()
     configure_communication(d)

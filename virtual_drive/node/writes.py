@@ -31,6 +31,32 @@ from firmware_protocol.cob_id import check_cob_id, check_heartbeat_consumers
 from firmware_protocol.entry import LimitError
 
 from . import communication, gain_sets, parameters, plant, storage
+from .od_addresses import (
+    COB_ID_EMCY,
+    COB_ID_EMCY_INDEX,
+    CONSUMER_HEARTBEAT_INDEX,
+    CONTROLWORD_INDEX,
+    ERROR_HISTORY_INDEX,
+    GAIN_SET_APPLY_INDEX,
+    MAX_CURRENT_INDEX,
+    MODES_OF_OPERATION_INDEX,
+    MOTOR_RATED_CURRENT_INDEX,
+    PRODUCER_HEARTBEAT_INDEX,
+    RESTORE_DEFAULTS_INDEX,
+    SDO_SERVER_2_INDEX,
+    SDO_SERVER_2_RX,
+    SDO_SERVER_2_TX,
+    SIM_FAULT_INDEX,
+    SIM_FAULT_INJECT_SUB,
+    SIM_FAULT_SUPPLY_SUB,
+    SIM_INFO_INDEX,
+    SIM_INFO_MODEL_SUB,
+    SPEED_CONTROLLER_INDEX,
+    SPEED_CURRENT_LIMIT_SUB,
+    STORE_PARAMETERS_INDEX,
+    TRACE_CHANNELS_INDEX,
+    TRACE_CONFIG_INDEX,
+)
 from .od_maps import SUPPORTED_MODES
 from .pdo import is_pdo_config
 from .trace_config import check_trace_channel, trace_config_write
@@ -100,16 +126,16 @@ def _restore_defaults(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
 
 def _apply_gain_set(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
     """0x20F1: apply the staged gain set 0x20F0 (1 current, 2 speed, 3 both)."""
-    d.checker.check(0x20F1, sub, value)
+    d.checker.check(GAIN_SET_APPLY_INDEX, sub, value)
     gain_sets.apply_gain_set(d, int(value))
     return False, None
 
 
 COMMANDS: Mapping[int, Handler] = {
-    0x1003: _clear_error_history,
-    0x1010: _store_parameters,
-    0x1011: _restore_defaults,
-    0x20F1: _apply_gain_set,
+    ERROR_HISTORY_INDEX: _clear_error_history,
+    STORE_PARAMETERS_INDEX: _store_parameters,
+    RESTORE_DEFAULTS_INDEX: _restore_defaults,
+    GAIN_SET_APPLY_INDEX: _apply_gain_set,
 }
 """Objects whose write is a command: handled before any value check, never stored."""
 
@@ -123,7 +149,9 @@ def _check_mode(d: VirtualDrive, sub: int, value: Any) -> None:
         raise SdoAbortedError(abort_codes.INVALID_VALUE)
 
 
-PRE_CHECKS: Mapping[int, Callable[[VirtualDrive, int, Any], None]] = {0x6060: _check_mode}
+PRE_CHECKS: Mapping[int, Callable[[VirtualDrive, int, Any], None]] = {
+    MODES_OF_OPERATION_INDEX: _check_mode
+}
 """Checks that precede the EDS check (their abort code wins)."""
 
 
@@ -149,14 +177,14 @@ def _heartbeat_producer(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
 
 def _emcy_cob_id(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
     """0x1014: EMCY COB-ID (CiA 301 rules: :func:`firmware_protocol.cob_id.check_cob_id`)."""
-    _limit_error_to_abort(lambda: check_cob_id("emcy", value, d._value(0x1014)))
+    _limit_error_to_abort(lambda: check_cob_id("emcy", value, d._param(COB_ID_EMCY)))
     return True, lambda: d.emcy.set_cob_id(value)
 
 
 def _sdo_server2(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
     """0x1201: the second SDO server's COB-IDs; rebinds it."""
-    if sub in (1, 2):
-        _limit_error_to_abort(lambda: check_cob_id("sdo", value, d._value(0x1201, sub)))
+    if (SDO_SERVER_2_INDEX, sub) in (SDO_SERVER_2_RX, SDO_SERVER_2_TX):
+        _limit_error_to_abort(lambda: check_cob_id("sdo", value, d._value(SDO_SERVER_2_INDEX, sub)))
     return True, lambda: communication.bind_sdo2(d)
 
 
@@ -193,9 +221,9 @@ def _plant(index: int) -> Handler:
 
 def _speed_controller(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
     """0x2020: gains go to the simulator; sub 3 (current limit) also re-applies the limit."""
-    if sub == 3:
-        return _current_limit(d, sub, value, 0x2020)
-    return _plant(0x2020)(d, sub, value)
+    if sub == SPEED_CURRENT_LIMIT_SUB:
+        return _current_limit(d, sub, value, SPEED_CONTROLLER_INDEX)
+    return _plant(SPEED_CONTROLLER_INDEX)(d, sub, value)
 
 
 def _trace_channel(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
@@ -208,9 +236,9 @@ def _sim_fault(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
     """0x5010: 1 inject (0 none, 1 overcurrent, 2 overvoltage, 3 undervoltage), 2 supply V."""
     with d.sim_lock:
         try:
-            if sub == 1:
+            if sub == SIM_FAULT_INJECT_SUB:
                 d.sim.inject_fault(int(value))
-            elif sub == 2:
+            elif sub == SIM_FAULT_SUPPLY_SUB:
                 d.sim.set_supply_voltage(float(value))
         except ValueError as exc:
             raise SdoAbortedError(abort_codes.INVALID_VALUE) from exc
@@ -219,7 +247,7 @@ def _sim_fault(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
 
 def _sim_info(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
     """0x5030:3: the simulation model (0 PWM-exact, 1 averaged), switched after the store."""
-    if sub != 3:
+    if sub != SIM_INFO_MODEL_SUB:
         return True, None
     fn = getattr(d.sim, "set_model", None)
     if fn is None:
@@ -234,18 +262,20 @@ def _sim_info(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
 
 HANDLERS: Mapping[int, Handler] = {
     **{index: _plant(index) for index in plant.SETTERS},
-    0x1014: _emcy_cob_id,
-    0x1016: _heartbeat_consumers,
-    0x1017: _heartbeat_producer,
-    0x1201: _sdo_server2,
-    0x2020: _speed_controller,
-    0x2100: lambda d, sub, value: trace_config_write(d, sub, value),
-    0x2101: _trace_channel,
-    0x5010: _sim_fault,
-    0x5030: _sim_info,
-    0x6040: _controlword,
-    0x6060: _mode,
-    0x6073: lambda d, sub, value: _current_limit(d, sub, value, 0x6073),
-    0x6075: lambda d, sub, value: _current_limit(d, sub, value, 0x6075),
+    COB_ID_EMCY_INDEX: _emcy_cob_id,
+    CONSUMER_HEARTBEAT_INDEX: _heartbeat_consumers,
+    PRODUCER_HEARTBEAT_INDEX: _heartbeat_producer,
+    SDO_SERVER_2_INDEX: _sdo_server2,
+    SPEED_CONTROLLER_INDEX: _speed_controller,
+    TRACE_CONFIG_INDEX: lambda d, sub, value: trace_config_write(d, sub, value),
+    TRACE_CHANNELS_INDEX: _trace_channel,
+    SIM_FAULT_INDEX: _sim_fault,
+    SIM_INFO_INDEX: _sim_info,
+    CONTROLWORD_INDEX: _controlword,
+    MODES_OF_OPERATION_INDEX: _mode,
+    MAX_CURRENT_INDEX: lambda d, sub, value: _current_limit(d, sub, value, MAX_CURRENT_INDEX),
+    MOTOR_RATED_CURRENT_INDEX: lambda d, sub, value: _current_limit(
+        d, sub, value, MOTOR_RATED_CURRENT_INDEX
+    ),
 }
 """Object index -> what a checked write does; objects not listed are only stored."""
