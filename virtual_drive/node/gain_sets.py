@@ -18,6 +18,15 @@ from canopen.sdo import SdoAbortedError
 from firmware_protocol import abort_codes
 
 from . import plant
+from .od_addresses import (
+    CURRENT_CONTROLLER_INDEX,
+    GAIN_SET_INDEX,
+    MAX_CURRENT,
+    MOTOR_RATED_CURRENT,
+    SPEED_CONTROLLER_INDEX,
+    SPEED_CURRENT_LIMIT,
+    sub_names,
+)
 
 if TYPE_CHECKING:
     from .drive_node import VirtualDrive
@@ -31,12 +40,16 @@ __all__ = [
 
 logger = logging.getLogger(__name__)
 
+_GAIN_SET_SUBS = sub_names("gain_set")
+"""gain_set sub -> name (``type`` .. ``emf_feedforward`` as in current_controller, then
+``speed_k_p``, ``speed_k_i``, ``speed_current_limit``)."""
+
 
 def apply_current_limit(d: VirtualDrive) -> None:
     """The speed loop's current limit (A) := min(0x2020:3, 0x6073 per mille of 0x6075)."""
-    rated = d._value(0x6075) / 1000.0
-    cap = d._value(0x6073) / 1000.0 * rated
-    limit = min(d._value(0x2020, 3), cap)
+    rated = d._param(MOTOR_RATED_CURRENT) / 1000.0
+    cap = d._param(MAX_CURRENT) / 1000.0 * rated
+    limit = min(d._param(SPEED_CURRENT_LIMIT), cap)
     try:
         d.sim.set_speed_gains(current_limit=limit)
     except (ValueError, TypeError) as exc:
@@ -45,8 +58,8 @@ def apply_current_limit(d: VirtualDrive) -> None:
 
 def apply_current_limit_with(d: VirtualDrive, speed_limit: float) -> None:
     """As :func:`apply_current_limit` with ``speed_limit`` (A) in place of 0x2020:3."""
-    rated = d._value(0x6075) / 1000.0
-    cap = d._value(0x6073) / 1000.0 * rated
+    rated = d._param(MOTOR_RATED_CURRENT) / 1000.0
+    cap = d._param(MAX_CURRENT) / 1000.0 * rated
     d.sim.set_speed_gains(current_limit=min(speed_limit, cap))
 
 
@@ -58,7 +71,7 @@ def after_limit_change(d: VirtualDrive, index: int, sub: int, value: Any) -> Cal
         with d.sim_lock:
             apply_current_limit(d)
 
-    if index == 0x2020:
+    if index == SPEED_CONTROLLER_INDEX:
         with d.sim_lock:
             try:
                 plant.apply(d.sim, index, sub, value)
@@ -69,36 +82,36 @@ def after_limit_change(d: VirtualDrive, index: int, sub: int, value: Any) -> Cal
 
 def apply_gain_set(d: VirtualDrive, which: int) -> None:
     """0x20F1: staged 0x20F0 -> active current (1), speed (2) or both (3) at one boundary."""
-    staged = {sub: d._value(0x20F0, sub) for sub in range(1, 14)}
+    staged = {name: d._value(GAIN_SET_INDEX, sub) for sub, name in _GAIN_SET_SUBS.items()}
     changes: dict[str, float | int] = {}
     current_kw = {}
     speed_kw = {}
     if which & 1:
-        for sub, key in plant.CURRENT_KW.items():
-            current_kw[key] = staged[sub]
-            changes[f"current_controller.{key}"] = staged[sub]
-        changes["gain_set.L_c"] = staged[2]
+        for key in plant.CURRENT_KW.values():
+            current_kw[key] = staged[key]
+            changes[f"current_controller.{key}"] = staged[key]
+        changes["gain_set.L_c"] = staged["L_c"]
     if which & 2:
         for sub, key in plant.GAIN_SET_SPEED_KW.items():
-            speed_kw[key] = staged[sub]
-        changes["speed_controller.current_limit"] = staged[13]
+            speed_kw[key] = staged[_GAIN_SET_SUBS[sub]]
+        changes["speed_controller.current_limit"] = staged["speed_current_limit"]
     for name, value in changes.items():
         e = d.view.entry(name)
         d.checker.check(e.index, e.subindex, value)
     d.checker.check_rules(changes, staged=True)
+    speed_gains = staged["speed_k_p"], staged["speed_k_i"]
     if which & 2:
-        d.checker.check_speed_gains(staged[11], staged[12])
-    d.checker.check_current_set(
-        {}, gains=current_kw, speed=(staged[11], staged[12]) if which & 2 else None
-    )
+        d.checker.check_speed_gains(*speed_gains)
+    d.checker.check_current_set({}, gains=current_kw, speed=speed_gains if which & 2 else None)
     with d.sim_lock:
-        old_current = {k: d._value(0x2010, s) for s, k in plant.CURRENT_KW.items()}
+        cc, sc = CURRENT_CONTROLLER_INDEX, SPEED_CONTROLLER_INDEX
+        old_current = {k: d._value(cc, s) for s, k in plant.CURRENT_KW.items()}
         try:
             if current_kw:
                 d.sim.set_current_gains(**current_kw)
             if speed_kw:
                 d.sim.set_speed_gains(**speed_kw)
-                apply_current_limit_with(d, staged[13])
+                apply_current_limit_with(d, staged["speed_current_limit"])
         except (ValueError, TypeError) as exc:
             if current_kw:  # undo a half-applied set: the old one was valid
                 d.sim.set_current_gains(**old_current)
@@ -106,11 +119,11 @@ def apply_gain_set(d: VirtualDrive, which: int) -> None:
         store = d.node.data_store
         for sub, key in plant.CURRENT_KW.items():
             if key in current_kw:
-                var = d.node._find_object(0x2010, sub)
-                store.setdefault(0x2010, {})[sub] = var.encode_raw(current_kw[key])
+                var = d.node._find_object(cc, sub)
+                store.setdefault(cc, {})[sub] = var.encode_raw(current_kw[key])
         for sub, key in plant.SPEED_KW.items():
             if key in speed_kw:
-                var = d.node._find_object(0x2020, sub)
-                store.setdefault(0x2020, {})[sub] = var.encode_raw(speed_kw[key])
+                var = d.node._find_object(sc, sub)
+                store.setdefault(sc, {})[sub] = var.encode_raw(speed_kw[key])
         d._pcache.clear()
     logger.info("gain set %d applied at t = %.6f s", which, d.sim.time)

@@ -11,6 +11,16 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from .od_addresses import (
+    CURRENT_CONTROLLER_INDEX,
+    MOTOR_INDEX,
+    PROTECTION_INDEX,
+    SIM_INVERTER_INDEX,
+    SIM_LOAD_INDEX,
+    SPEED_CONTROLLER_INDEX,
+    sub_names,
+)
+
 __all__ = [
     "CURRENT_KW",
     "GAIN_SET_SPEED_KW",
@@ -24,33 +34,29 @@ __all__ = [
     "apply",
 ]
 
-#: OD record index → (simulator setter, {sub: keyword})
-CURRENT_KW = {
-    1: "type",
-    2: "L_c",
-    3: "R_c",
-    4: "k_p",
-    5: "k_i",
-    6: "T_BT",
-    7: "T_DD",
-    8: "T_SD",
-    9: "V_G",
-    10: "emf_feedforward",
+# {sub: keyword} of each record: the EDS names the sub-objects after the simulator's keywords
+# (docs/contracts.md §1/§2), so the maps are read from it
+CURRENT_KW = sub_names("current_controller")
+SPEED_KW = sub_names("speed_controller")
+MOTOR_KW = sub_names("motor")
+PROTECTION_KW = sub_names("protection")
+LOAD_KW = sub_names("sim_load")
+INVERTER_KW = sub_names("sim_inverter")
+#: staged speed gains: gain_set sub -> set_speed_gains keyword (``speed_k_p`` -> ``k_p``)
+GAIN_SET_SPEED_KW = {
+    sub: name.removeprefix("speed_")
+    for sub, name in sub_names("gain_set").items()
+    if name.startswith("speed_")
 }
-SPEED_KW = {1: "k_p", 2: "k_i", 3: "current_limit"}
-MOTOR_KW = {1: "R", 2: "L", 3: "K_rpm", 4: "pole_pairs", 5: "rated_current", 6: "V_dc_nominal"}
-PROTECTION_KW = {1: "overcurrent_trip", 2: "overvoltage_trip", 3: "undervoltage_trip"}
-LOAD_KW = {1: "T_load", 2: "k_gen", 3: "J", 4: "B"}
-INVERTER_KW = {1: "T_BT", 2: "T_DD", 3: "T_SD", 4: "V_G"}
-GAIN_SET_SPEED_KW = {11: "k_p", 12: "k_i", 13: "current_limit"}
 
+#: OD record index → (simulator setter, {sub: keyword})
 SETTERS: dict[int, tuple[str, Mapping[int, str]]] = {
-    0x2000: ("set_motor", MOTOR_KW),
-    0x2010: ("set_current_gains", CURRENT_KW),
-    0x2020: ("set_speed_gains", SPEED_KW),
-    0x2050: ("set_protection", PROTECTION_KW),
-    0x5000: ("set_load", LOAD_KW),
-    0x5020: ("set_inverter_nonidealities", INVERTER_KW),
+    MOTOR_INDEX: ("set_motor", MOTOR_KW),
+    CURRENT_CONTROLLER_INDEX: ("set_current_gains", CURRENT_KW),
+    SPEED_CONTROLLER_INDEX: ("set_speed_gains", SPEED_KW),
+    PROTECTION_INDEX: ("set_protection", PROTECTION_KW),
+    SIM_LOAD_INDEX: ("set_load", LOAD_KW),
+    SIM_INVERTER_INDEX: ("set_inverter_nonidealities", INVERTER_KW),
 }
 
 
