@@ -17,6 +17,7 @@ from . import parameters, ramps
 from .cia402 import Cia402StateMachine
 from .emcy import DATA_SET_LOST, HEARTBEAT_LOSS, NMT_CONNECTION_LOSS
 from .nmt import CMD_RESET_COMMUNICATION, CMD_RESET_NODE
+from .od_addresses import ABORT_CONNECTION_OPTION
 from .od_maps import MODE_PROFILE_VELOCITY, RESET_BRAKE_LIMIT_S
 
 if TYPE_CHECKING:
@@ -97,7 +98,7 @@ def connection_reaction(d: VirtualDrive, option: int, code: int) -> None:
 def on_heartbeat_lost(d: VirtualDrive, node_id: int) -> None:
     """A consumer heartbeat (0x1016) timed out: EMCY 0x8130 (data[3] = node), 0x6007 reaction."""
     d.emcy.raise_error(HEARTBEAT_LOSS, bytes([node_id]))
-    connection_reaction(d, d._value(0x6007), HEARTBEAT_LOSS)
+    connection_reaction(d, d._param(ABORT_CONNECTION_OPTION), HEARTBEAT_LOSS)
 
 
 def on_heartbeat_back(d: VirtualDrive, node_id: int) -> None:
@@ -117,7 +118,7 @@ def on_nmt_abort_connection(d: VirtualDrive, command: int) -> None:
     """
     if not d.cia402.operation_enabled:
         return
-    option = d._value(0x6007)
+    option = d._param(ABORT_CONNECTION_OPTION)
     if command in (CMD_RESET_NODE, CMD_RESET_COMMUNICATION) and option == 0:
         option = 3
     logger.warning("NMT command 0x%02X while OPERATION ENABLED: 0x6007 = %d", command, option)

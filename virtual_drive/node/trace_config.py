@@ -14,6 +14,20 @@ from canopen.sdo import SdoAbortedError
 
 from firmware_protocol import abort_codes
 
+from .od_addresses import (
+    MEASUREMENTS_INDEX,
+    TRACE_CHANNEL_COUNT,
+    TRACE_CHANNELS_INDEX,
+    TRACE_COMMAND_SUB,
+    TRACE_DIVIDER,
+    TRACE_LENGTH,
+    TRACE_PRE_TRIGGER,
+    TRACE_TRIGGER_EDGE,
+    TRACE_TRIGGER_LEVEL,
+    TRACE_TRIGGER_MODE,
+    TRACE_TRIGGER_SOURCE,
+    TRACE_TRIGGER_SOURCE_SUB,
+)
 from .od_maps import MEASUREMENTS
 from .recorder import ARMED, CMD_ARM, CMD_FORCE, CMD_STOP, RECORDING, TraceConfigError
 
@@ -28,7 +42,7 @@ WriteResult = tuple[bool, Callable[[], None] | None]
 def trace_config_write(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
     """0x2100:``sub`` := ``value`` (already checked against the EDS): store it? follow-up?"""
     rec = d.recorder
-    if sub == 9:
+    if sub == TRACE_COMMAND_SUB:
         if value == CMD_STOP:
             return True, rec.stop
         configure_recorder(d)
@@ -42,7 +56,7 @@ def trace_config_write(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
         return True, None
     if rec.state in (ARMED, RECORDING):  # configuration is frozen
         raise SdoAbortedError(abort_codes.DEVICE_STATE)
-    if sub == 5:
+    if sub == TRACE_TRIGGER_SOURCE_SUB:
         check_trace_channel(d, value, allow_zero=False)
     return True, None
 
@@ -53,7 +67,7 @@ def check_trace_channel(d: VirtualDrive, ref: int, allow_zero: bool = True) -> N
     if ref == 0 and allow_zero:
         return
     index, sub, bits = (ref >> 16) & 0xFFFF, (ref >> 8) & 0xFF, ref & 0xFF
-    if index != 0x2040 or sub not in MEASUREMENTS:
+    if index != MEASUREMENTS_INDEX or sub not in MEASUREMENTS:
         raise SdoAbortedError(abort_codes.INVALID_VALUE)
     if bits != len(d.node._find_object(index, sub)):
         raise SdoAbortedError(abort_codes.INVALID_VALUE)
@@ -62,20 +76,20 @@ def check_trace_channel(d: VirtualDrive, ref: int, allow_zero: bool = True) -> N
 def configure_recorder(d: VirtualDrive) -> None:
     """Copy 0x2100/0x2101 into the recorder (before arming)."""
     rec = d.recorder
-    count = d._value(0x2100, 1)
+    count = d._param(TRACE_CHANNEL_COUNT)
     channels = []
     for k in range(1, count + 1):
-        ref = d._value(0x2101, k)
+        ref = d._value(TRACE_CHANNELS_INDEX, k)
         sub = (ref >> 8) & 0xFF
-        if (ref >> 16) != 0x2040 or sub not in MEASUREMENTS:
+        if (ref >> 16) != MEASUREMENTS_INDEX or sub not in MEASUREMENTS:
             raise SdoAbortedError(abort_codes.INVALID_VALUE)
         channels.append(MEASUREMENTS[sub])
-    src = d._value(0x2100, 5)
-    if (src >> 16) != 0x2040 or ((src >> 8) & 0xFF) not in MEASUREMENTS:
+    src = d._param(TRACE_TRIGGER_SOURCE)
+    if (src >> 16) != MEASUREMENTS_INDEX or ((src >> 8) & 0xFF) not in MEASUREMENTS:
         raise SdoAbortedError(abort_codes.INVALID_VALUE)
-    length = d._value(0x2100, 3)
-    pre = d._value(0x2100, 4)
-    divider = d._value(0x2100, 2)
+    length = d._param(TRACE_LENGTH)
+    pre = d._param(TRACE_PRE_TRIGGER)
+    divider = d._param(TRACE_DIVIDER)
     try:
         rec.check(channels, length, pre, divider)
     except TraceConfigError as exc:
@@ -85,6 +99,6 @@ def configure_recorder(d: VirtualDrive) -> None:
     rec.pre_trigger = pre
     rec.divider = divider
     rec.trigger_source = MEASUREMENTS[(src >> 8) & 0xFF]
-    rec.trigger_level = float(d._value(0x2100, 6))
-    rec.trigger_edge = d._value(0x2100, 7)
-    rec.trigger_mode = d._value(0x2100, 8)
+    rec.trigger_level = float(d._param(TRACE_TRIGGER_LEVEL))
+    rec.trigger_edge = d._param(TRACE_TRIGGER_EDGE)
+    rec.trigger_mode = d._param(TRACE_TRIGGER_MODE)
