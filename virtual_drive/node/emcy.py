@@ -26,6 +26,8 @@ from firmware_protocol.emcy_codes import (  # the codes of OD.md / the C header
     RPDO_VALUE,
 )
 
+from .od_addresses import ERROR_HISTORY_FIELDS
+
 __all__ = [
     "DATA_SET_LOST",
     "DC_OVERVOLTAGE",
@@ -49,7 +51,8 @@ REG_VOLTAGE = 0x04
 REG_TEMPERATURE = 0x08
 REG_COMMUNICATION = 0x10
 
-HISTORY_DEPTH = 8
+HISTORY_DEPTH = len(ERROR_HISTORY_FIELDS)
+"""Entries 0x1003 holds (its standard error fields in the EDS: 8)."""
 
 
 def register_bits(code: int) -> int:

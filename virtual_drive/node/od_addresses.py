@@ -50,6 +50,14 @@ __all__ = [
     "MOTOR_RATED_CURRENT",
     "MOTOR_RATED_CURRENT_INDEX",
     "MOTOR_RATED_TORQUE",
+    "N_RPDO",
+    "N_TPDO",
+    "PDO_COB_ID_SUB",
+    "PDO_EVENT_TIMER_SUB",
+    "PDO_INHIBIT_TIME_SUB",
+    "PDO_MAPPED_COUNT_SUB",
+    "PDO_MAX_MAPPED",
+    "PDO_TRANSMISSION_TYPE_SUB",
     "PRODUCER_HEARTBEAT",
     "PRODUCER_HEARTBEAT_INDEX",
     "PROFILE_ACCELERATION",
@@ -155,6 +163,25 @@ PRODUCER_HEARTBEAT_INDEX = PRODUCER_HEARTBEAT[0]
 SDO_SERVER_2_INDEX = index_of("sdo_server_2")
 SDO_SERVER_2_RX = address("sdo_server_2.cob_id_client_to_server")
 SDO_SERVER_2_TX = address("sdo_server_2.cob_id_server_to_client")
+N_RPDO = int(_OD.device_info["NrOfRXPDO"])
+N_TPDO = int(_OD.device_info["NrOfTXPDO"])
+PDO_COB_ID_SUB = address("tpdo1_communication.cob_id")[1]
+PDO_TRANSMISSION_TYPE_SUB = address("tpdo1_communication.transmission_type")[1]
+PDO_INHIBIT_TIME_SUB = address("tpdo1_communication.inhibit_time")[1]
+PDO_EVENT_TIMER_SUB = address("tpdo1_communication.event_timer")[1]
+PDO_MAPPED_COUNT_SUB = address("tpdo1_mapping.number_of_mapped_objects")[1]
+PDO_MAX_MAPPED = len(sub_names("tpdo1_mapping"))
+"""Mapping entries a PDO has (sub 1..8)."""
+for _kind, _n in (("rpdo", N_RPDO), ("tpdo", N_TPDO)):  # every PDO: the same sub-indices
+    for _k in range(1, _n + 1):
+        if (
+            address(f"{_kind}{_k}_communication.cob_id")[1] != PDO_COB_ID_SUB
+            or address(f"{_kind}{_k}_communication.transmission_type")[1]
+            != PDO_TRANSMISSION_TYPE_SUB
+            or address(f"{_kind}{_k}_communication.inhibit_time")[1] != PDO_INHIBIT_TIME_SUB
+            or len(sub_names(f"{_kind}{_k}_mapping")) != PDO_MAX_MAPPED
+        ):
+            raise ValueError(f"{_kind.upper()}{_k}'s parameters are laid out unlike TPDO1's")
 
 # -- manufacturer objects --------------------------------------------------------------------------
 MOTOR_INDEX = index_of("motor")

@@ -43,18 +43,28 @@ from canopen import objectdictionary as odm
 from canopen.sdo import SdoAbortedError
 
 from firmware_protocol import abort_codes
-from firmware_protocol.cob_id import check_cob_id
+from firmware_protocol.cob_id import CAN_ID_MASK, COB_INVALID, check_cob_id
 from firmware_protocol.emcy_codes import RPDO_LENGTH, RPDO_VALUE
 from firmware_protocol.entry import LimitError
+from firmware_protocol.index_ranges import RPDO_COMM, RPDO_MAP, TPDO_COMM, TPDO_MAP
+
+from .nmt import OPERATIONAL
+from .od_addresses import (
+    N_RPDO,
+    N_TPDO,
+    PDO_COB_ID_SUB,
+    PDO_EVENT_TIMER_SUB,
+    PDO_INHIBIT_TIME_SUB,
+    PDO_MAPPED_COUNT_SUB,
+    PDO_MAX_MAPPED,
+    PDO_TRANSMISSION_TYPE_SUB,
+)
 
 __all__ = ["PDO_INVALID", "PdoEngine", "is_pdo_config"]
 
 logger = logging.getLogger(__name__)
 
-RPDO_COMM, RPDO_MAP = 0x1400, 0x1600
-TPDO_COMM, TPDO_MAP = 0x1800, 0x1A00
-N_RPDO, N_TPDO = 2, 4
-PDO_INVALID = 0x80000000
+PDO_INVALID = COB_INVALID
 ABORT_INVALID_VALUE = abort_codes.INVALID_VALUE
 ABORT_UNSUPPORTED_ACCESS = abort_codes.UNSUPPORTED_ACCESS
 ABORT_CANNOT_MAP = abort_codes.PDO_CANNOT_MAP
@@ -173,7 +183,7 @@ class PdoEngine:
         return obj.decode_raw(self.node.get_data(index, sub))
 
     def _mapped(self, map_index: int) -> list[tuple[int, int, int]]:
-        count = self._u(map_index, 0)
+        count = self._u(map_index, PDO_MAPPED_COUNT_SUB)
         out = []
         for s in range(1, count + 1):
             entry = self._u(map_index, s)
@@ -187,10 +197,10 @@ class PdoEngine:
             self._unsubscribe(rpdo.cob_id, self._on_rpdo)
         self.rpdos = {}
         for k in range(N_RPDO):
-            cob = self._u(RPDO_COMM + k, 1)
+            cob = self._u(RPDO_COMM + k, PDO_COB_ID_SUB)
             if cob & PDO_INVALID:
                 continue
-            cob_id = cob & 0x7FF
+            cob_id = cob & CAN_ID_MASK
             rpdo = _Rpdo(k + 1, cob_id)
             off = 0
             for index, sub, bits in self._mapped(RPDO_MAP + k):
@@ -202,7 +212,7 @@ class PdoEngine:
         tpdos = []
         now = time.monotonic()
         for k in range(N_TPDO):
-            cob = self._u(TPDO_COMM + k, 1)
+            cob = self._u(TPDO_COMM + k, PDO_COB_ID_SUB)
             if cob & PDO_INVALID:
                 continue
             fmt = "<"
@@ -211,7 +221,7 @@ class PdoEngine:
                 obj = self.node._find_object(index, sub)
                 fmt += _FMT[obj.data_type]
                 getters.append(self._getter(index, sub, obj))
-            event_ms = self._u(TPDO_COMM + k, 5)
+            event_ms = self._u(TPDO_COMM + k, PDO_EVENT_TIMER_SUB)
             items = [getattr(g, "live_item", None) for g in getters]
             live = items[0][0] if items and items[0] is not None else None
             if len(items) < 2 or any(it is None or it[0] is not live for it in items):
@@ -219,10 +229,10 @@ class PdoEngine:
             tpdos.append(
                 _Tpdo(
                     number=k + 1,
-                    cob_id=cob & 0x7FF,
-                    trans_type=self._u(TPDO_COMM + k, 2),
+                    cob_id=cob & CAN_ID_MASK,
+                    trans_type=self._u(TPDO_COMM + k, PDO_TRANSMISSION_TYPE_SUB),
                     event_s=event_ms / 1000.0,
-                    inhibit_s=self._u(TPDO_COMM + k, 3) * 100e-6,
+                    inhibit_s=self._u(TPDO_COMM + k, PDO_INHIBIT_TIME_SUB) * 100e-6,
                     pack=struct.Struct(fmt).pack,
                     getters=getters,
                     live=live,
@@ -248,34 +258,38 @@ class PdoEngine:
         """Validate a write to a PDO parameter; raises SdoAbortedError to refuse it."""
         is_comm = TPDO_COMM <= index < TPDO_COMM + N_TPDO or RPDO_COMM <= index < RPDO_COMM + N_RPDO
         if is_comm:
-            if sub == 1:
-                old = self._u(index, 1)
-                if self._nmt_state() == 0x05 and value != old:
+            if sub == PDO_COB_ID_SUB:
+                old = self._u(index, PDO_COB_ID_SUB)
+                if self._nmt_state() == OPERATIONAL and value != old:
                     raise SdoAbortedError(ABORT_DEVICE_STATE)
                 kind = "tpdo" if index >= TPDO_COMM else "rpdo"
                 try:
                     check_cob_id(kind, value, old)  # CiA 301 restricted IDs, bits 29..11
                 except LimitError as exc:
                     raise SdoAbortedError(exc.abort_code) from exc
-            elif sub == 2 and 241 <= value <= 253:
+            elif sub == PDO_TRANSMISSION_TYPE_SUB and 241 <= value <= 253:
                 raise SdoAbortedError(ABORT_INVALID_VALUE)
-            elif sub == 3 and value != self._u(index, 3) and not self._u(index, 1) & PDO_INVALID:
+            elif (
+                sub == PDO_INHIBIT_TIME_SUB
+                and value != self._u(index, PDO_INHIBIT_TIME_SUB)
+                and not self._u(index, PDO_COB_ID_SUB) & PDO_INVALID
+            ):
                 raise SdoAbortedError(ABORT_INVALID_VALUE)  # inhibit time of a valid PDO
             return
         # mapping objects
-        if self._nmt_state() == 0x05:
+        if self._nmt_state() == OPERATIONAL:
             raise SdoAbortedError(ABORT_DEVICE_STATE)
-        comm = index - 0x200
-        if not self._u(comm, 1) & PDO_INVALID:
+        receive = index < TPDO_MAP
+        comm = index - (RPDO_MAP - RPDO_COMM if receive else TPDO_MAP - TPDO_COMM)
+        if not self._u(comm, PDO_COB_ID_SUB) & PDO_INVALID:
             raise SdoAbortedError(ABORT_UNSUPPORTED_ACCESS)
-        if sub > 0:
-            if self._u(index, 0) != 0:
+        if sub != PDO_MAPPED_COUNT_SUB:
+            if self._u(index, PDO_MAPPED_COUNT_SUB) != 0:
                 raise SdoAbortedError(ABORT_UNSUPPORTED_ACCESS)
             return
-        if value > 8:
+        if value > PDO_MAX_MAPPED:
             raise SdoAbortedError(ABORT_LENGTH_EXCEEDED)
         total = 0
-        receive = index < TPDO_MAP
         for s in range(1, value + 1):
             entry = self._u(index, s)
             m_index, m_sub, bits = (entry >> 16) & 0xFFFF, (entry >> 8) & 0xFF, entry & 0xFF
