@@ -158,9 +158,17 @@ class VirtualDrive:
             on_abort_connection=partial(resets.on_nmt_abort_connection, self),
             on_boot=partial(resets.on_boot, self),
         )
-        self.emcy = EmcyManager(0x80 + node_id, self._send, self.nmt.emcy_allowed)
+        # default COB-IDs of this node-ID from the EDS (0x80+N, 0x600+N, 0x580+N); 0x1014 is
+        # applied by the parameter load below, the first SDO server's are fixed
+        self.emcy = EmcyManager(
+            int(self.view.entry("cob_id_emcy").default), self._send, self.nmt.emcy_allowed
+        )
         self.sdo = BlockSdoServer(
-            0x600 + node_id, 0x580 + node_id, self.node, self.nmt.sdo_allowed, send=self._send
+            int(self.view.entry("sdo_server_1.cob_id_client_to_server").default),
+            int(self.view.entry("sdo_server_1.cob_id_server_to_client").default),
+            self.node,
+            self.nmt.sdo_allowed,
+            send=self._send,
         )
         self.node.sdo = self.sdo
         self.sdo2: BlockSdoServer | None = None
