@@ -7,8 +7,9 @@ than it applies them, and its backlog grows without bound. Measured: page B of t
 the time for 40 s, needed 18 s at full speed to answer a script call afterwards; in CI both
 pages stayed unresponsive for minutes (Playwright's waits queue behind the backlog).
 
-How: every update sent to a page counts (``sent``). Now and then, and always when AHEAD updates
-are unconfirmed, a marker follows the update: viser's localStorage read request
+How: every update sent to a page counts (``sent``). Now and then (one marker in flight at a
+time, at most one per MARKER_PERIOD_S), and always after the update that makes AHEAD updates
+unconfirmed, a marker follows the update: viser's localStorage read request
 (``LocalStorageGetItemRequestMessage``), which the page answers from its main thread's message
 handler, in order, after it applied everything queued before it. The answer confirms all updates
 up to the marker (``acked``). :meth:`PagePace.ready` says whether the page may get another
@@ -77,9 +78,13 @@ class PagePace:
         now = time.monotonic()
         with self._lock:
             self.sent += 1
-            stalled = all(now - t > STALL_S for _, t in self._pending.values())
-            due = now - self._last_marker >= MARKER_PERIOD_S or self.sent - self.acked >= AHEAD
-            if not (due and (not self._pending or stalled)):
+            full = self.sent - self.acked >= AHEAD  # this update fills the window
+            if self._pending:  # one marker in flight; another only for a full window
+                stalled = all(now - t > STALL_S for _, t in self._pending.values())
+                due = full or stalled
+            else:
+                due = full or now - self._last_marker >= MARKER_PERIOD_S
+            if not due:
                 return
             self.markers += 1
             uuid = f"{self._prefix}{self.markers}"

@@ -10,6 +10,9 @@ REST API / drive_link, not through the GUI), and the plot thread's counters.
   and nothing reaches the drive; after Apply the fields show the drive's read-back.
 - The live view cannot die silently: failing sends are survived, a killed plot thread is
   restarted, and a frozen data source shows "STALE" with the data's age in the page.
+- A page starved of CPU (its renderer run 10 % of the time) is sent no backlog: the server
+  holds at most AHEAD unconfirmed updates for it while the other page streams on, and it is
+  usable again as soon as it runs (the busy CI host kept both pages unresponsive for minutes).
 - A closed tab loses the lease LEASE_GRACE_S after its socket closed (not at once).
 """
 
@@ -17,12 +20,15 @@ from __future__ import annotations
 
 import os
 import re
+import signal
+import threading
 import time
 
 import pytest
 from fastapi.testclient import TestClient
 
 from dashboard._gui import LEASE_GRACE_S
+from dashboard._gui_pace import AHEAD
 from dashboard.app import create_app
 from dashboard.browser import CHROMIUM, click, launch, open_bench, text_input
 from dashboard.config import BenchConfig
@@ -194,6 +200,66 @@ def test_live_view_survives_failures_and_shows_stale(api, pages, monkeypatch):
     assert float(m.group(1)) >= 1.0  # stale after 1 s; the page rounds the age to 0.1 s
     monkeypatch.undo()
     wait_text(b, r"● live · data \d+ ms old")
+
+
+def _renderer_pids(page) -> list[int]:
+    """The renderer processes of the browser that shows ``page`` (Chromium's own list)."""
+    cdp = page.context.browser.new_browser_cdp_session()
+    try:
+        info = cdp.send("SystemInfo.getProcessInfo")["processInfo"]
+    finally:
+        cdp.detach()
+    return [p["id"] for p in info if p["type"] == "renderer"]
+
+
+def _starve(pids: list[int], seconds: float, duty: float, stop: threading.Event) -> None:
+    """Let ``pids`` run ``duty`` of every 0.5 s (SIGSTOP/SIGCONT) for ``seconds``."""
+    until = time.monotonic() + seconds
+    try:
+        while time.monotonic() < until and not stop.is_set():
+            for pid in pids:
+                os.kill(pid, signal.SIGSTOP)
+            time.sleep(0.5 * (1 - duty))
+            for pid in pids:
+                os.kill(pid, signal.SIGCONT)
+            time.sleep(0.5 * duty)
+    finally:
+        for pid in pids:
+            os.kill(pid, signal.SIGCONT)
+
+
+def test_a_starved_page_gets_no_backlog_and_is_usable_when_it_runs(api, pages):
+    gui = api.app.state.gui
+    a, b = pages
+    click(a, a.get_by_role("button", name="Take control"))  # to tell A's panel from B's
+    wait_text(a, r"In control: browser #\d+ \(you\)")
+    wait_text(b, r"● live · data \d+ ms old")
+    panels = gui.panel_list()
+    assert len(panels) == 2
+    pa = next(p for p in panels if p.holds_control())
+    pb = next(p for p in panels if p is not pa)
+    pids = _renderer_pids(b)
+    assert pids
+    stop = threading.Event()
+    th = threading.Thread(target=_starve, args=(pids, 12.0, 0.1, stop), daemon=True)
+    acked_a, sent_b = pa.pace.acked, pb.pace.sent
+    behind = 0
+    th.start()
+    try:
+        while th.is_alive():
+            behind = max(behind, pb.pace.sent - pb.pace.acked)
+            time.sleep(0.02)
+    finally:
+        stop.set()
+        th.join()
+    assert behind <= AHEAD  # never more than AHEAD updates queued for the starved page
+    assert pb.pace.sent - sent_b < 12 * (gui.config.gui_rate_hz + 4)  # not the full stream
+    assert pa.pace.acked > acked_a  # page A applied (and confirmed) updates meanwhile
+    t0 = time.monotonic()
+    b.evaluate("1")  # the page runs scripts again at once: no backlog in front of them
+    wait_text(b, r"● live · data \d+ ms old", timeout=30)
+    b.get_by_role("button", name="Enable").first.wait_for(timeout=30_000)
+    print(f"page B usable {time.monotonic() - t0:.1f} s after the starvation")
 
 
 def test_closed_tab_loses_the_lease_after_the_grace_time(api, pages):
