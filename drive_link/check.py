@@ -33,6 +33,7 @@ from . import cia402
 from ._nmt import HeartbeatProducer
 from .drive import Drive
 from .errors import DriveError, DriveTimeout, SdoAbort
+from .trace import TS as TRACE_TS
 
 __all__ = ["ITEMS", "CheckFailed", "CheckResult", "run_checks"]
 
@@ -91,6 +92,51 @@ def _raw_write(drive: Drive, name: str, value: float | int) -> None:
 
 def _f32(x: float) -> float:
     return struct.unpack("<f", struct.pack("<f", x))[0]
+
+
+#: Simulated time of a virtual drive (s); firmware on a DSP runs in real time and has none.
+SIM_TIME = "sim_info.sim_time"
+#: Wall-time cap of a wait bounded by the drive's own time: this many × the bound, + 30 s.
+WALL_CAP = 10.0
+
+
+class _DriveClock:
+    """Time as the drive lives it, for bounds that physics sets (a ramp, a record's length):
+    a virtual drive's simulated time (0x5030:1 ``sim_info.sim_time``), which lags the wall clock
+    when the host starves the simulation (inside User-Mode Linux, or on a busy host); the wall
+    clock where the drive has no such object (firmware on a DSP runs in real time)."""
+
+    def __init__(self, d: Drive) -> None:
+        self._d = d
+        self.simulated = False
+        if SIM_TIME in d.table:
+            try:
+                d.read(SIM_TIME)
+                self.simulated = True
+            except SdoAbort:
+                pass
+
+    def now(self) -> float:
+        """The drive's time, s."""
+        return float(self._d.read(SIM_TIME)) if self.simulated else time.monotonic()
+
+
+def _drive_wait(
+    d: Drive, done: Callable[[], bool], bound: float, poll: float = 0.02
+) -> tuple[bool, float]:
+    """Poll ``done()`` until it is true or ``bound`` s of the drive's own time
+    (:class:`_DriveClock`) have passed; at most ``WALL_CAP × bound + 30`` s of wall time (a
+    drive whose time does not advance). Returns (done, drive seconds waited)."""
+    clock = _DriveClock(d)
+    t0 = clock.now()
+    wall_end = time.monotonic() + WALL_CAP * bound + 30.0
+    while True:
+        if done():
+            return True, clock.now() - t0
+        waited = clock.now() - t0
+        if waited > bound or time.monotonic() > wall_end:
+            return bool(done()), waited
+        time.sleep(poll)
 
 
 def _wait_state(drive: Drive, state: str, timeout: float = 1.0) -> str:
@@ -558,7 +604,17 @@ def item_trace(d: Drive, opts: dict) -> str:
         ["i_p", "speed"], divider=1, length=length, pre_trigger=0, trigger="immediate"
     )
     d.trace.arm()
-    d.trace.wait(5.0)
+    # the record takes length × 20 µs of the drive's time (divider 1, immediate trigger):
+    # bounded by that time as the drive delivers it, not by the wall clock
+    state = [""]
+
+    def done() -> bool:
+        state[0] = d.trace.state
+        _expect(state[0] != "idle", "trace recorder went idle before it was done")
+        return state[0] == "done"
+
+    ok, waited = _drive_wait(d, done, length * TRACE_TS + 1.0)
+    _expect(ok, f"trace not done after {waited:.2f} s of drive time (recorder {state[0]})")
     reads = [0]
     stop = threading.Event()
 
@@ -664,15 +720,19 @@ def _spin(d: Drive, rpm: int = SPIN_RPM) -> float:
 
 
 def _reach_speed(d: Drive, rpm: int, failure: str) -> float:
-    """Wait (profile ramp time + 5 s) until the speed reaches 80 % of ``rpm``; return it."""
+    """Wait (profile ramp time + 5 s of the drive's time) until the speed reaches 80 % of
+    ``rpm``; return it."""
     acc = max(int(d.read("profile_acceleration")), 1)
-    deadline = time.monotonic() + 2.0 * rpm / acc + 5.0
-    v = float(d.read("measurements.speed"))
-    while v < 0.8 * rpm and time.monotonic() < deadline:
-        time.sleep(0.02)
-        v = float(d.read("measurements.speed"))
-    _expect(v >= 0.8 * rpm, f"{failure} (at {v:.0f} rpm)")
-    return v
+    bound = 2.0 * rpm / acc + 5.0
+    v = [float(d.read("measurements.speed"))]
+
+    def up() -> bool:
+        v[0] = float(d.read("measurements.speed"))
+        return v[0] >= 0.8 * rpm
+
+    _, waited = _drive_wait(d, up, bound)
+    _expect(v[0] >= 0.8 * rpm, f"{failure} (at {v[0]:.0f} rpm after {waited:.1f} s)")
+    return v[0]
 
 
 def _stop_time(d: Drive, rpm: float, name: str = "quick_stop_deceleration") -> float:
@@ -682,12 +742,15 @@ def _stop_time(d: Drive, rpm: float, name: str = "quick_stop_deceleration") -> f
 
 
 def _wait_standstill(d: Drive, timeout: float, window: float = 15.0) -> float:
-    deadline = time.monotonic() + timeout
-    while True:
-        v = float(d.read("measurements.speed"))
-        if abs(v) <= window or time.monotonic() > deadline:
-            return v
-        time.sleep(0.02)
+    """The speed (rpm) once |speed| ≤ ``window``, or after ``timeout`` s of the drive's time."""
+    v = [float(d.read("measurements.speed"))]
+
+    def still() -> bool:
+        v[0] = float(d.read("measurements.speed"))
+        return abs(v[0]) <= window
+
+    _drive_wait(d, still, timeout)
+    return v[0]
 
 
 def item_nmt_reaction(d: Drive, opts: dict) -> str:
