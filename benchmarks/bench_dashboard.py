@@ -39,6 +39,7 @@ import msgspec
 import numpy as np
 import zstandard
 
+from dashboard._gui_pace import PagePace
 from dashboard.browser import free_port, launch, run_dashboard, stop_process
 
 INIT_JS = """
@@ -132,6 +133,9 @@ class _SimulatedViewer:
         self.speed_plot, self.current_plot = _Sink(), _Sink()
         self.controller_md = _Sink()
         self.cid, self.token = -1, None
+        self.plot_newest = None
+        self.pace = PagePace(object())  # no page: never held back
+
 
     def __getattr__(self, name: str):  # show_status, show_legends ...: nothing to show
         return lambda *a, **k: None
