@@ -14,6 +14,7 @@ import struct
 import threading
 from collections.abc import Callable
 
+from firmware_protocol.cob_id import CAN_ID_MASK, COB_INVALID
 from firmware_protocol.emcy_codes import (  # the codes of OD.md / the C header
     DATA_SET_LOST,
     DC_OVERVOLTAGE,
@@ -148,7 +149,7 @@ class EmcyManager:
 
     def set_cob_id(self, value: int) -> None:
         """0x1014 value: bit 31 set = EMCY not sent (CiA 301 §7.5.2.17), bits 10..0 COB-ID."""
-        self.cob_id = None if value & 0x80000000 else value & 0x7FF
+        self.cob_id = None if value & COB_INVALID else value & CAN_ID_MASK
 
     def _emit(self, code: int, reg: int, data: bytes) -> None:
         if not self._allowed() or self.cob_id is None:
