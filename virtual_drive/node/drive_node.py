@@ -341,6 +341,8 @@ class VirtualDrive:
     def _reset_fault(self) -> bool:
         # Called with the CiA 402 lock held: take no drive lock here (the pacing loop takes
         # sim_lock, then the 402 lock); the simulator serialises reset_fault with run itself.
+        if self.sim.fault_persists():  # refused at once, as the DSP's next 20 µs sample would
+            return False  # (a starved virtual drive otherwise showed SWITCH ON DISABLED first)
         self.sim.reset_fault()  # leaves the bridge off
         self._sim_mode = "off"
         self._last_fault = None

@@ -501,6 +501,13 @@ class Simulator:
                 t=float(L.fault_time),
             )
 
+    def fault_persists(self) -> bool:
+        """True while a trip's cause is still there (the DC supply outside the overvoltage /
+        undervoltage limits): a fault reset now would trip again at the next sample."""
+        with self._lock:
+            V = float(self._L.p.V_dc)
+            return V > float(self._L.ov_trip) or V < float(self._L.uv_trip)
+
     def reset_fault(self) -> None:
         """Clear the trip; the drive goes to mode "off" (bridge disabled) and must be enabled
         again with set_mode.  A persisting cause (supply out of limits) trips again."""
