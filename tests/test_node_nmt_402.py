@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 from canopen.profiles.p402 import State402
 from canopen.sdo import SdoAbortedError, SdoCommunicationError
+from conftest import RunQueueProbe
 from test_node_support import Bench, emcy_frames
 
 pytestmark = pytest.mark.timeout(60)
@@ -38,12 +39,21 @@ def test_boot_up_then_heartbeat_in_pre_operational(bench):
     assert boot is not None, "no boot-up message"
     period_ms = bench.read("producer_heartbeat_time")
     assert period_ms == 100
-    time.sleep(1.05)
-    beats = [t for t, d in bench.log.of(0x701) if d == b"\x7f"]
+    probes = []
+    for _ in range(3):  # judged in a window where the kernel let this process (the drive) run
+        probe = RunQueueProbe()
+        t0 = time.monotonic()
+        time.sleep(1.05)
+        probes.append(f"{probe.stop():.2f} s/s")
+        beats = [t for t, d in bench.log.of(0x701) if d == b"\x7f" and t >= t0]
+        if probe.wait < 0.25:
+            break
+    else:
+        pytest.skip(f"the host kept the drive waiting in 3 windows (run-queue wait {probes})")
     assert len(beats) >= 5, beats
     gaps = [b - a for a, b in itertools.pairwise(beats)]
     # on schedule (median gap); a process the machine stalls sends one late beat, no burst
-    assert sorted(gaps)[len(gaps) // 2] == pytest.approx(0.1, abs=0.012), gaps
+    assert sorted(gaps)[len(gaps) // 2] == pytest.approx(0.1, abs=0.012), (gaps, probes)
     assert sum(g < 0.05 for g in gaps) <= 1, gaps
 
 
