@@ -37,6 +37,7 @@ from dashboard._bench import LIVE_SIGNALS, Bench
 from dashboard._gui_field import CURRENT_COLORS, SPEED_COLORS
 from dashboard._gui_field import fmt as _fmt
 from dashboard._gui_guard import guard_handshake, install_send_lock, refuse_share_url
+from dashboard._gui_pace import answer as pace_answer
 from dashboard._gui_panel import Panel
 from dashboard._gui_scene import RotorScene
 from dashboard._gui_scene import background as scene_background
@@ -102,7 +103,7 @@ class BenchGui:
         self.port = self.server.get_port()
         self.origins = allowed_origins("127.0.0.1", [self.port, self.config.api_port])
         hosts = allowed_hosts("127.0.0.1")
-        guard_handshake(self.port, lambda: hosts, lambda: self.origins)
+        guard_handshake(self.port, lambda: hosts, lambda: self.origins, pace_answer)
         refuse_share_url(self.server)
         self.server.gui.configure_theme(
             control_width="large",

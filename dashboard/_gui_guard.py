@@ -7,6 +7,8 @@ handles may be written from any thread. This module:
 - checks Host (and, for the WebSocket, Origin) in the opening handshake, before viser handles
   any message: a foreign Host gets 421, a foreign Origin 403 (the socket never opens);
 - replaces viser's share-URL handlers with refusals;
+- answers the live view's pace markers (an image address per marker, :mod:`dashboard._gui_pace`)
+  with an empty 204, after the Host check;
 - serialises every message viser queues (``queue_message``) under one process-wide lock, so
   that the plot thread, the status thread, viser's callbacks and the REST threads never push
   into viser's buffers at the same time;
@@ -122,11 +124,16 @@ def _ws_servers(port: int) -> list[Any]:
 
 
 def guard_handshake(
-    port: int, hosts: Callable[[], set[str]], origins: Callable[[], set[str]]
+    port: int,
+    hosts: Callable[[], set[str]],
+    origins: Callable[[], set[str]],
+    answer: Callable[[str], bool] | None = None,
 ) -> None:
     """Check Host (every HTTP request and WebSocket) and Origin (WebSocket) in the handshake of
     the viser server bound to ``port``. ``hosts``/``origins`` give the allowed sets at call
-    time. :raises RuntimeError: no websockets server found on that port."""
+    time. ``answer(path)``, if given, sees every plain request with an allowed Host first; when
+    it returns True the request gets an empty 204 (the live view's pace markers,
+    :mod:`dashboard._gui_pace`). :raises RuntimeError: no websockets server found on that port."""
     servers = _ws_servers(port)
     if not servers:
         raise RuntimeError(f"no viser server on port {port} to guard")
@@ -144,6 +151,8 @@ def guard_handshake(
                 origin = request.headers.get("Origin")
                 if not origin_ok(origin, origins()):
                     return conn.respond(403, "origin not allowed\n")
+            elif answer is not None and answer(request.path):
+                return conn.respond(204, "")
             return original(conn, request) if original is not None else None
 
         srv.process_request = process_request

@@ -9,33 +9,54 @@ pages stayed unresponsive for minutes (Playwright's waits queue behind the backl
 
 How: every update sent to a page counts (``sent``). Now and then (one marker in flight at a
 time, at most one per MARKER_PERIOD_S), and always after the update that makes AHEAD updates
-unconfirmed, a marker follows the update: viser's localStorage read request
-(``LocalStorageGetItemRequestMessage``), which the page answers from its main thread's message
-handler, in order, after it applied everything queued before it. The answer confirms all updates
-up to the marker (``acked``). :meth:`PagePace.ready` says whether the page may get another
-update: fewer than AHEAD unconfirmed. So a slow page gets fewer, newer updates (the plots and
-status always carry the whole current state, so skipping one loses nothing) and its backlog
-stays below AHEAD updates; a fast page is not slowed. A marker costs the page one frame of its
-(software-WebGL) canvas, hence at most one every MARKER_PERIOD_S unless the window is full.
+unconfirmed, a marker follows the update: a hidden HTML element of the page's panel gets an
+``<img hidden>`` whose address (PATH_PREFIX + marker id) is served by the viser port itself
+(:func:`dashboard._gui_guard.guard_handshake` calls :func:`answer`). The page requests it only
+once its main thread applied that update, in order after everything queued before it, so the
+request confirms all updates up to the marker (``acked``). :meth:`PagePace.ready` says whether
+the page may get another update: fewer than AHEAD unconfirmed. So a slow page gets fewer, newer
+updates (the plots and status always carry the whole current state, so skipping one loses
+nothing) and its backlog stays below AHEAD updates; a page that keeps up is not slowed.
 
-Private viser API used (viser 1.1.1): ``ClientHandle._websock_connection`` (``queue_message``,
-``register_handler``) and the two localStorage messages.
+Why an image and not a viser request/answer (its localStorage read): a message that is not
+GUI-only makes viser's page render its WebGL canvas for 250 ms (RENDER_SETTLE_MS in App.tsx);
+with two markers a second that more than doubled Chromium's CPU (32.6 -> 75.3 % of a core).
+A GUI update costs no canvas frame; the image request is one loopback HTTP request per marker.
+
+Private viser API used (viser 1.1.1): ``ClientHandle._websock_connection`` (present for a real
+browser's client) and ``client.gui.add_html``.
 """
 
 from __future__ import annotations
 
 import itertools
+import re
 import threading
 import time
+import weakref
 from typing import Any
 
-__all__ = ["AHEAD", "MARKER_PERIOD_S", "STALL_S", "PagePace"]
+__all__ = ["AHEAD", "MARKER_PERIOD_S", "PATH_PREFIX", "STALL_S", "PagePace", "answer"]
 
 AHEAD = 12  #: updates a page may have unconfirmed (≈ 0.4 s of plots at 24 Hz plus status)
 MARKER_PERIOD_S = 0.5  #: at most one marker per this many s while the window is not full
 STALL_S = 10.0  #: a marker unanswered this long: allow one more update (and a new marker)
-_KEY = "dashboard-pace"  #: the localStorage key read (never written: the answer is null)
+PATH_PREFIX = "/dashboard-pace/"  #: the markers' image addresses on the viser port
+_PATH = re.compile(re.escape(PATH_PREFIX) + r"(\d+)-(\d+)$")
 _ids = itertools.count(1)
+_paces: weakref.WeakValueDictionary[int, PagePace] = weakref.WeakValueDictionary()
+
+
+def answer(path: str) -> bool:
+    """A request for ``path`` reached the viser port: True if it was a marker's image (then
+    the page it belongs to has applied everything up to that marker)."""
+    m = _PATH.match(path.split("?", 1)[0])
+    if m is None:
+        return False
+    pace = _paces.get(int(m.group(1)))
+    if pace is not None:
+        pace.confirm(int(m.group(2)))
+    return True
 
 
 class PagePace:
@@ -44,26 +65,22 @@ class PagePace:
     A client without a viser connection (a test's stand-in) is never held back."""
 
     def __init__(self, client: Any) -> None:
-        self._conn = getattr(client, "_websock_connection", None)
-        self._prefix = f"{_KEY}-{next(_ids)}-"
+        self._id = next(_ids)
         self._lock = threading.Lock()
         self.sent = 0  #: updates sent to the page
         self.acked = 0  #: updates the page confirmed it applied
         self.markers = 0  #: markers sent
         self.lag_s = 0.0  #: round-trip time of the last answered marker (s)
-        self._pending: dict[str, tuple[int, float]] = {}  # marker id → (sent count, monotonic)
+        self._pending: dict[int, tuple[int, float]] = {}  # marker → (sent count, monotonic)
         self._last_marker = -float("inf")
-        if self._conn is not None:
-            from viser import _messages
-
-            self._request = _messages.LocalStorageGetItemRequestMessage
-            self._conn.register_handler(
-                _messages.LocalStorageGetItemResponseMessage, self._on_answer
-            )
+        self._html: Any = None
+        if getattr(client, "_websock_connection", None) is not None:
+            self._html = client.gui.add_html("")
+            _paces[self._id] = self
 
     def ready(self) -> bool:
         """Whether the page may get another update now."""
-        if self._conn is None:
+        if self._html is None:
             return True
         with self._lock:
             if self.sent - self.acked < AHEAD:
@@ -73,7 +90,7 @@ class PagePace:
 
     def sent_update(self) -> None:
         """Count one update just queued for the page; queue a marker after it when due."""
-        if self._conn is None:
+        if self._html is None:
             return
         now = time.monotonic()
         with self._lock:
@@ -87,19 +104,15 @@ class PagePace:
             if not due:
                 return
             self.markers += 1
-            uuid = f"{self._prefix}{self.markers}"
-            self._pending[uuid] = (self.sent, now)
+            n = self.markers
+            self._pending[n] = (self.sent, now)
             self._last_marker = now
-        self._conn.queue_message(self._request(key=_KEY, request_uuid=uuid))
+        self._html.content = f'<img src="{PATH_PREFIX}{self._id}-{n}" alt="" hidden>'
 
-    def _on_answer(self, client_id: int, message: Any) -> None:
-        """viser's event loop: the page applied everything up to this marker."""
-        del client_id
-        uuid = getattr(message, "request_uuid", "")
-        if not uuid.startswith(self._prefix):
-            return
+    def confirm(self, marker: int) -> None:
+        """The page applied everything up to ``marker`` (any thread)."""
         with self._lock:
-            got = self._pending.pop(uuid, None)
+            got = self._pending.pop(marker, None)
             if got is None:
                 return
             seq, t = got

@@ -1,98 +1,110 @@
 """The per-page flow control of the live view (dashboard._gui_pace) against a stand-in page that
-applies what it is sent in order and answers viser's localStorage read (as viser's page does:
-MessageHandler.tsx answers LocalStorageGetItemRequestMessage after the messages before it).
+applies what it is sent in order; applying a marker's HTML makes it request the marker's image
+from the viser port (as Chromium does for an <img hidden> put into the page), which the port
+hands to dashboard._gui_pace.answer.
 
-Truths: the messages the stand-in page received, in order, and when it answers.
+Truths: the messages the stand-in page received, in order, and when it applies them.
 """
 
 from __future__ import annotations
 
-from viser import _messages
+import re
 
 from dashboard import _gui_pace
-from dashboard._gui_pace import AHEAD, PagePace
+from dashboard._gui_pace import AHEAD, PATH_PREFIX, PagePace, answer
 
 
 class _Page:
-    """A viser connection stand-in: keeps queued messages; ``apply()`` plays the page."""
+    """A browser's page stand-in: keeps what it is sent; ``apply()`` plays the page."""
 
     def __init__(self) -> None:
-        self.queue: list[object] = []
-        self.handlers: list = []
-
-    def register_handler(self, cls, cb) -> None:
-        assert cls is _messages.LocalStorageGetItemResponseMessage
-        self.handlers.append(cb)
-
-    def queue_message(self, msg) -> None:
-        self.queue.append(msg)
+        self.queue: list[str] = []
 
     def apply(self, n: int | None = None) -> int:
-        """Apply the first ``n`` queued messages (all by default), answering markers."""
+        """Apply the first ``n`` queued updates (all by default), loading marker images."""
         done, self.queue = self.queue[:n], self.queue[len(self.queue[:n]) :]
         for m in done:
-            if isinstance(m, _messages.LocalStorageGetItemRequestMessage):
-                ans = _messages.LocalStorageGetItemResponseMessage(
-                    value=None, error=None, request_uuid=m.request_uuid
-                )
-                for cb in self.handlers:
-                    cb(7, ans)
+            src = re.search(r'<img src="([^"]+)"', m)
+            if src:
+                assert answer(src.group(1))  # the viser port recognises a marker's address
         return len(done)
 
 
+class _Html:
+    def __init__(self, page: _Page) -> None:
+        self.page = page
+
+    @property
+    def content(self) -> str:
+        return ""
+
+    @content.setter
+    def content(self, value: str) -> None:
+        self.page.queue.append(value)
+
+
 class _Client:
+    """A viser ClientHandle stand-in with a connection and a per-client GUI."""
+
     def __init__(self) -> None:
-        self._websock_connection = _Page()
+        self._websock_connection = object()
+        self.page = _Page()
+        self.gui = self
+
+    def add_html(self, content: str) -> _Html:
+        return _Html(self.page)
+
+
+def _paced() -> tuple[_Page, PagePace]:
+    client = _Client()
+    return client.page, PagePace(client)
 
 
 def _send(pace: PagePace, page: _Page) -> None:
-    page.queue_message("update")
+    page.queue.append("update")
     pace.sent_update()
 
 
 def test_a_page_that_applies_nothing_gets_at_most_AHEAD_updates():
-    client = _Client()
-    page, pace = client._websock_connection, PagePace(client)
+    page, pace = _paced()
     sent = 0
     for _ in range(1000):  # the plot loop ticking while the page is starved
         if pace.ready():
             _send(pace, page)
             sent += 1
     assert sent == AHEAD
-    assert sum(m == "update" for m in page.queue) == AHEAD
-    markers = [m for m in page.queue if m != "update"]
-    assert markers and page.queue[-1] is markers[-1]  # the window's last update is confirmable
+    assert page.queue.count("update") == AHEAD
+    assert page.queue[-1].startswith("<img")  # the window's last update is confirmable
     page.apply()  # the page runs again and applies its backlog
     assert pace.ready() and pace.acked == pace.sent == AHEAD
 
 
 def test_a_page_that_keeps_up_is_never_held_back():
-    client = _Client()
-    page, pace = client._websock_connection, PagePace(client)
+    page, pace = _paced()
     for _ in range(500):
         assert pace.ready()
         _send(pace, page)
-        page.apply()  # applied before the next tick (and markers answered)
+        page.apply()  # applied before the next tick
     assert pace.sent == 500 and pace.sent - pace.acked < AHEAD
     assert pace.markers <= 500 // (AHEAD - 1) + 2  # markers only when due, not per update
 
 
-def test_answers_confirm_in_order_and_a_stalled_marker_lets_one_more_through(monkeypatch):
-    client = _Client()
-    page, pace = client._websock_connection, PagePace(client)
+def test_markers_confirm_in_order_and_a_stalled_marker_lets_one_more_through(monkeypatch):
+    page, pace = _paced()
     while pace.ready():
         _send(pace, page)
     assert pace.markers == 2  # after the first update, and after the one that filled the window
-    page.apply(2)  # the page applied the first update and answered the marker behind it
+    page.apply(2)  # the page applied the first update and the marker behind it
     assert pace.acked == 1 and pace.ready()
     _send(pace, page)
     assert not pace.ready()
-    page.handlers[0](7, _messages.LocalStorageGetItemResponseMessage(None, None, "other-1"))
-    assert not pace.ready()  # someone else's localStorage answer confirms nothing
+    assert answer(f"{PATH_PREFIX}999999-1")  # a marker of a page gone: answered, changes nothing
+    assert not answer("/index.html") and not answer(f"{PATH_PREFIX}x")
+    assert not pace.ready()
     monkeypatch.setattr(_gui_pace, "STALL_S", 0.0)  # a page that stopped answering
     assert pace.ready()
     _send(pace, page)
-    assert page.queue[-1] != "update"  # a new marker follows the extra update
+    assert page.queue[-1].startswith("<img")  # a new marker follows the extra update
     page.apply()
     assert pace.acked == pace.sent == AHEAD + 2 and not pace._pending
 
