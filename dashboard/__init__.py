@@ -23,7 +23,8 @@ eqs. 28–31) and ``_loop_view`` (Bode and pole curves from :mod:`drive_link.des
 (CSV, PNG), ``_fields`` (number fields with units), ``_live_plot``, ``_virtual`` (opens the
 bench: real bus, running hub, or hub + virtual drive), ``_gui`` + ``_gui_panel`` +
 ``_gui_tabs/`` (one module per tab) + ``_gui_field``, ``_gui_scene`` (3D rotor), ``_gui_guard``,
-``_gui_status``. See ``docs/architecture.md``.
+``_gui_pace`` (updates only as fast as each page applies them), ``_gui_status``.
+See ``docs/architecture.md``.
 """
 
 from __future__ import annotations
