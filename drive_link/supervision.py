@@ -208,6 +208,9 @@ class Supervisor:
         self._pending: str | None = None  # reason of a queued check/re-arm
         self._pending_boot = False
         self._error: str | None = None
+        #: reason of a suspected restart whose re-arm found the drive silent (checked again
+        #: once by the next command, see :meth:`wait_ready`)
+        self._unanswered: str | None = None
         self._closed = False
         self._last_state: int | None = None
         self._last_hb: float | None = None
@@ -300,17 +303,27 @@ class Supervisor:
             return
         limit = self.wait_timeout if timeout is None else timeout
         deadline = time.monotonic() + limit
+        retried = False
         with self._lock:
-            while not self._ready and not self._closed:
-                left = deadline - time.monotonic()
-                if left <= 0:
-                    raise SupervisionError(
-                        f"node {self.node_id} restarted and re-arming its supervision did not "
-                        f"finish within {limit:g} s; command not sent"
-                    )
-                self._lock.wait(left)
-            if self._error is not None and not self._closed:
-                raise SupervisionError(self._error)
+            while True:
+                while not self._ready and not self._closed:
+                    left = deadline - time.monotonic()
+                    if left <= 0:
+                        raise SupervisionError(
+                            f"node {self.node_id} restarted and re-arming its supervision did "
+                            f"not finish within {limit:g} s; command not sent"
+                        )
+                    self._lock.wait(left)
+                if self._error is None or self._closed:
+                    return
+                if self._unanswered is None or retried:
+                    raise SupervisionError(self._error)
+                # the last re-arm only found the drive silent (a starved bus or host: a late
+                # heartbeat is not always a restart): check again once before refusing
+                retried = True
+                self._pending, self._unanswered = self._unanswered, None
+                self._ready, self._error = False, None
+                self._lock.notify_all()
 
     # ------------------------------------------------------------------ detection (bus thread)
     def _on_heartbeat(self, can_id: int, data: bytearray, timestamp: float) -> None:
@@ -367,6 +380,9 @@ class Supervisor:
             with self._lock:
                 if self._pending is not None:
                     continue  # another restart meanwhile: go again, gate stays closed
+                self._unanswered = (
+                    reason if set(report.failed) == {"drive"} and not boot else None
+                )
                 if report.failed and any(
                     k.startswith(("0x6007", "0x1016")) or k == "drive" for k in report.failed
                 ):

@@ -340,3 +340,34 @@ def test_producer_time_changed_by_another_master_is_learned(rig):
     assert len(checks) <= 1, checks
     assert d.boots_seen == 0
     SdoChannel.download(d.sdo, 0x1017, 0, struct.pack("<H", 100))
+
+
+def test_a_late_heartbeat_with_the_drive_silent_meanwhile_is_checked_again(rig):
+    """A heartbeat gap (no boot-up) while the drive's SDO answers are lost: the re-arm's
+    read-back fails, but that is no proof of a lost supervision; the next user command checks
+    once more and goes through when the drive answers again (the settings were intact)."""
+    d = rig.drive
+    d.configure_heartbeat_consumer(CONSUMER_MS)
+    real_send = rig.vd.bus.send
+    mute = threading.Event()
+
+    def send(msg, timeout=None):
+        if mute.is_set() and msg.arbitration_id == 0x580 + NODE:
+            return None  # SDO responses lost (a starved bus or host)
+        return real_send(msg, timeout)
+
+    rig.vd.bus.send = send
+    d.supervisor.rearm_budget = 0.5
+    mute.set()
+    sup = d.supervisor
+    with sup._lock:  # what the heartbeat rule queues for a late heartbeat
+        sup._pending, sup._ready = "heartbeat resumed after 900 ms", False
+        sup._lock.notify_all()
+    deadline = time.monotonic() + 30.0
+    while sup._error is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert sup._error is not None, "the re-arm's read-back should have failed while muted"
+    mute.clear()
+    assert d.read("statusword") >= 0  # checked again, then sent
+    assert int(d.read("consumer_heartbeat_time.consumer_1")) == _consumer_value()
+    assert d.boots_seen == 0  # nothing had been lost: no restart counted
