@@ -27,7 +27,7 @@ import numpy as np
 
 from firmware_protocol import abort_codes, emcy_codes
 from firmware_protocol.enums import StoreStatus
-from firmware_protocol.index_ranges import SIMULATION
+from firmware_protocol.index_ranges import COMMUNICATION, SIMULATION
 
 from . import cia402
 from ._nmt import HeartbeatProducer
@@ -384,7 +384,7 @@ def item_gain_set(d: Drive, opts: dict) -> str:
 
 
 #: Communication profile area (CiA 301 §7.4.8): what NMT reset communication reverts.
-COMM_AREA = range(0x1000, 0x2000)
+COMM_AREA = COMMUNICATION
 
 
 def _persistent_snapshot(d: Drive, indices: range | None = None) -> dict[str, bytes]:
