@@ -24,6 +24,7 @@ class HostHeartbeat:
         self.bench = bench
         self.stop_evt = threading.Event()
         self.last = 0.0
+        self.sent: list[float] = []  # when each heartbeat was sent (monotonic s)
         self.thread = threading.Thread(target=self._run, daemon=True)
         self.thread.start()
 
@@ -31,6 +32,7 @@ class HostHeartbeat:
         while not self.stop_evt.is_set():
             self.bench.net.send_message(0x700 + HOST, b"\x05")
             self.last = time.monotonic()
+            self.sent.append(self.last)
             self.stop_evt.wait(0.01)
 
     def stop(self) -> float:
@@ -58,7 +60,15 @@ def test_heartbeat_loss_quick_stop_and_emcy(bench):
     bench.enable(-1)
     bench.write("setpoints.i_p_ref", 10.0)
     time.sleep(0.15)
-    assert emcy_frames(bench.log) == []  # heartbeats arriving: no error
+    early = emcy_frames(bench.log)
+    if early:  # right only if this (starved) process really left a gap over the consumer time
+        gap = max((b - a for a, b in zip(hb.sent, hb.sent[1:], strict=False)), default=0.0)
+        hb.stop()
+        assert gap > CONSUMER_MS / 1000, (
+            f"EMCY {early} while heartbeats came at most {gap * 1e3:.0f} ms apart "
+            f"(consumer {CONSUMER_MS} ms)"
+        )
+        pytest.skip(f"the host's heartbeat thread was starved ({gap * 1e3:.0f} ms gap)")
     probe = RunQueueProbe()  # run-queue wait the kernel imposed on this process meanwhile
     last = hb.stop()
     got = bench.log.wait_for(0x81, 1.0, since=last)
