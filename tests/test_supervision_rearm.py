@@ -26,6 +26,7 @@ pytestmark = pytest.mark.timeout(90)
 
 NODE = 5
 HOST = 0x7F
+MARKER_COB = 0x7F0  # a COB-ID no CiA 301 service and no drive object uses
 CONSUMER_MS = 1000  # generous: on a busy host (load 25) the host producer thread stalls 300 ms+
 
 
@@ -33,6 +34,7 @@ class Sniffer(can.Listener):
     """Every frame on the channel, in bus order, with the monotonic time it was seen."""
 
     def __init__(self, channel: str) -> None:
+        self.channel = channel
         self.bus = can.Bus(interface="virtual", channel=channel)
         self.frames: list[tuple[float, int, bytes]] = []
         self.lock = threading.Lock()
@@ -43,8 +45,18 @@ class Sniffer(can.Listener):
             self.frames.append((time.monotonic(), msg.arbitration_id, bytes(msg.data)))
 
     def since(self, t: float) -> list[tuple[float, int, bytes]]:
-        with self.lock:
-            return [f for f in self.frames if f[0] >= t]
+        """Frames seen since ``t``, up to everything sent on the bus before this call: a marker
+        frame is sent and waited for (the sniffer's thread lags the bus on a busy host)."""
+        tag = uuid.uuid4().bytes[:8]
+        with can.Bus(interface="virtual", channel=self.channel) as marker:
+            marker.send(can.Message(arbitration_id=MARKER_COB, data=tag, is_extended_id=False))
+        deadline = time.monotonic() + 30.0
+        while time.monotonic() < deadline:
+            with self.lock:
+                if any(cob == MARKER_COB and data == tag for _, cob, data in self.frames):
+                    return [f for f in self.frames if f[0] >= t and f[1] != MARKER_COB]
+            time.sleep(0.01)
+        raise AssertionError("the sniffer did not see its marker frame within 30 s")
 
     def close(self) -> None:
         self.notifier.stop(1.0)
