@@ -31,7 +31,13 @@ from collections.abc import Callable
 from canopen.sdo.client import SdoClient
 from canopen.sdo.exceptions import SdoAbortedError, SdoCommunicationError
 
-__all__ = ["Exchange", "NoAnswer", "continue_upload", "download", "upload"]
+#: s a host-clock frame timestamp may lie before the request it answers (clock steps,
+#: rounding); frames stamped earlier are dropped (see drive_link._sdo._Client)
+CLOCK_TOLERANCE_S = 0.002
+
+__all__ = [
+    "CLOCK_TOLERANCE_S", "Exchange", "NoAnswer", "continue_upload", "download", "upload",
+]  # fmt: skip
 
 ABORT = 0x80
 TOGGLE = 0x10
@@ -59,6 +65,8 @@ class Exchange:
         self.index = index
         self.subindex = subindex
         self.requests_sent = 0
+        # frames stamped before now answer earlier requests (drive_link._sdo._Client)
+        client.not_before = time.time() - CLOCK_TOLERANCE_S  # type: ignore[attr-defined]
         self.drain()
         #: (frame, how many more may come): late duplicates of the last transfer's answer
         self.stale: tuple[bytes, int] | None = getattr(client, "stale_answer", None)

@@ -245,7 +245,10 @@ def test_atomic_gain_set_and_read_back(bench):
         r = _cli_ok(bench, "set-gains", *(f"{k}={v!r}" for k, v in want.items()))
         back = d.read_gains()
         for k, v in want.items():
-            assert getattr(back, k) == float(np.float32(v)), (k, getattr(back, k), v, r.stdout)
+            assert getattr(back, k) == float(np.float32(v)), (
+                f"{_tag(bench)} {k} read back {getattr(back, k)!r}, set {v!r}; "
+                f"set-gains printed: {' | '.join(ln.strip() for ln in r.stdout.splitlines())}"
+            )
         try:
             # staging alone changes nothing active
             _stage_raw(d, "R_c", 0.5 * g0.R_c)
