@@ -286,7 +286,15 @@ class Bench:
         """A :class:`drive_link.Drive` on node 1 (its own bus connection)."""
         from drive_link import Drive
 
+        kw.setdefault("sdo_timeout", self.sdo_timeout)
         return Drive.connect(node_id=self.node_id, **self.bus_kwargs(), **kw)
+
+    @property
+    def sdo_timeout(self) -> float:
+        """SDO response timeout per frame (s): drive_link's default 0.3 s, longer where the
+        whole bench runs slower (User-Mode Linux, slow 10: 1.0 s; an unanswered initiate then
+        fails after 19 s instead of 5.7 s — a starved CI host kept UML silent longer)."""
+        return 0.3 * max(1.0, self.cond.slow / 3.0)
 
     def cli(self, *args: str, timeout: float = 60.0) -> subprocess.CompletedProcess:
         """Run ``drive-link ARGS <bus options>`` as a user would; ``timeout`` in s (× slow).
@@ -298,7 +306,7 @@ class Bench:
             [str(exe)] if exe.exists() else [sys.executable, "-m", "drive_link.cli"]
         )
         return subprocess.run(
-            [*cmd, *args, *self.bus_args()],
+            [*cmd, *args, *self.bus_args(), "--sdo-timeout", f"{self.sdo_timeout:g}"],
             capture_output=True,
             text=True,
             timeout=timeout * self.cond.slow,
