@@ -14,10 +14,18 @@ REST API / drive_link, not through the GUI), and the plot thread's counters.
   holds at most AHEAD unconfirmed updates for it while the other page streams on, and it is
   usable again as soon as it runs (the busy CI host kept both pages unresponsive for minutes).
 - A closed tab loses the lease LEASE_GRACE_S after its socket closed (not at once).
+
+A failure explains itself: it carries what :class:`Watch` saw every 5 s (load, CPU/memory/IO
+pressure, each Chromium process's CPU s, state and major faults, how long each renderer's main
+thread ran and waited for a CPU, the pace counters of each page, viser connections opened and
+closed, the last text of each page). A page that did not answer in time because the host gave
+its renderer no CPU (its main thread waited for one ≥ STARVED of that time) skips the test with
+those figures; a renderer that ran or slept meanwhile fails it.
 """
 
 from __future__ import annotations
 
+import functools
 import os
 import re
 import signal
@@ -31,7 +39,8 @@ from dashboard import _gui_pace
 from dashboard._gui import LEASE_GRACE_S
 from dashboard._gui_pace import AHEAD
 from dashboard.app import create_app
-from dashboard.browser import CHROMIUM, click, launch, open_bench, text_input
+from dashboard.browser import CHROMIUM, launch, open_bench, text_input
+from dashboard.browser import click as _click
 from dashboard.config import BenchConfig
 
 pytestmark = [
@@ -51,36 +60,249 @@ def api():
         yield c
 
 
+class Watch:
+    """What the module's two pages did, for a failure message that explains itself: every
+    SAMPLE_S the host (load, CPU and memory pressure, free memory), each browser's processes
+    (CPU s, state, major page faults; for the renderers' main threads the s they ran and the s
+    they waited for a CPU), the pace counters of each page's panel, the viser connections
+    opened and closed, and the last text each page showed."""
+
+    SAMPLE_S = 5.0
+
+    def __init__(self, gui) -> None:
+        self.gui = gui
+        self.pids: dict[str, dict[int, str]] = {}  # page name → {pid: Chromium process type}
+        self.names: dict[int, str] = {}  # id(page) → page name
+        self.last_text: dict[str, tuple[float, str]] = {}  # page name → (monotonic, text)
+        self.samples: list[str] = []
+        self.events: list[str] = []  # viser connections opened and closed, page crashes
+        self._conns: dict[int, object] = {}
+        self._stop = threading.Event()
+        self._t0 = time.monotonic()
+        self._th = threading.Thread(target=self._run, name="browser-watch", daemon=True)
+
+    def add(self, name: str, page) -> None:
+        cdp = page.context.browser.new_browser_cdp_session()
+        try:
+            info = cdp.send("SystemInfo.getProcessInfo")["processInfo"]
+        finally:
+            cdp.detach()
+        self.pids[name] = {p["id"]: p["type"] for p in info}
+        self.names[id(page)] = name
+        page.on("crash", lambda _: self.event(f"page {name} crashed"))
+
+    def event(self, what: str) -> None:
+        self.events.append(f"t={time.monotonic() - self._t0:.0f}s {what}")
+
+    def start(self) -> None:
+        ws = self.gui.server._websock_server
+        self._conns.update(ws._live_connections)
+        self.gui.server.on_client_connect(self._opened)
+        self.gui.server.on_client_disconnect(self._closed)
+        self._th.start()
+
+    def _opened(self, client) -> None:
+        ws = self.gui.server._websock_server
+        self._conns[client.client_id] = ws._live_connections.get(client.client_id)
+        self.event(f"viser client #{client.client_id} opened")
+
+    def _closed(self, client) -> None:
+        conn = self._conns.pop(client.client_id, None)
+        how = "?"
+        if conn is not None:
+            how = f"code {conn.close_code} {conn.close_reason!r}"
+            if conn.protocol.close_rcvd is None:
+                how += " (no close frame from the page)"
+        self.event(f"viser client #{client.client_id} closed: {how}")
+
+    def stop(self) -> None:
+        self._stop.set()
+        self._th.join(timeout=5)
+
+    def _run(self) -> None:
+        while not self._stop.wait(self.SAMPLE_S):
+            self.samples.append(self.sample())
+            del self.samples[:-24]
+
+    def sched(self, page) -> tuple[float, float]:
+        """(s run, s waited for a CPU) so far by the main threads of ``page``'s renderers."""
+        name = self.names.get(id(page), "?")
+        ran = waited = 0.0
+        for pid, typ in self.pids.get(name, {}).items():
+            if typ == "renderer":
+                r, w = _schedstat(pid)
+                ran, waited = ran + r, waited + w
+        return ran, waited
+
+    def sample(self) -> str:
+        out = [f"t={time.monotonic() - self._t0:.0f}s load {os.getloadavg()[0]:.1f} {_host()}"]
+        for name, pids in self.pids.items():
+            procs = " ".join(f"{typ[:3]}:{_proc(pid)}" for pid, typ in pids.items())
+            out.append(f"{name}[{procs}]")
+        for p in self.gui.panel_list():
+            pending = ",".join(f"{time.monotonic() - t:.0f}s" for _, t in p.pace._pending.values())
+            out.append(
+                f"#{p.cid}{'*' if p.holds_control() else ''}(sent {p.pace.sent} acked "
+                f"{p.pace.acked} lag {p.pace.lag_s:.1f}s pending {pending or '-'})"
+            )
+        return " ".join(out)
+
+    def report(self) -> str:
+        now = time.monotonic()
+        seen = "\n".join(
+            f"page {n} showed ({now - t:.0f} s ago): {txt[:300]!r}"
+            for n, (t, txt) in self.last_text.items()
+        )
+        return (
+            "\n--- browser watch: per Chromium process (bro/ren/GPU/net/sto) CPU s, state, major"
+            " faults, a renderer's main thread ran/waited-for-CPU s; #client(*: in control) the"
+            " pace of each page ---\n"
+            + "\n".join([*self.samples[-12:], "now: " + self.sample(), *self.events[-6:]])
+            + "\n"
+            + seen
+        )
+
+
+WATCH: Watch | None = None
+
+
+def _stat(pid: int) -> list[str] | None:
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().rsplit(")", 1)[1].split()
+    except OSError:
+        return None
+
+
+def _schedstat(pid: int) -> tuple[float, float]:
+    """(s run, s waited on a run queue) of the main thread of ``pid`` (0, 0 when gone)."""
+    try:
+        with open(f"/proc/{pid}/task/{pid}/schedstat") as f:
+            run_ns, wait_ns = f.read().split()[:2]
+    except (OSError, ValueError):
+        return 0.0, 0.0
+    return int(run_ns) / 1e9, int(wait_ns) / 1e9
+
+
+def _proc(pid: int) -> str:
+    """CPU s, state and major faults of process ``pid`` (and ran/waited s of a renderer's main
+    thread), or "gone"."""
+    st = _stat(pid)
+    if st is None:
+        return "gone"
+    cpu = (int(st[11]) + int(st[12])) / os.sysconf("SC_CLK_TCK")
+    ran, waited = _schedstat(pid)
+    return f"{cpu:.0f}s{st[0]}{st[9]}({ran:.0f}/{waited:.0f})"
+
+
+def _host() -> str:
+    """CPU and memory pressure (PSI some avg10, %) and available memory (MB)."""
+    out = []
+    for kind in ("cpu", "memory", "io"):
+        try:
+            with open(f"/proc/pressure/{kind}") as f:
+                out.append(f"{kind} {f.readline().split()[1].split('=')[1]}%")
+        except (OSError, IndexError):
+            pass
+    try:
+        with open("/proc/meminfo") as f:
+            avail = next(ln for ln in f if ln.startswith("MemAvailable"))
+        out.append(f"avail {int(avail.split()[1]) // 1024} MB")
+    except (OSError, StopIteration):
+        pass
+    return " ".join(out)
+
+
+def explain(exc: BaseException) -> AssertionError:
+    """``exc`` with what the browser watch saw (see :class:`Watch`)."""
+    extra = WATCH.report() if WATCH is not None else ""
+    out = AssertionError(f"{type(exc).__name__}: {exc}{extra}")
+    out.explained = True  # type: ignore[attr-defined]
+    return out
+
+
+STARVED = 0.5  #: a page whose renderer waited for a CPU this share of a wait was starved
+
+
+def explained(fn):
+    """``fn`` whose failures carry the browser watch's report. When ``fn(page, ...)`` timed out
+    because the host gave ``page``'s renderer no CPU (its main thread waited for one at least
+    STARVED of the time, /proc schedstat), the test is skipped with those figures instead: the
+    page then cannot show anything, whatever the product does. A renderer that ran, or slept
+    (blocked), while the page did not answer fails the test."""
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        page = args[0] if args and hasattr(args[0], "inner_text") else None
+        t0 = time.monotonic()
+        s0 = WATCH.sched(page) if WATCH is not None and page is not None else None
+        try:
+            return fn(*args, **kwargs)
+        except Exception as exc:  # Playwright's TimeoutError, a failed assert
+            if getattr(exc, "explained", False):
+                raise
+            if s0 is not None and type(exc).__name__ == "TimeoutError":
+                dt = time.monotonic() - t0
+                ran, waited = (b - a for a, b in zip(s0, WATCH.sched(page), strict=True))
+                if waited >= STARVED * dt:
+                    pytest.skip(
+                        f"page {WATCH.names.get(id(page))} did not answer in {dt:.0f} s: the "
+                        f"host starved it (its renderer ran {ran:.1f} s and waited {waited:.1f}"
+                        f" s for a CPU; load {os.getloadavg()[0]:.1f}): {exc}"
+                        + WATCH.report()
+                    )
+            raise explain(exc) from exc
+
+    return wrapper
+
+
+click = explained(_click)
+
+
 @pytest.fixture(scope="module")
 def pages(api):
+    global WATCH
     from playwright.sync_api import sync_playwright
 
     url = f"http://127.0.0.1:{api.app.state.gui.port}/"
+    WATCH = Watch(api.app.state.gui)
     with sync_playwright() as p:
         browsers = [launch(p), launch(p)]  # two Chromium processes: two real browsers
         out = []
-        for b in browsers:
+        for name, b in zip("AB", browsers, strict=True):
             pg = b.new_page(viewport=VIEWPORT)
             pg.set_default_timeout(90_000)  # a busy host stalls the pages for tens of seconds
             open_bench(pg, url)
+            WATCH.add(name, pg)
             out.append(pg)
+        WATCH.start()
         yield out
+        WATCH.stop()
+        print(WATCH.report())  # shown with -s or on a teardown error
         for b in browsers:
             b.close()
 
 
-def text(page) -> str:
-    return page.inner_text("body")
+def text(page, timeout: float = 90.0) -> str:
+    """The page's text (``timeout`` s for the page to answer)."""
+    txt = page.inner_text("body", timeout=timeout * 1000)
+    if WATCH is not None:
+        WATCH.last_text[WATCH.names.get(id(page), "?")] = (time.monotonic(), txt)
+    return txt
 
 
-def wait_text(page, pattern: str, timeout: float = 60.0) -> re.Match:
+@explained
+def wait_text(page, pattern: str, timeout: float = 90.0) -> re.Match:
+    """The first match of ``pattern`` in the page's text within ``timeout`` s (a page that
+    does not answer counts against the same time)."""
     deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        m = re.search(pattern, text(page))
+    while True:
+        m = re.search(pattern, text(page, max(deadline - time.monotonic(), 1.0)))
         if m:
             return m
+        if time.monotonic() >= deadline:
+            raise AssertionError(f"page never showed {pattern!r} in {timeout:g} s")
         time.sleep(0.1)
-    raise AssertionError(f"page never showed {pattern!r}; it shows:\n{text(page)[:2000]}")
 
 
 def wait_until(cond, timeout: float = 30.0, what: str = "condition") -> None:
@@ -92,6 +314,7 @@ def wait_until(cond, timeout: float = 30.0, what: str = "condition") -> None:
     raise AssertionError(f"{what} not met within {timeout} s")
 
 
+@explained
 def type_into(page, label: str, value: str) -> None:
     box = text_input(page, label)
     box.wait_for(state="attached", timeout=60_000)
@@ -101,10 +324,12 @@ def type_into(page, label: str, value: str) -> None:
     time.sleep(0.3)  # viser batches GUI messages in 50 ms windows
 
 
+@explained
 def field(page, label: str) -> str:
     return text_input(page, label).input_value()
 
 
+@explained
 def test_inputs_are_per_browser_and_only_the_controller_applies(api, pages):
     a, b = pages
     click(a, a.get_by_role("button", name="Enable"))  # A's first action takes control
@@ -130,6 +355,7 @@ def test_inputs_are_per_browser_and_only_the_controller_applies(api, pages):
     click(b, b.get_by_role("tab", name="Speed"))
 
 
+@explained
 def test_typed_values_are_strict_and_nothing_is_sent(api, pages):
     a, _ = pages
     click(a, a.get_by_role("tab", name="Tuning"))
@@ -163,6 +389,7 @@ def test_typed_values_are_strict_and_nothing_is_sent(api, pages):
     click(a, a.get_by_role("button", name="Take control"))
 
 
+@explained
 def test_live_view_survives_failures_and_shows_stale(api, pages, monkeypatch):
     gui = api.app.state.gui
     _, b = pages
@@ -229,6 +456,7 @@ def _starve(pids: list[int], seconds: float, duty: float, stop: threading.Event)
             os.kill(pid, signal.SIGCONT)
 
 
+@explained
 def test_a_starved_page_gets_no_backlog_and_is_usable_when_it_runs(api, pages):
     gui = api.app.state.gui
     a, b = pages
@@ -266,6 +494,7 @@ def test_a_starved_page_gets_no_backlog_and_is_usable_when_it_runs(api, pages):
     print(f"page B usable {time.monotonic() - t0:.1f} s after the starvation")
 
 
+@explained
 def test_closed_tab_loses_the_lease_after_the_grace_time(api, pages):
     a, b = pages
     click(a, a.get_by_role("button", name="Take control"))
