@@ -54,7 +54,9 @@ def status_here(port: int) -> tuple[int, dict | str]:
     out, err = io.StringIO(), io.StringIO()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         rc = cli.main(["--host", "127.0.0.1", "--port", str(port), "status", "--json"])
-    return rc, json.loads(out.getvalue()) if rc == 0 else err.getvalue()
+    if rc == 0:
+        return rc, json.loads(out.getvalue())
+    return rc, (err.getvalue() + out.getvalue()).strip()  # --json: the error is JSON on stdout
 
 
 class HeartbeatProbe:
