@@ -118,8 +118,8 @@ def _group(item) -> str:
     return path
 
 
+@pytest.hookimpl(tryfirst=True)  # before xdist's own hook turns the marks into node-id suffixes
 def pytest_collection_modifyitems(config, items):
-    import pytest
 
     rank = {g: i for i, g in enumerate(SLOW_FIRST)}
     order = {id(it): n for n, it in enumerate(items)}
