@@ -10,7 +10,18 @@ from .conditions import Bench, Condition, selected
 _CONDITIONS = selected()
 
 
-@pytest.fixture(scope="module", params=_CONDITIONS, ids=[c.name for c in _CONDITIONS])
+def _time_limit(c: Condition) -> float:
+    """Per-test limit (s): 240 s × the condition's slowness (a 64 KiB upload at 5 % loss on a
+    busy host took over 240 s with its retries), 900 s on SocketCAN in UML."""
+    return 900.0 if c.channel else 240.0 * max(1.0, c.slow)
+
+
+@pytest.fixture(
+    scope="module",
+    params=[
+        pytest.param(c, id=c.name, marks=pytest.mark.timeout(_time_limit(c))) for c in _CONDITIONS
+    ],
+)
 def condition(request) -> Condition:
     return request.param
 
