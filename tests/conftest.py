@@ -27,12 +27,25 @@ def _schedstat(pid: int) -> dict[str, tuple[int, int]]:
     except OSError:
         return out
     for t in tasks:
-        try:
-            fields = (t / "schedstat").read_text().split()
-        except OSError:
-            continue  # thread gone
-        out[t.name] = (int(fields[0]), int(fields[1]))
+        times = _task_schedstat(t)
+        if times is not None:  # else: thread gone
+            out[t.name] = times
     return out
+
+
+def _task_schedstat(task: Path) -> tuple[int, int] | None:
+    """(ns on a CPU, ns waiting on a run queue) of one /proc/<pid>/task/<tid>; None if gone."""
+    try:
+        fields = (task / "schedstat").read_text().split()
+    except OSError:
+        return None
+    return int(fields[0]), int(fields[1])
+
+
+def main_thread_times(pid: int) -> tuple[float, float]:
+    """(s on a CPU, s waiting on a run queue) of the main thread of ``pid``; (0, 0) if gone."""
+    times = _task_schedstat(Path(f"/proc/{pid}/task/{pid}"))
+    return (0.0, 0.0) if times is None else (times[0] / 1e9, times[1] / 1e9)
 
 
 def _delta(a: dict[str, tuple[int, int]], b: dict[str, tuple[int, int]]) -> tuple[float, float]:
@@ -120,7 +133,6 @@ def _group(item) -> str:
 
 @pytest.hookimpl(tryfirst=True)  # before xdist's own hook turns the marks into node-id suffixes
 def pytest_collection_modifyitems(config, items):
-
     rank = {g: i for i, g in enumerate(SLOW_FIRST)}
     order = {id(it): n for n, it in enumerate(items)}
 

@@ -33,6 +33,7 @@ import threading
 import time
 
 import pytest
+from conftest import main_thread_times
 from fastapi.testclient import TestClient
 
 from dashboard import _gui_pace
@@ -130,7 +131,7 @@ class Watch:
         ran = waited = 0.0
         for pid, typ in self.pids.get(name, {}).items():
             if typ == "renderer":
-                r, w = _schedstat(pid)
+                r, w = main_thread_times(pid)
                 ran, waited = ran + r, waited + w
         return ran, waited
 
@@ -174,16 +175,6 @@ def _stat(pid: int) -> list[str] | None:
         return None
 
 
-def _schedstat(pid: int) -> tuple[float, float]:
-    """(s run, s waited on a run queue) of the main thread of ``pid`` (0, 0 when gone)."""
-    try:
-        with open(f"/proc/{pid}/task/{pid}/schedstat") as f:
-            run_ns, wait_ns = f.read().split()[:2]
-    except (OSError, ValueError):
-        return 0.0, 0.0
-    return int(run_ns) / 1e9, int(wait_ns) / 1e9
-
-
 def _proc(pid: int) -> str:
     """CPU s, state and major faults of process ``pid`` (and ran/waited s of a renderer's main
     thread), or "gone"."""
@@ -191,7 +182,7 @@ def _proc(pid: int) -> str:
     if st is None:
         return "gone"
     cpu = (int(st[11]) + int(st[12])) / os.sysconf("SC_CLK_TCK")
-    ran, waited = _schedstat(pid)
+    ran, waited = main_thread_times(pid)
     return f"{cpu:.0f}s{st[0]}{st[9]}({ran:.0f}/{waited:.0f})"
 
 
