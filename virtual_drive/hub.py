@@ -35,12 +35,15 @@ from dataclasses import dataclass
 
 from firmware_protocol.can_bits import arbitration_key, frame_bits_fast
 from virtual_drive.hub_protocol import (
+    FEATURES_REPLY,
     CommandSplitter,
     ProtocolError,
     format_error,
     frame_line,
     parse_channel,
     parse_send_fields,
+    parse_sendat_fields,
+    scan_sendats,
     scan_sends,
 )
 
@@ -160,6 +163,9 @@ class Hub:
     #: After ``< rawmode >`` is acknowledged, frames for that client wait this long (s), so
     #: python-can's handshake ``recv`` sees ``< ok >`` alone and not glued to a frame.
     handshake_hold_s = 0.05
+    #: A ``sendat`` frame stated longer ago than this (s) arrives this long ago: a sender's
+    #: batch covers a few ms; an older time is a clock the hub does not share.
+    max_backdate_s = 0.05
     #: Frames one client may have waiting for the bus before the hub stops reading it
     #: (its TCP send then blocks: back-pressure like a full CAN controller TX queue).
     max_pending_per_client = 1024
@@ -522,9 +528,15 @@ class Hub:
             except OSError:
                 pass
         if client.state == _RAW and not client.splitter.pending_bytes:
-            frames, used = scan_sends(chunk)  # the common case: only well-formed sends
-            if frames:
-                self._enqueue(client, frames, now)
+            while chunk:  # the common case: only well-formed sends (or sendats)
+                frames, used = scan_sends(chunk)
+                if frames:
+                    self._enqueue(client, frames, now)
+                else:
+                    timed, used = scan_sendats(chunk)
+                    if not timed:
+                        break
+                    self._enqueue_timed(client, timed, now)
                 chunk = chunk[used:]
         for item in client.splitter.feed(chunk):
             if isinstance(item, ProtocolError):
@@ -566,12 +578,55 @@ class Hub:
         self._seq = seq
         self._n_received += len(frames)
 
+    def _enqueue_timed(
+        self, client: _Client, frames: list[tuple[float, int, bytes, bool]], now: float
+    ) -> None:
+        """Queue ``sendat`` frames ``(unix_time, id, data, is_extended)``: each arrives at its
+        stated time, but never before a frame of this client still waiting for the bus (its
+        order is kept), never more than :attr:`max_backdate_s` ago and never after ``now``
+        (see :mod:`hub_protocol`). A frame of the client that is already on the bus does not
+        hold it back: it starts when the bus is free, as a CAN controller's other transmit
+        mailbox would."""
+        queue = client.queue
+        if not queue:
+            client.bus.senders.append(client)
+            lo = now - self.max_backdate_s
+        else:
+            lo = max(queue[-1][0], now - self.max_backdate_s)
+        seq = self._seq
+        mono_offset = self._mono0 - self._wall0
+        for stamp, can_id, data, ext in frames:
+            seq += 1
+            arrival = stamp + mono_offset
+            if arrival < lo:
+                arrival = lo
+            elif arrival > now:
+                arrival = now
+            lo = arrival
+            queue.append(
+                (
+                    arrival,
+                    arbitration_key(can_id, ext),
+                    seq,
+                    can_id,
+                    data,
+                    ext,
+                    frame_bits_fast(can_id, data, ext),
+                )
+            )
+        self._seq = seq
+        self._n_received += len(frames)
+
     def _handle(self, client: _Client, words: list[str], now: float) -> None:
         cmd = words[0]
         if client.state == _RAW and cmd == "send":
             self._enqueue(client, [parse_send_fields(words)], now)
+        elif client.state == _RAW and cmd == "sendat":
+            self._enqueue_timed(client, [parse_sendat_fields(words)], now)
         elif cmd == "echo":
             client.outbuf += b"< echo >"
+        elif cmd == "features":
+            client.outbuf += FEATURES_REPLY
         elif client.state == _WAIT_OPEN:
             if cmd != "open":
                 raise ProtocolError(f"expected '< open BUS >', got {cmd!r}")

@@ -10,6 +10,16 @@ This is the protocol spoken by python-can's built-in ``socketcand`` interface
 * server -> client: ``< frame <id> <secs>.<usecs> <HEXDATA> >`` (id 3 or 8 hex digits, data one
   contiguous hex string) and ``< error <id> <secs>.<usecs> [text] >`` for error frames
 
+Two elements are this hub's own (a socketcand daemon answers them with ``< error ... >``, and
+python-can's client never sends them):
+
+* client ``< features >`` -> ``< features sendat >``: what the hub understands beyond socketcand;
+* client ``< sendat <secs>.<usecs> <id> <len> <b0> ... >``: a frame that was ready for the bus at
+  that Unix time (in the past; a sender that runs its ticks in batches, like a USB adapter that
+  hands over frames with their hardware times). The hub arbitrates it from that time (never
+  before the sender's previous frame, never before the bus is free, never in the future), so the
+  receivers see the bus times of a drive that sent each frame on its own.
+
 Pure functions only (no I/O), so they can be tested and reused on their own.
 """
 
@@ -23,6 +33,7 @@ from itertools import product
 __all__ = [
     "CAN_ERR_FLAG",
     "CAN_ERR_PROT",
+    "FEATURES_REPLY",
     "LINE_BYTES",
     "MAX_ELEMENT_BYTES",
     "CommandSplitter",
@@ -34,8 +45,13 @@ __all__ = [
     "parse_channel",
     "parse_send",
     "parse_send_fields",
+    "parse_sendat_fields",
+    "scan_sendats",
     "scan_sends",
 ]
+
+#: Reply of the hub to ``< features >`` (the elements it understands beyond socketcand).
+FEATURES_REPLY = b"< features sendat >"
 
 #: SocketCAN error-frame flag and "protocol violation" error class (linux/can/error.h).
 CAN_ERR_FLAG = 0x20000000
@@ -231,6 +247,50 @@ def scan_sends(chunk: bytes) -> tuple[list[tuple[int, bytes, bool]], int]:
             frames.append((can_id, data, True))
         pos = m.end()
     return frames, pos
+
+
+_SENDAT_ELEMENT = re.compile(
+    rb"< sendat ([0-9]{1,12})\.([0-9]{6}) ([0-9A-Fa-f]{3}|[0-9A-Fa-f]{8}) ([0-8])"
+    rb"((?: [0-9A-Fa-f]{1,2})*)  ?>"
+)
+
+
+def scan_sendats(chunk: bytes) -> tuple[list[tuple[float, int, bytes, bool]], int]:
+    """The leading well-formed ``sendat`` elements of ``chunk`` as ``(unix_time_s, id, data,
+    is_extended)``, and how many bytes they took; stops like :func:`scan_sends` at the first
+    element that is anything else (the caller's full path gives the precise answer)."""
+    frames: list[tuple[float, int, bytes, bool]] = []
+    pos = 0
+    match = _SENDAT_ELEMENT.match
+    get = _BYTE_VALUES.__getitem__
+    while True:
+        m = match(chunk, pos)
+        if m is None:
+            break
+        secs, usecs, id_word, length, byte_words = m.groups()
+        can_id = int(id_word, 16)
+        data = bytes(map(get, byte_words.split()))
+        if len(data) != int(length):
+            break
+        ext = len(id_word) == 8
+        if can_id > (0x1FFFFFFF if ext else 0x7FF):
+            break
+        frames.append((int(secs) + int(usecs) * 1e-6, can_id, data, ext))
+        pos = m.end()
+    return frames, pos
+
+
+def parse_sendat_fields(words: list[str]) -> tuple[float, int, bytes, bool]:
+    """The words of a ``sendat`` element (``["sendat", "secs.usecs", id, len, b0, ...]``) as
+    ``(unix_time_s, id, data, is_extended)``; ProtocolError as :func:`parse_send`, or for a
+    time that is not ``<secs>.<usecs>`` (six digits)."""
+    if len(words) < 2:
+        raise ProtocolError("sendat needs a time, an id and a length")
+    secs, dot, usecs = words[1].partition(".")
+    if not (dot and secs.isdigit() and len(secs) <= 12 and usecs.isdigit() and len(usecs) == 6):
+        raise ProtocolError(f"sendat time {words[1]!r} is not <secs>.<usecs>")
+    can_id, data, ext = parse_send_fields(["send", *words[2:]])
+    return int(secs) + int(usecs) * 1e-6, can_id, data, ext
 
 
 def parse_channel(words: list[str]) -> str:

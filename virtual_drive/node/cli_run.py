@@ -127,9 +127,13 @@ def add_run_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--tick-ms",
         type=float,
-        default=float(os.environ.get("VIRTUAL_DRIVE_TICK_MS", "1") or 1),
-        help="wall-clock period of the pacing loop, ms (default 1, or $VIRTUAL_DRIVE_TICK_MS): "
-        "simulation chunks, heartbeats and TPDO timing run on this grid; a longer tick costs "
+        default=float(os.environ["VIRTUAL_DRIVE_TICK_MS"])
+        if os.environ.get("VIRTUAL_DRIVE_TICK_MS")
+        else None,
+        help="wall-clock period of the pacing loop, ms (default $VIRTUAL_DRIVE_TICK_MS, else 5 "
+        "on the loopback hub, whose frames carry their bus time, and 1 elsewhere): simulation "
+        "chunks and heartbeats run on this grid, TPDOs on their own event timer (on the hub "
+        "sent in batches with their exact times; elsewhere on this grid); a longer tick costs "
         "less CPU where each system call is expensive (User-Mode Linux: 10)",
     )
     p.add_argument("--log-level", default="INFO", choices=["DEBUG", "INFO", "WARNING", "ERROR"])
@@ -253,7 +257,7 @@ def run_command(args: argparse.Namespace) -> int:
             return _fail(f"--node-id must be 1..127, got {node_ids[0]}", 2)
     if not args.speed > 0:
         return _fail(f"--speed must be > 0, got {args.speed}", 2)
-    if not 0.1 <= args.tick_ms <= 20.0:
+    if args.tick_ms is not None and not 0.1 <= args.tick_ms <= 20.0:
         return _fail(f"--tick-ms must be 0.1..20 ms, got {args.tick_ms:g}", 2)
     hub = None
     if args.hub:
@@ -310,7 +314,7 @@ def run_command(args: argparse.Namespace) -> int:
         reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         return _fail(f"cannot open the CAN bus ({shown}): {reason}")
 
-    from virtual_drive.node.drive_node import VirtualDrive
+    from virtual_drive.node.drive_node import TIMED_PERIOD, VirtualDrive
     from virtual_drive.node.runner import Pacer
 
     stop = threading.Event()
@@ -324,7 +328,13 @@ def run_command(args: argparse.Namespace) -> int:
     # or a TPDO due on its exact time does not wait for another thread's Python work
     # (median 2 ms-inhibit gap 2.6 -> 2.2 ms measured at load 25).
     sys.setswitchinterval(0.0005)
-    pacer = Pacer(args.tick_ms / 1000.0)
+    if args.tick_ms is not None:
+        period = args.tick_ms / 1000.0
+    elif all(getattr(bus, "timed_sends", False) for bus in buses):
+        period = TIMED_PERIOD
+    else:
+        period = 1e-3
+    pacer = Pacer(period)
     drives: list = []
     several = len(node_ids) > 1
     try:

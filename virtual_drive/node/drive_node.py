@@ -88,6 +88,7 @@ __all__ = [
     "RESET_BRAKE_LIMIT_S",
     "SPEED_ZERO_RPM",
     "SUPPORTED_MODES",
+    "TIMED_PERIOD",
     "DriveLocalNode",
     "RpdoRefusedError",
     "VirtualDrive",
@@ -97,6 +98,11 @@ logger = logging.getLogger(__name__)
 
 #: Samples per piece while a stop ramp runs (1 ms at Ts = 20 µs): see :meth:`VirtualDrive._step`.
 RAMP_CHUNK = 50
+#: Pacing period (s) on a bus that takes frames with their bus time (``timed_sends``, the
+#: loopback hub): one wake-up and one socket write per 5 ms, the TPDOs still 1 ms apart on the
+#: bus with the values of their own instant (like a USB adapter that hands over frames in
+#: batches with hardware times). Elsewhere (SocketCAN, python-can ``virtual``): 1 ms.
+TIMED_PERIOD = 0.005
 
 ABORT_STORE = abort_codes.STORE  # kept for importers of the old module
 ABORT_HARDWARE = abort_codes.HARDWARE
@@ -119,7 +125,7 @@ class VirtualDrive:
         store_path: str | Path | None = None,
         speed: float = 1.0,
         sim: Any = None,
-        period: float = 1e-3,
+        period: float | None = None,
     ) -> None:
         if not 1 <= node_id <= 127:
             raise ValueError(f"node_id must be 1..127, got {node_id}")
@@ -195,9 +201,20 @@ class VirtualDrive:
         self.cia402 = Cia402StateMachine(self._options, self._reset_fault)
         self.recorder = TraceRecorder()
         self.checker = ParamChecker(self.view, self._current_by_name)
-        # the pacing thread also sends the event-driven TPDOs (one wake-up per tick)
+        # the pacing thread also sends the event-driven TPDOs (one wake-up per tick); on a bus
+        # that takes frames with their bus time (the loopback hub) the ticks are TIMED_PERIOD
+        # apart and each TPDO is sent with its due time and the values of that instant
+        self.timed_sends = bool(getattr(bus, "timed_sends", False))
+        if period is None:
+            period = TIMED_PERIOD if self.timed_sends else 1e-3
         self.runner = Runner(
-            self._step, self._periodic, speed=self.speed, period=period, timer=self.pdo.tick
+            self._step,
+            self._periodic,
+            speed=self.speed,
+            period=period,
+            timer=self.pdo.tick,
+            timer_at=self.pdo.tick_at if self.timed_sends else None,
+            flush=self._flush_timed if self.timed_sends else None,
         )
         self._live_getters = make_live_getters(self)
         # control state (touched by the runner between chunks)
@@ -281,6 +298,17 @@ class VirtualDrive:
                 return
 
     # -- parameters -----------------------------------------------------------------------
+    def _flush_timed(self) -> None:
+        """End of a timed tick: the bus writes the TPDOs it held (one write per tick)."""
+        try:
+            with self._send_lock:
+                self.bus.flush()
+            self.last_tx_ok = time.monotonic()
+        except (can.CanError, OSError) as exc:
+            self.tx_errors += 1
+            if self.tx_errors < 10 or self.tx_errors % 1000 == 0:
+                logger.warning("send of the tick's frames failed: %s", exc)
+
     def _current_by_name(self, name: str) -> float | int:
         e = self.view.entry(name)
         return self.node.stored(e.index, e.subindex)

@@ -30,7 +30,7 @@ from collections.abc import Container, Iterable
 
 import can
 
-__all__ = ["HubBus", "HubConnection", "HubPort", "format_send"]
+__all__ = ["HubBus", "HubConnection", "HubPort", "format_send", "format_sendat"]
 
 logger = logging.getLogger(__name__)
 
@@ -45,6 +45,22 @@ def format_send(cob_id: int, data: bytes, is_extended: bool = False) -> bytes:
             return b"< send %08X %X %s >" % (cob_id, len(data), data.hex(" ").encode())
         return b"< send %03X %X %s >" % (cob_id, len(data), data.hex(" ").encode())
     return b"< send %08X 0 >" % cob_id if is_extended else b"< send %03X 0 >" % cob_id
+
+
+#: time.time() − time.monotonic() when this module was loaded (sendat times are Unix times)
+_WALL_OFFSET = time.time() - time.monotonic()
+
+
+def format_sendat(at: float, cob_id: int, data: bytes, is_extended: bool = False) -> bytes:
+    """``< sendat <secs>.<usecs> <id> <len> <b0> ... >`` for a frame ready at ``at``
+    (``time.monotonic()`` seconds) — the loopback hub's element (:mod:`hub_protocol`)."""
+    usecs = round((at + _WALL_OFFSET) * 1e6)
+    ident = b"%08X" % cob_id if is_extended else b"%03X" % cob_id
+    if data:
+        return b"< sendat %d.%06d %s %X %s >" % (
+            usecs // 1_000_000, usecs % 1_000_000, ident, len(data), data.hex(" ").encode()
+        )
+    return b"< sendat %d.%06d %s 0 >" % (usecs // 1_000_000, usecs % 1_000_000, ident)
 
 
 class HubBus(can.BusABC):
@@ -74,6 +90,7 @@ class HubBus(can.BusABC):
         self._buf = b""
         self._queue: deque[can.Message] = deque()
         self._send_lock = threading.Lock()
+        self._held: list[bytes] = []  #: timed frames waiting for flush()
         self._eof = False
         #: CAN-IDs to deliver (None: all). Consulted per frame, so a live dict works.
         self.rx_wanted: Container[int] | None = None
@@ -91,6 +108,7 @@ class HubBus(can.BusABC):
             self._expect("hi", connect_timeout)
             sock.sendall(f"< open {channel} >".encode("ascii"))
             self._expect("ok", connect_timeout)
+            self.timed_sends = self._probe_features(min(connect_timeout, 2.0))
             sock.sendall(b"< rawmode >")
             self._expect("ok", connect_timeout)
         except (OSError, can.CanError) as exc:
@@ -105,7 +123,20 @@ class HubBus(can.BusABC):
         super().__init__(channel=channel, can_filters=can_filters, **kwargs)
 
     # -- handshake --------------------------------------------------------------------------
-    def _expect(self, word: str, timeout: float) -> None:
+    def _probe_features(self, timeout: float) -> bool:
+        """Ask ``< features >`` (before rawmode, so no frame can come first): True when the
+        server is the loopback hub and takes ``< sendat ... >``; a socketcand daemon answers
+        ``< error ... >`` (or nothing): plain sends."""
+        self._sock.sendall(b"< features >")
+        try:
+            words = self._expect("features", timeout, strict=False)
+        except (OSError, can.CanError):
+            return False
+        return words is not None and "sendat" in words
+
+    def _expect(self, word: str, timeout: float, strict: bool = True) -> list[str] | None:
+        """Read one element; it must be ``< word ... >`` (its words are returned). Otherwise
+        CanInitializationError, or None when not ``strict``."""
         deadline = time.monotonic() + timeout
         while True:
             end = self._buf.find(b">")
@@ -113,7 +144,9 @@ class HubBus(can.BusABC):
                 element = self._buf[: end + 1].decode("ascii", "replace").split()
                 self._buf = self._buf[end + 1 :]
                 if element[1:2] == [word]:
-                    return
+                    return element[2:-1]
+                if not strict:
+                    return None
                 raise can.CanInitializationError(
                     f"socketcand handshake: expected '< {word} >', got {' '.join(element)!r}"
                 )
@@ -133,18 +166,36 @@ class HubBus(can.BusABC):
         with self._send_lock:
             self._sock.sendall(line)
 
-    def send_many(self, frames: Iterable[tuple[int, bytes]]) -> int:
-        """Send standard frames ``(cob_id, data)`` with one ``sendall``; returns how many."""
-        lines = [
-            b"< send %03X %X %s >" % (cob_id, len(data), data.hex(" ").encode())
-            if data
-            else b"< send %03X 0 >" % cob_id
-            for cob_id, data in frames
-        ]  # format_send inlined (the pacing loop's path, every millisecond)
+    def send_many(self, frames: Iterable[tuple[int, bytes]], at: float | None = None) -> int:
+        """Send standard frames ``(cob_id, data)`` with one ``sendall``; returns how many.
+
+        :param at: the ``time.monotonic()`` at which the frames were ready for the bus (the
+            TPDO due time of a drive that runs its ticks in batches); when the server takes it
+            (:attr:`timed_sends`) they are held as ``< sendat >`` elements until
+            :meth:`flush` (the end of the drive's tick: one write per tick), else ``at`` is
+            ignored and they are sent now.
+        """
+        if at is not None and self.timed_sends:
+            self._held.extend(format_sendat(at, cob_id, data) for cob_id, data in frames)
+            return len(frames)
+        else:
+            lines = [
+                b"< send %03X %X %s >" % (cob_id, len(data), data.hex(" ").encode())
+                if data
+                else b"< send %03X 0 >" % cob_id
+                for cob_id, data in frames
+            ]  # format_send inlined (the pacing loop's path)
         if lines:
             with self._send_lock:
                 self._sock.sendall(b"".join(lines))
         return len(lines)
+
+    def flush(self) -> None:
+        """Write the frames held by :meth:`send_many` (``at`` given) in one ``sendall``."""
+        if self._held:
+            held, self._held = self._held, []
+            with self._send_lock:
+                self._sock.sendall(b"".join(held))
 
     # -- receiving --------------------------------------------------------------------------
     def _recv_internal(self, timeout: float | None) -> tuple[can.Message | None, bool]:
@@ -322,8 +373,13 @@ class HubConnection:
                     self._broken = f"socketcand connection failed: {exc}"
                     logger.warning("hub connection: %s", exc)
 
-    def _send_from(self, src: HubPort, frames: list[tuple[int, bytes, bool]]) -> None:
-        lines = [format_send(cob_id, data, ext) for cob_id, data, ext in frames]
+    def _send_from(
+        self, src: HubPort, frames: list[tuple[int, bytes, bool]], at: float | None = None
+    ) -> None:
+        if at is not None and self._bus.timed_sends:
+            lines = [format_sendat(at, cob_id, data, ext) for cob_id, data, ext in frames]
+        else:
+            lines = [format_send(cob_id, data, ext) for cob_id, data, ext in frames]
         if threading.get_ident() == self._batch_ident:
             self._held.extend(lines)
         else:
@@ -331,7 +387,7 @@ class HubConnection:
                 self._bus._sock.sendall(b"".join(lines))
         ports = self._ports
         if len(ports) > 1:  # local delivery: the other nodes of this process see them too
-            stamp = time.time()
+            stamp = time.time() if at is None else at + _WALL_OFFSET
             for p in ports:
                 if p is src:
                     continue
@@ -413,10 +469,19 @@ class HubPort(can.BusABC):
     def send(self, msg: can.Message, timeout: float | None = None) -> None:
         self._conn._send_from(self, [(msg.arbitration_id, bytes(msg.data), msg.is_extended_id)])
 
-    def send_many(self, frames: Iterable[tuple[int, bytes]]) -> int:
+    @property
+    def timed_sends(self) -> bool:
+        """The server takes ``< sendat >`` (see :meth:`HubBus.send_many`)."""
+        return self._conn._bus.timed_sends
+
+    def flush(self) -> None:
+        """Nothing: frames are sent at once, or held by the connection for the pacer's
+        flush hook (:meth:`HubConnection.batch_on`)."""
+
+    def send_many(self, frames: Iterable[tuple[int, bytes]], at: float | None = None) -> int:
         batch = [(cob_id, data, False) for cob_id, data in frames]
         if batch:
-            self._conn._send_from(self, batch)
+            self._conn._send_from(self, batch, at)
         return len(batch)
 
     def lost(self) -> str | None:

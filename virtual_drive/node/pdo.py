@@ -131,8 +131,9 @@ class PdoEngine:
     :param nmt_state: returns the NMT state code (0x7F pre-operational).
     :param fast_getter: ``(index, sub) → callable`` returning the live value, or None to read
         through ``node.get_data`` (slower).
-    :param send_many: ``send_many([(cob_id, data), ...])`` puts the TPDOs due at one instant
-        on the bus at once (one socket write on the hub client); default: ``send`` each.
+    :param send_many: ``send_many([(cob_id, data), ...], at=None)`` puts the TPDOs due at one
+        instant on the bus at once (one socket write on the hub client; ``at``: their due
+        time, see :meth:`tick_at`); default: ``send`` each.
     :param align: ``align(t)`` → the first pacing tick at or after ``t``: event timers start
         there, so the frames are sent in the tick's wake-up (no second wake-up per period).
     """
@@ -148,7 +149,7 @@ class PdoEngine:
         fast_getter: Callable[[int, int], Callable[[], float | int] | None] = lambda i, s: None,
         report: Callable[[int, bytes], object] = lambda code, data: None,
         clear: Callable[[int], object] = lambda code: None,
-        send_many: Callable[[list[tuple[int, bytes]]], None] | None = None,
+        send_many: Callable[..., None] | None = None,
         align: Callable[[float], float] = lambda t: t,
     ) -> None:
         self.node = node
@@ -378,11 +379,21 @@ class PdoEngine:
         counted in :attr:`missed` and the grid is kept (one frame, no burst). The frames due
         together go out in one ``send_many``.
         """
+        return max(0.0, self._tick(now, False) - time.monotonic())
+
+    def tick_at(self, at: float) -> float:
+        """:meth:`tick` for a drive that runs its ticks in batches: the simulation stands at
+        ``at`` (monotonic s, in the past), the TPDOs due then carry its values and are sent
+        with ``at`` as their bus time (``send_many(frames, at)``); the inhibit time counts from
+        ``at``. Returns the monotonic time the next TPDO is due."""
+        return self._tick(at, True)
+
+    def _tick(self, now: float, stamped: bool) -> float:
         idle = 0.05
         if not self._allowed():
-            return idle
+            return now + idle
         if now < self._earliest and self._tpdos_seen is self.tpdos:
-            return self._earliest - now  # nothing due and nothing reconfigured: no work
+            return self._earliest  # nothing due and nothing reconfigured: no work
         due: list[tuple[_Tpdo, int]] = []
         for t in self.tpdos:
             if t.event_s > 0 and t.trans_type >= 0xFE and now >= t.next_due:
@@ -391,10 +402,10 @@ class PdoEngine:
                     self.missed[t.number - 1] = (self.missed[t.number - 1] + periods) & 0xFFFFFFFF
                 due.append((t, periods))
         if due:
-            self._send_tpdos([t for t, _ in due], now)
+            self._send_tpdos([t for t, _ in due], now, stamped)
             # the inhibit time counts from the end of this send: on a busy host the send
             # itself may be delayed, and the next frame must still be inhibit_s later
-            done = time.monotonic()
+            done = now if stamped else time.monotonic()
             for t, periods in due:
                 grid = t.next_due + (periods + 1) * t.event_s
                 t.next_due = max(grid, done + t.inhibit_s) if t.inhibit_s > 0 else grid
@@ -404,7 +415,7 @@ class PdoEngine:
             if t.event_s > 0 and t.trans_type >= 0xFE and t.next_due < earliest:
                 earliest = t.next_due
         self._earliest, self._tpdos_seen = earliest, tpdos
-        return max(0.0, earliest - time.monotonic())
+        return earliest
 
     def on_sync(self, can_id: int, data: bytes, timestamp: float) -> None:
         """SYNC (0x080): synchronous TPDOs of type 1–240 go out every n-th SYNC."""
@@ -435,8 +446,8 @@ class PdoEngine:
         t.last_sent = now
         self.sent += 1
 
-    def _send_tpdos(self, tpdos: list[_Tpdo], now: float) -> None:
-        if self._send_many is None or len(tpdos) == 1:
+    def _send_tpdos(self, tpdos: list[_Tpdo], now: float, stamped: bool = False) -> None:
+        if self._send_many is None or (len(tpdos) == 1 and not stamped):
             for t in tpdos:
                 self._send_tpdo(t, now)
             return
@@ -447,5 +458,8 @@ class PdoEngine:
                 frames.append((t.cob_id, payload))
                 t.last_sent = now
         if frames:
-            self._send_many(frames)
+            if stamped:
+                self._send_many(frames, now)
+            else:
+                self._send_many(frames)
             self.sent += len(frames)

@@ -65,6 +65,13 @@ class Runner:
     :param timer: ``timer(now) -> seconds until it is due again``, called after the periodic
         services and whenever that time comes (the TPDO engine's ``tick``).
     :param pacer: a shared :class:`Pacer` (several drives, one thread).
+    :param timer_at: ``timer_at(t) -> monotonic time it is due next``: the timer of a drive
+        whose frames carry their bus time (:meth:`PdoEngine.tick_at`). Given, the chunk of a
+        tick is run in pieces that end at the timer's due points and the timer runs at each,
+        with the simulation standing at that time; the thread then wakes only once per
+        ``period`` (e.g. 5 ms: a fifth of the wake-ups and socket writes of 1 ms ticks) and
+        the frames still show their exact event-timer spacing on the bus.
+    :param flush: called at the end of each timed tick (the bus writes the frames it held).
     """
 
     def __init__(
@@ -77,12 +84,16 @@ class Runner:
         max_chunk: float = 0.005,
         timer: Callable[[float], float] | None = None,
         pacer: Pacer | None = None,
+        timer_at: Callable[[float], float] | None = None,
+        flush: Callable[[], None] | None = None,
     ) -> None:
         if not speed > 0:
             raise ValueError("speed must be > 0")
         self._step = step
         self._periodic = periodic
         self.timer = timer
+        self.timer_at = timer_at
+        self._flush = flush
         self.speed = float(speed)
         self.period = float(period)
         self.max_lag = float(max_lag)
@@ -113,7 +124,7 @@ class Runner:
         self._chunk_n = max(
             round(self.max_chunk / TS), math.ceil(4 * self._pacer.period * self.speed / TS)
         )
-        self._timer_due = 0.0
+        self._timer_due = self._t0 if self.timer_at is not None else 0.0
         self._active = True
         self._pacer.add(self)
         self._pacer.start()
@@ -150,7 +161,9 @@ class Runner:
                 "pacing loop behind: %.1f ms of simulated time dropped", skipped * TS * 1e3
             )
         n = min(n, self._chunk_n)
-        if n > 0:
+        if self.timer_at is not None:
+            self._run_timed(n, now)
+        elif n > 0:
             self._step(n)
             self._done += n
             stats.samples += n
@@ -162,6 +175,53 @@ class Runner:
             stats.max_lag_s = abs(lag)
         self._periodic(after)
         stats.iterations += 1
+
+    def _run_timed(self, n: int, now: float) -> None:
+        """Run ``n`` samples in pieces that end at the due points of :attr:`timer_at` up to
+        ``now``; the timer runs at each (its frames carry that time), and once more at the
+        end (a reconfigured TPDO is seen within one tick)."""
+        timer_at = self.timer_at
+        step = self._step
+        stats = self.stats
+        scale = self.speed / TS
+        t0 = self._t0
+        end = self._done + n
+        # catching up after a stall (more than this chunk behind): no frame per due point; the
+        # timer below sends one per TPDO and counts the missed periods, as the 1 ms ticks do
+        behind = (now - t0) * scale - end > 0.5 * self._chunk_n
+        while not behind:
+            due = self._timer_due
+            if due > now:
+                break
+            k = math.ceil((due - t0) * scale - 1e-9)  # the sample that reaches `due`
+            if k > end:
+                break  # (catching up: the rest of the backlog comes in the next chunks)
+            m = k - self._done
+            if m > 0:
+                step(m)
+                self._done = k
+                stats.samples += m
+                if m > stats.max_chunk:
+                    stats.max_chunk = m
+            try:
+                self._timer_due = timer_at(due)  # type: ignore[misc]
+            except Exception:  # the timer never dies: log, retry in 10 ms
+                logger.exception("pacer timer")
+                self._timer_due = now + 0.01
+        m = end - self._done
+        if m > 0:
+            step(m)
+            self._done = end
+            stats.samples += m
+            if m > stats.max_chunk:
+                stats.max_chunk = m
+        try:  # where the simulation stands now: sees a reconfigured TPDO within one tick
+            self._timer_due = timer_at(t0 + end / scale)
+        except Exception:
+            logger.exception("pacer timer")
+            self._timer_due = now + 0.01
+        if self._flush is not None:
+            self._flush()  # the tick's frames in one write
 
     def _behind(self, now: float) -> bool:
         """More than one chunk of backlog (catch-up: no sleeping)."""
@@ -278,7 +338,8 @@ class Pacer:
             # its exact time (inhibit) never waits for a simulation chunk
             for r in runners:
                 if r._active and r.timer is not None and now >= r._timer_due:
-                    wake = min(wake, self._service(r, now))
+                    if r.timer_at is None:  # (timed runners run theirs inside the chunk)
+                        wake = min(wake, self._service(r, now))
             if self.flush_hooks:
                 self._flush()
             if now >= next_tick:
@@ -306,11 +367,11 @@ class Pacer:
                 now = time.monotonic()
                 wake = math.inf
                 for r in runners:
-                    if r._active and r.timer is not None:
+                    if r._active and r.timer is not None and r.timer_at is None:
                         wake = min(wake, self._service(r, now))
             else:
                 for r in runners:
-                    if r._active and r.timer is not None:
+                    if r._active and r.timer is not None and r.timer_at is None:
                         wake = min(wake, r._timer_due)
             if self.flush_hooks:
                 self._flush()

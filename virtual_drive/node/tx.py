@@ -4,7 +4,8 @@
 ``send_many`` (:class:`virtual_drive.node.hub_bus.HubBus`: one ``sendall`` for all frames) it is
 used under the drive's send lock with the drive's error bookkeeping (``tx_errors``,
 ``last_tx_ok``); on any other python-can bus the frames go one by one through the drive's own
-``_send`` (ENOBUFS retries and all).
+``_send`` (ENOBUFS retries and all). ``at`` (monotonic s) is when the frames were due: a bus
+with ``timed_sends`` (the loopback hub) puts them on the emulated bus from that time.
 """
 
 from __future__ import annotations
@@ -21,11 +22,12 @@ __all__ = ["make_send_many"]
 logger = logging.getLogger(__name__)
 
 
-def make_send_many(drive: Any) -> Callable[[list[tuple[int, bytes]]], None]:
-    """``send_many(frames)`` for ``drive`` (a VirtualDrive: ``bus``, ``_send``,
+def make_send_many(drive: Any) -> Callable[..., None]:
+    """``send_many(frames, at=None)`` for ``drive`` (a VirtualDrive: ``bus``, ``_send``,
     ``_send_lock``, ``tx_errors``, ``last_tx_ok``); never raises."""
+    timed = bool(getattr(drive.bus, "timed_sends", False))
 
-    def send_many(frames: list[tuple[int, bytes]]) -> None:
+    def send_many(frames: list[tuple[int, bytes]], at: float | None = None) -> None:
         bus_send_many = getattr(drive.bus, "send_many", None)
         if bus_send_many is None:
             for cob_id, data in frames:
@@ -33,7 +35,10 @@ def make_send_many(drive: Any) -> Callable[[list[tuple[int, bytes]]], None]:
             return
         try:
             with drive._send_lock:
-                bus_send_many(frames)
+                if timed and at is not None:
+                    bus_send_many(frames, at)
+                else:
+                    bus_send_many(frames)
             drive.last_tx_ok = time.monotonic()
         except (can.CanError, OSError) as exc:
             drive.tx_errors += len(frames)

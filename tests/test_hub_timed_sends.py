@@ -1,0 +1,234 @@
+"""Frames sent with their bus time (``< sendat >``): the hub's element and the virtual drive
+that runs its ticks in batches (issue 11).
+
+Truths: a CAN bus carries each frame when its sender puts it there (an 8-byte classical frame
+at 1 Mbit/s takes 111-135 bit times, 47 for a 0-byte one); a TPDO with a 1 ms event timer is on
+the bus every 1 ms with the value of that instant (CiA 301 event-driven PDO); a profile-velocity
+ramp of 1000 rpm/s moves the speed reference by 1 rpm per ms (CiA 402, 0x6083). The receiver is
+python-can's own ``socketcand`` interface, which takes the hub's frame times as they are.
+"""
+
+from __future__ import annotations
+
+import itertools
+import socket
+import statistics
+import struct
+import time
+
+import can
+import pytest
+
+from virtual_drive.hub import Hub
+from virtual_drive.hub_protocol import (
+    CommandSplitter,
+    ProtocolError,
+    parse_sendat_fields,
+    scan_sendats,
+)
+from virtual_drive.node.hub_bus import HubBus, format_send, format_sendat
+
+pytestmark = pytest.mark.timeout(120)
+
+_WALL = time.time() - time.monotonic()
+
+
+def test_sendat_elements_round_trip_through_both_parsers():
+    cases = [
+        (0x181, b"", False),
+        (0x281, bytes(range(8)), False),
+        (0x7FF, b"\xff\x00\x10", False),
+        (0x1ABCDEF0, b"\x01\x02", True),
+    ]
+    at = time.monotonic() - 0.003
+    chunk = b"".join(format_sendat(at, i, d, e) for i, d, e in cases)
+    frames, used = scan_sendats(chunk)
+    assert used == len(chunk)
+    assert [(i, d, e) for _, i, d, e in frames] == cases
+    for stamp, *_ in frames:
+        assert stamp == pytest.approx(at + _WALL, abs=2e-6)
+    # the generic splitter sees the same elements, and the full parser agrees
+    words = CommandSplitter().feed(chunk)
+    assert [parse_sendat_fields(w)[1:] for w in words] == cases
+    # a plain send is not a sendat: the fast path stops there, the caller goes on
+    assert scan_sendats(format_send(0x181, b"\x01") + chunk) == ([], 0)
+    for bad in (
+        ["sendat", "12.5", "181", "0"],  # usecs must have 6 digits
+        ["sendat", "x.000001", "181", "0"],
+        ["sendat", "1.000001", "800", "0"],  # standard id above 7FF
+        ["sendat", "1.000001", "181", "2", "01"],  # length 2, one byte
+    ):
+        with pytest.raises(ProtocolError):
+            parse_sendat_fields(bad)
+
+
+def _raw_client(port: int) -> socket.socket:
+    s = socket.create_connection(("127.0.0.1", port), timeout=5)
+    buf = b""
+    for send, want in ((None, b"< hi >"), (b"< open vcan0 >", b"< ok >")):
+        if send:
+            s.sendall(send)
+        while want not in buf:
+            buf += s.recv(4096)
+        buf = buf[buf.index(want) + len(want) :]
+    s.sendall(b"< features >")
+    while b">" not in buf:
+        buf += s.recv(4096)
+    assert buf.split(b">")[0].split() == [b"<", b"features", b"sendat"]
+    s.sendall(b"< rawmode >")
+    buf = b""
+    while b"< ok >" not in buf:
+        buf += s.recv(4096)
+    return s
+
+
+def test_hub_puts_sendat_frames_on_the_bus_at_their_time():
+    with Hub(port=0, bitrate=1_000_000) as hub:
+        rx = can.Bus(
+            interface="socketcand", host="127.0.0.1", port=hub.port, channel="vcan0",
+            tcp_tune=True,
+        )
+        tx = _raw_client(hub.port)
+        try:
+            time.sleep(0.2)
+            now = time.monotonic()
+            stated = [now - 0.004, now - 0.003, now - 0.002]
+            batch = b"".join(
+                format_sendat(t, 0x281, struct.pack("<ff", k, 0.0)) for k, t in enumerate(stated)
+            )
+            # one earlier than its predecessor (kept after it: a sender's order is kept), one
+            # in the future (never: on the bus now), one far in the past (a clock not shared)
+            batch += format_sendat(now - 0.0035, 0x282, b"\x01")
+            batch += format_sendat(now + 5.0, 0x283, b"\x02")
+            tx.sendall(batch)
+            got = []
+            end = time.monotonic() + 5
+            while len(got) < 5 and time.monotonic() < end:
+                msg = rx.recv(0.5)
+                if msg is not None:
+                    got.append(msg)
+            arrived = time.time()
+            assert [m.arbitration_id for m in got] == [0x281, 0x281, 0x281, 0x282, 0x283]
+            for m, t in zip(got[:3], stated, strict=True):
+                # on the bus from its stated time: done 111-135 bit times (at 1 Mbit/s) later
+                assert 111e-6 <= m.timestamp - (t + _WALL) <= 135e-6 + 2e-6, m
+            gaps = [b.timestamp - a.timestamp for a, b in itertools.pairwise(got[:3])]
+            assert gaps == [pytest.approx(1e-3, abs=25e-6)] * 2  # (bit stuffing differs)
+            assert got[3].timestamp > got[2].timestamp  # order kept
+            assert got[3].timestamp <= got[2].timestamp + 200e-6
+            assert got[4].timestamp <= arrived  # never in the future
+            tx.sendall(format_sendat(time.monotonic() - 10.0, 0x284, b""))
+            old = None
+            while old is None and time.monotonic() < end:
+                old = rx.recv(0.5)
+            assert old is not None and old.arbitration_id == 0x284
+            assert time.time() - old.timestamp <= Hub.max_backdate_s + 0.5
+        finally:
+            tx.close()
+            rx.shutdown()
+
+
+def test_vdhub_client_uses_sendat_only_where_the_server_takes_it():
+    with Hub(port=0) as hub:
+        bus = HubBus(channel="vcan0", host="127.0.0.1", port=hub.port)
+        try:
+            assert bus.timed_sends
+        finally:
+            bus.shutdown()
+    # a server that answers '< features >' with an error (a socketcand daemon does)
+    srv = socket.socket()
+    srv.bind(("127.0.0.1", 0))
+    srv.listen(1)
+    import threading
+
+    seen: list[bytes] = []
+
+    def serve() -> None:
+        conn, _ = srv.accept()
+        conn.sendall(b"< hi >")
+        buf = b""
+        for reply in (b"< ok >", b"< error unknown command >", b"< ok >"):
+            while b">" not in buf:
+                buf += conn.recv(4096)
+            element, _, buf = buf.partition(b">")
+            seen.append(element + b">")
+            conn.sendall(reply)
+        time.sleep(0.5)
+        conn.close()
+
+    th = threading.Thread(target=serve, daemon=True)
+    th.start()
+    try:
+        bus = HubBus(channel="vcan0", host="127.0.0.1", port=srv.getsockname()[1])
+        try:
+            assert not bus.timed_sends
+            assert bus.send_many([(0x181, b"\x01")], at=time.monotonic()) == 1  # plain send
+        finally:
+            bus.shutdown()
+        th.join(5)
+        assert [e.split()[1] for e in seen] == [b"open", b"features", b"rawmode"]
+    finally:
+        srv.close()
+
+
+class _Frames(can.Listener):
+    def __init__(self) -> None:
+        self.msgs: list[can.Message] = []
+
+    def on_message_received(self, msg: can.Message) -> None:
+        self.msgs.append(msg)
+
+
+def test_batched_drive_sends_each_tpdo_on_its_own_ms_with_its_own_value():
+    """The drive on the hub wakes every 5 ms (not every 1 ms), yet TPDO3's speed reference
+    is on the bus every 1 ms and follows a 1000 rpm/s ramp sample by sample (1 rpm per frame,
+    not a staircase of five equal values)."""
+    from virtual_drive.node import VirtualDrive
+
+    with Hub(port=0, bitrate=1_000_000) as hub:
+        bus = HubBus(channel="vcan0", host="127.0.0.1", port=hub.port)
+        drive = VirtualDrive(bus, node_id=1)
+        bus.rx_wanted = drive.network.subscribers
+        rx = can.Bus(
+            interface="socketcand", host="127.0.0.1", port=hub.port, channel="vcan0",
+            tcp_tune=True,
+        )
+        frames = _Frames()
+        notifier = can.Notifier(rx, [frames])
+        drive.start()
+        try:
+            node = drive.node
+            drive.nmt.command(0x01)
+            node.set_data(0x6060, 0, struct.pack("<b", 3))  # profile velocity
+            node.set_data(0x6083, 0, struct.pack("<I", 1000))  # rpm/s
+            for cw in (0x06, 0x07, 0x0F):
+                node.set_data(0x6040, 0, struct.pack("<H", cw))
+            node.set_data(0x60FF, 0, struct.pack("<i", 3000))  # ramp for 3 s
+            time.sleep(0.3)
+            it0, t0 = drive.runner.stats.iterations, time.monotonic()
+            n0 = len(frames.msgs)
+            time.sleep(1.0)
+            wakes = (drive.runner.stats.iterations - it0) / (time.monotonic() - t0)
+            window = frames.msgs[n0:]
+        finally:
+            notifier.stop()
+            rx.shutdown()
+            drive.stop()
+            bus.shutdown()
+    assert drive.runner.period == pytest.approx(0.005)
+    assert wakes <= 1.2 / 0.005, wakes  # about 200 wake-ups/s, not 1000
+    tpdo3 = [m for m in window if m.arbitration_id == 0x381]
+    assert len(tpdo3) >= 900, len(tpdo3)
+    stamps = [m.timestamp for m in tpdo3]
+    gaps = [b - a for a, b in itertools.pairwise(stamps)]
+    assert statistics.median(gaps) == pytest.approx(1e-3, abs=0.05e-3)
+    # one frame per event period: the bus time moves by ~1 ms (a TPDO1/TPDO2 ahead in
+    # arbitration shifts it by at most a couple of frame times)
+    assert sum(0.7e-3 <= g <= 1.3e-3 for g in gaps) >= 0.95 * len(gaps), sorted(gaps)[:5]
+    refs = [struct.unpack("<ff", bytes(m.data))[1] for m in tpdo3]
+    steps = [b - a for a, b in itertools.pairwise(refs)]
+    # 1000 rpm/s: 1 rpm per 1 ms frame; a value sampled once per 5 ms tick would repeat
+    assert sum(abs(s) < 0.25 for s in steps) <= 0.05 * len(steps), steps[:20]
+    assert statistics.median(steps) == pytest.approx(1.0, abs=0.1)
+    slope = (refs[-1] - refs[0]) / (stamps[-1] - stamps[0])
+    assert slope == pytest.approx(1000.0, rel=0.05)
