@@ -109,29 +109,43 @@ def main() -> int:
         probe = subprocess.Popen(
             [sys.executable, "-c", _PROBE, str(args.seconds)], stdout=subprocess.PIPE, text=True
         )
-        drifts = []
+        drifts = []  # sim - wall sampled at any moment: includes the time since the last tick
+        tick_lags = []  # sim - wall where the last tick left it (the pacing drift proper)
         end = wall0 + args.seconds
+        stats = drive.runner.stats
         while True:
             now = time.monotonic()
             if now >= end:
                 break
             drifts.append((drive.sim.time - sim0) - (now - wall0))
+            tick_lags.append(stats.last_lag_s)
             time.sleep(0.05)
         worst = max(abs(d) for d in drifts)
         drift = drifts[-1]
         p99 = sorted(abs(d) for d in drifts)[int(0.99 * (len(drifts) - 1))]
+        tick_worst = max(abs(d) for d in tick_lags)
+        tick_p99 = sorted(abs(d) for d in tick_lags)[int(0.99 * (len(tick_lags) - 1))]
         wall = time.monotonic() - wall0
         cpu = time.process_time() - cpu0
         ru1 = resource.getrusage(resource.RUSAGE_SELF)
         ru_cpu = (ru1.ru_utime - ru0.ru_utime) + (ru1.ru_stime - ru0.ru_stime)
         sent = drive.pdo.sent - sent0
-        stats = drive.runner.stats
         client = "python-can socketcand" if args.python_can else type(bus).__name__
         print(f"measured {wall:.1f} s wall, mode {args.mode}, PWM-exact model, bus {client}")
         print(f"TPDOs sent: {sent} ({sent / wall:.0f} frames/s), tx errors {drive.tx_errors}")
+        period = drive.runner._pacer.period if drive.runner._pacer else drive.runner.period
         print(
-            f"|sim - wall| drift: max {worst * 1e3:.2f} ms, 99th percentile {p99 * 1e3:.2f} ms, "
-            f"last {drift * 1e3:+.2f} ms ({len(drifts)} samples every 50 ms)"
+            f"pacing: one wake-up per {period * 1e3:g} ms"
+            + (", TPDOs sent with their bus times" if drive.timed_sends else "")
+        )
+        print(
+            f"|sim - wall| drift at the end of each tick: max {tick_worst * 1e3:.2f} ms, "
+            f"99th percentile {tick_p99 * 1e3:.2f} ms ({len(tick_lags)} samples every 50 ms)"
+        )
+        print(
+            f"|sim - wall| at any moment (adds the 0..{period * 1e3:g} ms since the last tick): "
+            f"max {worst * 1e3:.2f} ms, 99th percentile {p99 * 1e3:.2f} ms, "
+            f"last {drift * 1e3:+.2f} ms"
         )
         print(f"machine load average (1 min): {os.getloadavg()[0]:.2f} on {os.cpu_count()} CPUs")
         print(
@@ -146,7 +160,7 @@ def main() -> int:
             f"scheduler probe (separate process, 1 ms sleeps): worst wake-up {p_worst} ms late, "
             f"{p_late} of {p_n} wake-ups > 5 ms late"
         )
-        ok = worst <= 2e-3 and cpu / wall <= 0.06
+        ok = tick_worst <= 2e-3 and cpu / wall <= 0.06
         print("goals (drift <= 2 ms, CPU <= 6 % idle):", "met" if ok else "NOT met")
         return 0
     finally:

@@ -176,7 +176,11 @@ class HubBus(can.BusABC):
             ignored and they are sent now.
         """
         if at is not None and self.timed_sends:
-            self._held.extend(format_sendat(at, cob_id, data) for cob_id, data in frames)
+            usecs = round((at + _WALL_OFFSET) * 1e6)  # format_sendat inlined, one time stamp
+            head = b"< sendat %d.%06d " % (usecs // 1_000_000, usecs % 1_000_000)
+            held = self._held
+            for cob_id, data in frames:
+                held.append(head + b"%03X %X %s >" % (cob_id, len(data), data.hex(" ").encode()))
             return len(frames)
         else:
             lines = [
