@@ -14,7 +14,9 @@ so each sender's order is kept), occupies the bus for
 :func:`firmware_protocol.can_bits.frame_bits` ``/ bitrate`` seconds (exact bit stuffing), and
 is delivered when the bus has finished it (plus an optional injected delay with uniform jitter,
 like a USB adapter: ``delay_s`` ± ``jitter_s``, never reordering frames, as CAN never does).
-Frames can be dropped with a seeded RNG for fault tests.
+Frames can be dropped with a seeded RNG for fault tests. A client that asks ``< features >`` may
+send ``< sendat <time> ... >`` (the virtual drive's batched ticks): such a frame competes for the
+bus from its stated time instead of its arrival (see :mod:`virtual_drive.hub_protocol`).
 
 One background thread runs an ``epoll`` loop over all sockets; no locks are needed.
 The ``virtual-drive hub`` command is :mod:`virtual_drive.hub_cli`; the launcher that starts a hub
