@@ -4,14 +4,21 @@ python-can allows one reader per bus, so all drives (and scans) on one bus share
 its Notifier thread. :class:`BusMonitor` counts every frame for rates and bus load,
 :class:`~drive_link._bus_health.BusHealth` error frames and the bus state. Frames are sent through
 :class:`PacedNetwork`, which waits out a full transmit queue instead of failing.
+
+The Notifier calls one function per frame (:func:`dispatcher`: canopen's subscribers, then the
+monitor, error frames to the health listener) instead of three listeners, and the monitor
+queues each frame with its arrival time and counts them in batches (issue 11: a dashboard on
+the hub receives about 2,200 frames/s).
 """
 
 from __future__ import annotations
 
 import errno
+import logging
 import threading
 import time
 from collections import deque
+from collections.abc import Callable
 from typing import Any
 
 import can
@@ -28,12 +35,17 @@ __all__ = [
     "Connection",
     "PacedNetwork",
     "acquire",
+    "dispatcher",
     "queue_full",
     "release",
 ]
 
+log = logging.getLogger(__name__)
+
 #: How long one frame may wait for room in a full transmit queue before the send fails (s).
 SEND_DEADLINE = 2.0
+#: frames the monitor queues on the bus thread before it counts them there in one go
+_MONITOR_BATCH = 128
 
 
 def queue_full(exc: BaseException) -> bool:
@@ -105,38 +117,95 @@ def _frame_bits(msg: can.Message) -> int:
 
 
 class BusMonitor(can.Listener):
-    """Counts received frames per CAN-ID for rates and bus load (thread-safe)."""
+    """Counts received frames for rates and bus load (thread-safe).
+
+    Each frame is queued with its arrival time (``time.monotonic()``) and counted in batches:
+    every ``_MONITOR_BATCH`` frames on the bus thread, and whenever a figure is read."""
 
     def __init__(self, window_s: float = 1.0):
         self.window_s = window_s
         self._lock = threading.Lock()
         self._recent: deque[tuple[float, int]] = deque()  # (time, bits)
-        self.frames_total = 0
-        self.bits_total = 0.0
+        self._inbox: deque[tuple[float, can.Message]] = deque()  # not counted yet
+        self._frames_total = 0
+        self._bits_total = 0.0
 
     def on_message_received(self, msg: can.Message) -> None:
         if msg.is_error_frame:  # a controller report (BusHealth counts it), not a frame on the wire
             return
-        bits = _frame_bits(msg)
-        now = time.monotonic()
+        inbox = self._inbox
+        inbox.append((time.monotonic(), msg))
+        if len(inbox) >= _MONITOR_BATCH:
+            with self._lock:
+                self._count()
+
+    def _count(self) -> None:
+        """Count the queued frames (call with the lock held)."""
+        inbox, recent = self._inbox, self._recent
+        n = len(inbox)
+        if not n:
+            return
+        bits_sum = 0
+        for _ in range(n):  # others may append meanwhile: only the n taken now
+            now, msg = inbox.popleft()
+            bits = _frame_bits(msg)
+            bits_sum += bits
+            recent.append((now, bits))
+        self._frames_total += n
+        self._bits_total += bits_sum
+        cutoff = now - self.window_s
+        while recent and recent[0][0] < cutoff:
+            recent.popleft()
+
+    @property
+    def frames_total(self) -> int:
+        """Frames received since the start (error frames excluded)."""
         with self._lock:
-            self.frames_total += 1
-            self.bits_total += bits
-            self._recent.append((now, bits))
-            cutoff = now - self.window_s
-            while self._recent and self._recent[0][0] < cutoff:
-                self._recent.popleft()
+            self._count()
+            return self._frames_total
+
+    @property
+    def bits_total(self) -> float:
+        """Bits those frames occupied on the wire (exact stuffing)."""
+        with self._lock:
+            self._count()
+            return self._bits_total
 
     def rates(self) -> tuple[float, float]:
         """(frames/s, bits/s) received over the last ``window_s`` seconds."""
         now = time.monotonic()
         with self._lock:
+            self._count()
             cutoff = now - self.window_s
             while self._recent and self._recent[0][0] < cutoff:
                 self._recent.popleft()
             n = len(self._recent)
             bits = sum(b for _, b in self._recent)
         return n / self.window_s, bits / self.window_s
+
+
+def dispatcher(
+    network: canopen.Network, monitor: BusMonitor, health: can.Listener
+) -> Callable[[can.Message], None]:
+    """The Notifier's one callback: what canopen's ``MessageListener``, ``monitor`` and
+    ``health`` would do as three listeners, in that order, with one call per frame (``health``
+    only gets error frames: it ignores every other frame)."""
+    notify = network.notify
+    count = monitor.on_message_received
+    report = health.on_message_received
+
+    def on_message(msg: can.Message) -> None:
+        if msg.is_error_frame:
+            report(msg)  # neither canopen nor the monitor takes error frames
+            return
+        if not msg.is_remote_frame:
+            try:
+                notify(msg.arbitration_id, msg.data, msg.timestamp)
+            except Exception as exc:  # as canopen's MessageListener: a callback's error is logged
+                log.error(str(exc))
+        count(msg)
+
+    return on_message
 
 
 class Connection:
@@ -149,8 +218,7 @@ class Connection:
         self.monitor = BusMonitor()
         self.health = BusHealth(bus)
         self.network = PacedNetwork(bus)
-        self.network.listeners.append(self.monitor)
-        self.network.listeners.append(self.health)
+        self.network.listeners = [dispatcher(self.network, self.monitor, self.health)]
         self.network.NOTIFIER_CYCLE = 0.1
         self.network.connect()
         self.refs = 0

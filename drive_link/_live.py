@@ -6,6 +6,10 @@ estimates dropped frames against the expected event-timer cadence (frames the pe
 have arrived between the first and the latest frame, minus those that did: jitter cancels out,
 a lost frame does not; a pause longer than 1 s, e.g. NMT PRE-OPERATIONAL, starts a new count
 window instead of counting as losses), and measures its rate; the bus monitor gives the bus load.
+
+Frames are decoded in batches (issue 11): the bus thread only queues each frame's stamp, bytes
+and arrival time; the queue is decoded with one numpy view per batch (:data:`BATCH` frames, or
+whatever is queued when a reader asks), so a reader always sees every frame received so far.
 """
 
 from __future__ import annotations
@@ -13,6 +17,7 @@ from __future__ import annotations
 import struct
 import threading
 import time
+from collections import deque
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
@@ -22,10 +27,43 @@ import numpy as np
 from ._connection import BusMonitor
 from ._objects import ObjectTable
 
-__all__ = ["LiveStreams", "MappedField", "TpdoConfig", "mapped_fields", "read_tpdo_configs"]
+__all__ = [
+    "BATCH",
+    "LiveStreams",
+    "MappedField",
+    "TpdoConfig",
+    "mapped_fields",
+    "read_tpdo_configs",
+]
 
 #: A TPDO silence longer than this (s) is a pause (NMT state, drive restart), not lost frames.
 _PAUSE_S = 1.0
+#: Frames of one TPDO queued on the bus thread before they are decoded there in one go.
+BATCH = 64
+#: struct type letter → numpy kind (the sizes are struct's standard sizes, "<" formats)
+_KINDS = {
+    "b": "i", "h": "i", "i": "i", "l": "i", "q": "i",
+    "B": "u", "H": "u", "I": "u", "L": "u", "Q": "u",
+    "e": "f", "f": "f", "d": "f", "?": "b",
+}  # fmt: skip
+
+
+def _record_dtype(fields: list[MappedField], itemsize: int) -> np.dtype | None:
+    """One numpy record type for a PDO's decoded fields (little-endian, at their byte offsets),
+    or None if a field's format has no plain numpy equivalent."""
+    names, formats, offsets = [], [], []
+    for k, f in enumerate(fields):
+        if not f.fmt:
+            continue
+        letter = f.fmt.lstrip("<")
+        if len(letter) != 1 or letter not in _KINDS or f.offset % 8:
+            return None
+        names.append(f"f{k}")
+        formats.append(f"<{_KINDS[letter]}{struct.calcsize('<' + letter)}")
+        offsets.append(f.offset // 8)
+    return np.dtype(
+        {"names": names, "formats": formats, "offsets": offsets, "itemsize": max(itemsize, 1)}
+    )
 
 
 @dataclass(frozen=True)
@@ -130,6 +168,11 @@ class _Stream:
         self.window_frames = 0  # frames received in it
         self.dropped_before = 0  # drops counted in closed windows
         self.recent: list[float] = []  # monotonic arrival times in the last second
+        self.need = sum(f.bits for f in cfg.fields) // 8  # bytes a frame must carry
+        self.decoded = [(f"f{k}", f) for k, f in enumerate(cfg.fields) if f.fmt]
+        self.dtype = _record_dtype(cfg.fields, self.need)
+        #: (stamp s, data, monotonic arrival s) of frames not decoded yet (bus thread appends)
+        self.inbox: deque[tuple[float, bytes, float]] = deque()
 
     def window_drops(self) -> int:
         """Frames the event timer promised in the current window that never arrived."""
@@ -192,31 +235,62 @@ class LiveStreams:
         s = self._streams.get(can_id)
         if s is None:
             return
-        cfg = s.cfg
-        need = sum(f.bits for f in cfg.fields) // 8
-        now_mono = time.monotonic()
-        t = timestamp if timestamp else time.time()
-        with self._lock:
-            if len(data) < need:
-                s.bad_length += 1
-                return
-            i = s.n % s.capacity
-            s.t[i] = t
-            for f in cfg.fields:
-                if f.fmt:
-                    s.values[f.name][i] = struct.unpack_from(f.fmt, data, f.offset // 8)[0]
-            if s.last_t is None or t - s.last_t > _PAUSE_S:
+        inbox = s.inbox
+        inbox.append((timestamp or time.time(), bytes(data), time.monotonic()))
+        if len(inbox) >= BATCH:
+            with self._lock:
+                self._decode(s)
+
+    def _decode_all(self) -> None:
+        """Decode every queued frame (call with the lock held)."""
+        for s in self._streams.values():
+            if s.inbox:
+                self._decode(s)
+
+    def _decode(self, s: _Stream) -> None:
+        """Decode the frames queued for ``s`` into its ring buffers (call with the lock held)."""
+        inbox = s.inbox
+        frames = [inbox.popleft() for _ in range(len(inbox))]  # others may append meanwhile
+        if not frames:
+            return
+        need = s.need
+        good = [f for f in frames if len(f[1]) >= need]
+        s.bad_length += len(frames) - len(good)
+        if not good:
+            return
+        good = good[-s.capacity :]  # a batch longer than the ring: its newest frames
+        m = len(good)
+        stamps = [f[0] for f in good]
+        idx = (s.n + np.arange(m)) % s.capacity
+        s.t[idx] = stamps
+        if s.dtype is not None:
+            raw = b"".join(f[1] if len(f[1]) == need else f[1][:need] for f in good)
+            rec = np.frombuffer(raw, dtype=s.dtype, count=m)
+            for key, fld in s.decoded:
+                s.values[fld.name][idx] = rec[key]
+        else:  # a format numpy does not read: one frame at a time
+            for _key, fld in s.decoded:
+                off = fld.offset // 8
+                s.values[fld.name][idx] = [
+                    struct.unpack_from(fld.fmt, f[1], off)[0] for f in good
+                ]
+        last = s.last_t
+        for t in stamps:
+            if last is None or t - last > _PAUSE_S:  # a pause: a new count window
+                s.last_t = last
                 s.dropped_before += s.window_drops()
                 s.window_t0 = t
                 s.window_frames = 0
             s.window_frames += 1
-            s.last_t = t
-            s.n += 1
-            s.frames += 1
-            s.recent.append(now_mono)
-            if len(s.recent) > 4 * s.capacity or (s.recent and now_mono - s.recent[0] > 2.0):
-                cut = now_mono - 1.0
-                s.recent = [x for x in s.recent if x >= cut]
+            last = t
+        s.last_t = last
+        s.n += m
+        s.frames += m
+        s.recent.extend(f[2] for f in good)
+        now_mono = good[-1][2]
+        if len(s.recent) > 4 * s.capacity or now_mono - s.recent[0] > 2.0:
+            cut = now_mono - 1.0
+            s.recent = [x for x in s.recent if x >= cut]
 
     def _snapshot(
         self, s: _Stream, seconds: float | None
@@ -236,6 +310,7 @@ class LiveStreams:
         """Every signal with its own time base: ``{name: (t, values)}`` (t in s, host clock)."""
         out: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         with self._lock:
+            self._decode_all()
             for s in self._streams.values():
                 t, vals = self._snapshot(s, seconds)
                 for k, v in vals.items():
@@ -250,6 +325,7 @@ class LiveStreams:
         its first frame). Empty arrays before any frame.
         """
         with self._lock:
+            self._decode_all()
             snaps = {cob: self._snapshot(s, seconds) for cob, s in self._streams.items()}
         wanted = signals or self.signals
         unknown = [w for w in wanted if not any(w in v for _, v in snaps.values())]
@@ -279,6 +355,7 @@ class LiveStreams:
         """Most recent value of every signal (NaN before the first frame)."""
         out: dict[str, float] = {}
         with self._lock:
+            self._decode_all()
             for s in self._streams.values():
                 for k, v in s.values.items():
                     out[k] = float(v[(s.n - 1) % s.capacity]) if s.n else float("nan")
@@ -291,6 +368,7 @@ class LiveStreams:
         now = time.monotonic()
         per: dict[str, dict] = {}
         with self._lock:
+            self._decode_all()
             for s in self._streams.values():
                 recent = [x for x in s.recent if x >= now - 1.0]
                 per[f"TPDO{s.cfg.number}"] = {
@@ -316,6 +394,7 @@ class LiveStreams:
     def reset_counters(self) -> None:
         """Zero the frame and drop counters (buffers are kept)."""
         with self._lock:
+            self._decode_all()
             for s in self._streams.values():
                 s.frames = s.bad_length = s.dropped_before = s.window_frames = 0
                 s.last_t = None

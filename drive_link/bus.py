@@ -63,6 +63,7 @@ def open_bus(**settings: Any) -> can.BusABC:
     kw = bus_settings(**settings)
     if kw.get("interface") == "socketcand" and "host" in kw:
         _probe_tcp(kw["host"], int(kw.get("port", 29536)))
+        kw["interface"] = "vdhub"  # same protocol, the project's lean client (issue 11)
     try:
         return can.Bus(**kw)
     except Exception as exc:  # python-can raises many kinds (OSError, CanError, ValueError, ...)
