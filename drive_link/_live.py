@@ -14,6 +14,7 @@ whatever is queued when a reader asks), so a reader always sees every frame rece
 
 from __future__ import annotations
 
+import bisect
 import struct
 import threading
 import time
@@ -40,6 +41,9 @@ __all__ = [
 _PAUSE_S = 1.0
 #: Frames of one TPDO queued on the bus thread before they are decoded there in one go.
 BATCH = 64
+#: A window's copy reaches this far (s) past its start: samples stamped out of order by less
+#: than this are still found (frames are stamped in bus order; jitter is well below 1 ms).
+_SNAP_MARGIN_S = 0.25
 #: struct type letter → numpy kind (the sizes are struct's standard sizes, "<" formats)
 _KINDS = {
     "b": "i", "h": "i", "i": "i", "l": "i", "q": "i",
@@ -295,15 +299,38 @@ class LiveStreams:
     def _snapshot(
         self, s: _Stream, seconds: float | None
     ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-        n = min(s.n, s.capacity)
-        start = s.n - n
-        idx = np.arange(start, s.n) % s.capacity
-        t = s.t[idx].copy()
-        vals = {k: v[idx].copy() for k, v in s.values.items()}
+        """Copies of the buffered samples in arrival order: all of them, or those stamped at
+        most ``seconds`` before the newest. Only the tail that can hold them is copied: it
+        reaches back to a sample stamped _SNAP_MARGIN_S before that (found by bisection on
+        the nearly sorted stamps), so a sample stamped that much out of order is not seen."""
+        cap = s.capacity
+        n = min(s.n, cap)
+        if seconds is not None and n:
+            newest = s.t[(s.n - 1) % cap]
+            below = newest - seconds - _SNAP_MARGIN_S
+            t_ring, end = s.t, s.n
+            if t_ring[(end - n) % cap] < below:  # the oldest is out of the window: bisect
+                lo, hi = 0, n  # a tail of hi samples reaches below, one of lo does not
+                while hi - lo > 1:
+                    mid = (lo + hi) // 2
+                    if t_ring[(end - mid) % cap] < below:
+                        hi = mid
+                    else:
+                        lo = mid
+                n = hi
+        i0 = (s.n - n) % cap
+        if i0 + n <= cap:
+            t = s.t[i0 : i0 + n].copy()
+            vals = {k: v[i0 : i0 + n].copy() for k, v in s.values.items()}
+        else:  # wraps around the ring's end
+            j = i0 + n - cap
+            t = np.concatenate((s.t[i0:], s.t[:j]))
+            vals = {k: np.concatenate((v[i0:], v[:j])) for k, v in s.values.items()}
         if seconds is not None and n:
             keep = t >= t[-1] - seconds
-            t = t[keep]
-            vals = {k: v[keep] for k, v in vals.items()}
+            if not keep.all():
+                t = t[keep]
+                vals = {k: v[keep] for k, v in vals.items()}
         return t, vals
 
     def streams(self, seconds: float | None = None) -> dict[str, tuple[np.ndarray, np.ndarray]]:
@@ -324,10 +351,14 @@ class LiveStreams:
         requested signal; every other signal is sampled on it with zero-order hold (NaN before
         its first frame). Empty arrays before any frame.
         """
+        wanted = signals or self.signals
         with self._lock:
             self._decode_all()
-            snaps = {cob: self._snapshot(s, seconds) for cob, s in self._streams.items()}
-        wanted = signals or self.signals
+            snaps = {  # only the streams that hold a wanted signal
+                cob: self._snapshot(s, seconds)
+                for cob, s in self._streams.items()
+                if any(w in s.values for w in wanted)
+            }
         unknown = [w for w in wanted if not any(w in v for _, v in snaps.values())]
         if unknown:
             raise KeyError(
@@ -370,14 +401,15 @@ class LiveStreams:
         with self._lock:
             self._decode_all()
             for s in self._streams.values():
-                recent = [x for x in s.recent if x >= now - 1.0]
+                # arrival times are appended in order: count the last second by bisection
+                in_last_s = len(s.recent) - bisect.bisect_left(s.recent, now - 1.0)
                 per[f"TPDO{s.cfg.number}"] = {
                     "cob_id": s.cfg.cob_id,
                     "signals": list(s.values),
                     "frames": s.frames,
                     "dropped": s.dropped,
                     "bad_length": s.bad_length,
-                    "rate_hz": float(len(recent)),
+                    "rate_hz": float(in_last_s),
                     "expected_hz": 1000.0 / s.cfg.event_timer_ms if s.cfg.event_timer_ms else None,
                 }
         out: dict = {
