@@ -34,6 +34,7 @@ import viser
 
 from dashboard import _live_plot as live_plot
 from dashboard._bench import LIVE_SIGNALS, Bench
+from dashboard._gui_cast import install_fast_cast
 from dashboard._gui_field import CURRENT_COLORS, SPEED_COLORS
 from dashboard._gui_field import fmt as _fmt
 from dashboard._gui_guard import guard_handshake, install_send_lock, refuse_share_url
@@ -94,6 +95,7 @@ class BenchGui:
     # ------------------------------------------------------------------ lifecycle
     def start(self) -> None:
         install_send_lock()
+        install_fast_cast()  # viser's per-assignment cast without rebuilding its type hints
         # viser has no authentication: the GUI stays on loopback even when the API is remote
         # (there, a browser must sign in with the token before it can change anything).
         with contextlib.redirect_stdout(io.StringIO()):  # viser prints its URL banner anyway
