@@ -6,7 +6,9 @@ its Notifier thread. :class:`BusMonitor` counts every frame for rates and bus lo
 :class:`PacedNetwork`, which waits out a full transmit queue instead of failing.
 
 The Notifier calls one function per frame (:func:`dispatcher`: canopen's subscribers, then the
-monitor, error frames to the health listener) instead of three listeners, and the monitor
+monitor, error frames to the health listener) instead of three listeners; on the project's hub
+client data frames skip the Notifier and the ``can.Message`` (:func:`direct_dispatcher`, called
+in the bus's receive call on the Notifier's thread, in the order received); the monitor
 queues each frame with its arrival time and counts them in batches (issue 11: a dashboard on
 the hub receives about 2,200 frames/s).
 """
@@ -35,6 +37,7 @@ __all__ = [
     "Connection",
     "PacedNetwork",
     "acquire",
+    "direct_dispatcher",
     "dispatcher",
     "queue_full",
     "release",
@@ -103,9 +106,15 @@ class PacedNetwork(canopen.Network):
         self.check()
 
 
-def _frame_bits(msg: can.Message) -> int:
+def _frame_bits(msg: can.Message | tuple[int, bytes, bool]) -> int:
     """Bits ``msg`` occupied on the wire (exact stuffing; :mod:`firmware_protocol.can_bits`).
-    A CAN FD frame counts its classical-frame length (47/67 + 8·n, no stuffing)."""
+    A CAN FD frame counts its classical-frame length (47/67 + 8·n, no stuffing). ``msg`` may
+    also be a data frame as (CAN-ID, data, is_extended) (:meth:`BusMonitor.on_frame`)."""
+    if type(msg) is tuple:
+        can_id, data, ext = msg
+        if len(data) > 8:
+            return (67 if ext else 47) + 8 * len(data)
+        return frame_bits_fast(can_id, data, ext)
     data = bytes(msg.data)
     if msg.is_fd or len(data) > 8:
         return (67 if msg.is_extended_id else 47) + 8 * len(data)
@@ -126,7 +135,8 @@ class BusMonitor(can.Listener):
         self.window_s = window_s
         self._lock = threading.Lock()
         self._recent: deque[tuple[float, int]] = deque()  # (time, bits)
-        self._inbox: deque[tuple[float, can.Message]] = deque()  # not counted yet
+        #: (arrival, frame) not counted yet; a frame is a Message or (id, data, is_extended)
+        self._inbox: deque[tuple[float, Any]] = deque()
         self._frames_total = 0
         self._bits_total = 0.0
 
@@ -135,6 +145,15 @@ class BusMonitor(can.Listener):
             return
         inbox = self._inbox
         inbox.append((time.monotonic(), msg))
+        if len(inbox) >= _MONITOR_BATCH:
+            with self._lock:
+                self._count()
+
+    def on_frame(self, can_id: int, data: bytes, is_extended: bool) -> None:
+        """Count a data frame received without a :class:`can.Message` (the hub's direct
+        path, :class:`Connection`)."""
+        inbox = self._inbox
+        inbox.append((time.monotonic(), (can_id, data, is_extended)))
         if len(inbox) >= _MONITOR_BATCH:
             with self._lock:
                 self._count()
@@ -208,6 +227,25 @@ def dispatcher(
     return on_message
 
 
+def direct_dispatcher(
+    network: canopen.Network, monitor: BusMonitor
+) -> Callable[[int, bytes, float, bool], None]:
+    """What :func:`dispatcher` does for a data frame, called by a bus that hands over frames
+    without building a :class:`can.Message` (the project's hub client, ``rx_direct``); it
+    never raises (it runs inside the bus's receive call)."""
+    notify = network.notify
+    count = monitor.on_frame
+
+    def on_frame(can_id: int, data: bytes, stamp: float, is_extended: bool) -> None:
+        try:
+            notify(can_id, bytearray(data), stamp)  # canopen's callbacks get a bytearray
+        except Exception as exc:  # as canopen's MessageListener: a callback's error is logged
+            log.error(str(exc))
+        count(can_id, data, is_extended)
+
+    return on_frame
+
+
 class Connection:
     """A bus, its canopen Network (with Notifier) and a frame monitor; reference counted."""
 
@@ -219,6 +257,8 @@ class Connection:
         self.health = BusHealth(bus)
         self.network = PacedNetwork(bus)
         self.network.listeners = [dispatcher(self.network, self.monitor, self.health)]
+        if owns_bus and hasattr(bus, "rx_direct"):  # the hub client: data frames without
+            bus.rx_direct = direct_dispatcher(self.network, self.monitor)  # a Message each
         self.network.NOTIFIER_CYCLE = 0.1
         self.network.connect()
         self.refs = 0

@@ -26,7 +26,7 @@ import socket
 import threading
 import time
 from collections import deque
-from collections.abc import Container, Iterable
+from collections.abc import Callable, Container, Iterable
 
 import can
 
@@ -95,6 +95,9 @@ class HubBus(can.BusABC):
         #: CAN-IDs to deliver (None: all). Consulted per frame, so a live dict works.
         self.rx_wanted: Container[int] | None = None
         self.rx_dropped = 0  #: frames not delivered because nobody wanted them
+        #: if set, called as (can_id, data, stamp, is_extended) for each wanted data frame
+        #: instead of building a can.Message (drive_link's receive path, issue 11)
+        self.rx_direct: Callable[[int, bytes, float, bool], None] | None = None
         try:
             sock = socket.create_connection((host, int(port)), timeout=connect_timeout)
         except OSError as exc:
@@ -243,6 +246,7 @@ class HubBus(can.BusABC):
         rest = parts.pop()
         self._buf = rest if len(rest) <= _MAX_PARTIAL else b""
         wanted = self.rx_wanted
+        direct = self.rx_direct
         queue = self._queue
         channel = self.channel
         for part in parts:
@@ -264,6 +268,9 @@ class HubBus(can.BusABC):
                     stamp = float(words[3])
                 except ValueError:
                     logger.warning("bad frame element from the server: %r", part[:80])
+                    continue
+                if direct is not None:
+                    direct(can_id, data, stamp, len(ident) != 3)
                     continue
                 queue.append(
                     can.Message(
