@@ -176,7 +176,7 @@ class _Stream:
         self.decoded = [(f"f{k}", f) for k, f in enumerate(cfg.fields) if f.fmt]
         self.dtype = _record_dtype(cfg.fields, self.need)
         #: (stamp s, data, monotonic arrival s) of frames not decoded yet (bus thread appends)
-        self.inbox: deque[tuple[float, bytes, float]] = deque()
+        self.inbox: deque[tuple[float, bytes | bytearray, float]] = deque()
 
     def window_drops(self) -> int:
         """Frames the event timer promised in the current window that never arrived."""
@@ -240,7 +240,8 @@ class LiveStreams:
         if s is None:
             return
         inbox = s.inbox
-        inbox.append((timestamp or time.time(), bytes(data), time.monotonic()))
+        inbox.append((timestamp or time.time(), data, time.monotonic()))  # no copy: each
+        # frame's data is its own (python-can's Message, the hub client's direct path)
         if len(inbox) >= BATCH:
             with self._lock:
                 self._decode(s)
@@ -367,6 +368,7 @@ class LiveStreams:
         candidates = [snap for snap in snaps.values() if any(w in snap[1] for w in wanted)]
         base_t = max(candidates, key=lambda snap: len(snap[0]))[0] if candidates else np.zeros(0)
         out: dict[str, np.ndarray] = {"t": base_t}
+        held: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # per time base: (index, before)
         for name in wanted:
             for t, vals in snaps.values():
                 if name in vals:
@@ -376,8 +378,12 @@ class LiveStreams:
                     elif len(t) == 0:
                         out[name] = np.full(len(base_t), np.nan)
                     else:
-                        j = np.searchsorted(t, base_t, side="right") - 1
-                        res = np.where(j >= 0, v[np.clip(j, 0, None)], np.nan)
+                        if id(t) not in held:  # once per stream, not per signal
+                            j = np.searchsorted(t, base_t, side="right") - 1
+                            held[id(t)] = (np.maximum(j, 0), j < 0)
+                        j0, before = held[id(t)]
+                        res = v[j0]
+                        res[before] = np.nan
                         out[name] = res
                     break
         return out
