@@ -34,6 +34,7 @@ def install_fast_cast() -> None:
     cls = api.AssignablePropsBase
     if getattr(cls._cast_value_recursive, "_dashboard_fast", False):
         return
+    original = cls._cast_value_recursive
     colors_to_uint8 = api.colors_to_uint8
 
     def cast(self: Any, hint: Any, value: Any, prop_name: str) -> Any:
@@ -60,4 +61,5 @@ def install_fast_cast() -> None:
         return value
 
     cast._dashboard_fast = True  # type: ignore[attr-defined]
+    cast._dashboard_original = original  # type: ignore[attr-defined]  # viser's, for tests
     cls._cast_value_recursive = cast  # type: ignore[method-assign]
