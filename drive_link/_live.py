@@ -271,8 +271,9 @@ class LiveStreams:
         if s.dtype is not None:
             raw = b"".join(f[1] if len(f[1]) == need else f[1][:need] for f in good)
             rec = np.frombuffer(raw, dtype=s.dtype, count=m)
-            for key, fld in s.decoded:
-                s.values[fld.name][idx] = rec[key]
+            with np.errstate(invalid="ignore"):  # a signalling NaN stays NaN, as in struct
+                for key, fld in s.decoded:
+                    s.values[fld.name][idx] = rec[key]
         else:  # a format numpy does not read: one frame at a time
             for _key, fld in s.decoded:
                 off = fld.offset // 8
