@@ -12,6 +12,7 @@ test holds on a busy host (load 5–25 on 2 cores) and still fails when the prod
 from __future__ import annotations
 
 import os
+import re
 import time
 from pathlib import Path
 
@@ -95,6 +96,15 @@ def min_rate(nominal_hz: float, wait: float, margin: float = 0.9) -> float:
     """Lowest acceptable rate of a ``nominal_hz`` stream from a process kept waiting ``wait``
     s/s by the kernel: ``margin × nominal × (1 − wait)`` (Hz)."""
     return margin * nominal_hz * max(0.0, 1.0 - wait)
+
+
+def heartbeat_explained(detail: str, wait: float) -> bool:
+    """True when a failed ``check`` heartbeat item (``"heartbeat period M ms, expected P ms"``)
+    is explained by a run-queue wait of ``wait`` s/s: the heartbeat rate 1/M is at least
+    :func:`min_rate` of 1/P with margin 0.9 (an idle host explains nothing the check's own
+    25 % tolerance did not already accept)."""
+    m = re.fullmatch(r"heartbeat period ([\d.]+) ms, expected (\d+) ms", detail)
+    return m is not None and 1000.0 / float(m[1]) >= min_rate(1000.0 / int(m[2]), wait, 0.9)
 
 
 # --------------------------------------------------------------------------------------------

@@ -21,6 +21,7 @@ Registered as python-can interface ``vdhub`` (entry point ``can.interface``), so
 from __future__ import annotations
 
 import logging
+import os
 import select
 import socket
 import threading
@@ -129,7 +130,10 @@ class HubBus(can.BusABC):
     def _probe_features(self, timeout: float) -> bool:
         """Ask ``< features >`` (before rawmode, so no frame can come first): True when the
         server is the loopback hub and takes ``< sendat ... >``; a socketcand daemon answers
-        ``< error ... >`` (or nothing): plain sends."""
+        ``< error ... >`` (or nothing): plain sends. ``VIRTUAL_DRIVE_SENDAT=0`` in the
+        environment keeps plain sends (and the drive's 1 ms ticks) on the hub too."""
+        if os.environ.get("VIRTUAL_DRIVE_SENDAT", "1") == "0":
+            return False
         self._sock.sendall(b"< features >")
         try:
             words = self._expect("features", timeout, strict=False)
