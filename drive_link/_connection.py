@@ -241,7 +241,10 @@ def direct_dispatcher(
             notify(can_id, bytearray(data), stamp)  # canopen's callbacks get a bytearray
         except Exception as exc:  # as canopen's MessageListener: a callback's error is logged
             log.error(str(exc))
-        count(can_id, data, is_extended)
+        try:
+            count(can_id, data, is_extended)
+        except Exception as exc:  # never into the bus's receive call (the Notifier would die)
+            log.error("bus monitor: %s", exc)
 
     return on_frame
 
