@@ -36,12 +36,27 @@ def decimate(
     starts = np.flatnonzero(new_bucket)
     ends = np.append(starts[1:], n)
     keep = [np.array([0, n - 1]), ends - 1]
-    seg = np.repeat(np.arange(len(starts)), ends - starts)
+    lengths = ends - starts
+    width = int(lengths.max())
+    grid = pad = seg = None
+    if width * len(starts) <= 2 * n:  # buckets of similar length: one padded row each
+        grid = starts[:, None] + np.arange(width)
+        pad = grid >= ends[:, None]
+        np.minimum(grid, n - 1, out=grid)
+    else:
+        seg = np.repeat(np.arange(len(starts)), lengths)
     for c in cols:
         ok = np.isfinite(c)
         finite = c if ok.all() else np.where(ok, c, np.nanmean(c) if ok.any() else 0.0)
-        keep.append(starts + _argext(finite, starts, seg, np.minimum))
-        keep.append(starts + _argext(finite, starts, seg, np.maximum))
+        if grid is not None:  # argmin/argmax give the first extremum of each row
+            rows = finite[grid]
+            rows[pad] = np.inf
+            keep.append(starts + rows.argmin(axis=1))
+            rows[pad] = -np.inf
+            keep.append(starts + rows.argmax(axis=1))
+        else:
+            keep.append(starts + _argext(finite, starts, seg, np.minimum))
+            keep.append(starts + _argext(finite, starts, seg, np.maximum))
     mask = np.zeros(n, dtype=bool)  # sorted and unique, without np.unique's sort
     mask[np.concatenate(keep)] = True
     idx = np.flatnonzero(mask)
