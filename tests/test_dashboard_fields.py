@@ -64,6 +64,42 @@ def test_decimate_keeps_extremes_and_newest():
     assert np.all(np.diff(td) > 0)
 
 
+def _decimate_by_loops(t, cols, buckets):
+    """The oracle: bucket by bucket in Python, the first min and max of each series, each
+    bucket's last sample, the first and the last sample."""
+    n = len(t)
+    edges = np.linspace(t[0], t[-1], buckets + 1)
+    b = np.clip(np.searchsorted(edges, t, side="right") - 1, 0, buckets - 1)
+    keep = {0, n - 1}
+    start = 0
+    for i in range(1, n + 1):
+        if i == n or b[i] != b[start]:
+            keep.add(i - 1)
+            for c in cols:
+                ok = np.isfinite(c)
+                fill = np.nanmean(c) if ok.any() else 0.0
+                seg = np.where(ok[start:i], c[start:i], fill)
+                keep.update((start + int(np.argmin(seg)), start + int(np.argmax(seg))))
+            start = i
+    idx = np.array(sorted(keep))
+    return t[idx], [c[idx] for c in cols]
+
+
+@pytest.mark.parametrize("spacing", ["even", "gaps"])  # the 2D path and the segment path
+def test_decimate_equals_a_bucket_by_bucket_oracle(spacing):
+    rng = np.random.default_rng(4)
+    n = 4000
+    step = np.full(n, 1e-3) if spacing == "even" else np.where(rng.random(n) < 0.02, 0.3, 1e-3)
+    t = np.cumsum(step)
+    cols = [np.round(rng.normal(size=n), 1), np.where(t > t[-1] / 2, 5.0, 0.0), rng.normal(size=n)]
+    cols[2][rng.random(n) < 0.05] = np.nan
+    td, cd = decimate(t, cols, buckets=80)
+    to, co = _decimate_by_loops(t, cols, 80)
+    np.testing.assert_array_equal(td, to)
+    for got, want in zip(cd, co, strict=True):
+        np.testing.assert_array_equal(got, want)
+
+
 def test_freshness_text():
     assert freshness_text(0.04) == (False, "live · data 40 ms old")
     stale, txt = freshness_text(3.2)
