@@ -560,25 +560,7 @@ class Hub:
         self, client: _Client, frames: list[tuple[int, bytes, bool]], now: float
     ) -> None:
         """Queue ``frames`` (id, data, is_extended) of ``client`` for the bus, arrived ``now``."""
-        queue = client.queue
-        if not queue:
-            client.bus.senders.append(client)
-        seq = self._seq
-        for can_id, data, ext in frames:
-            seq += 1
-            queue.append(
-                (
-                    now,
-                    arbitration_key(can_id, ext),
-                    seq,
-                    can_id,
-                    data,
-                    ext,
-                    frame_bits_fast(can_id, data, ext),
-                )
-            )
-        self._seq = seq
-        self._n_received += len(frames)
+        self._queue(client, [(now, can_id, data, ext) for can_id, data, ext in frames])
 
     def _enqueue_timed(
         self, client: _Client, frames: list[tuple[float, int, bytes, bool]], now: float
@@ -590,21 +572,29 @@ class Hub:
         hold it back: it starts when the bus is free, as a CAN controller's other transmit
         mailbox would."""
         queue = client.queue
-        if not queue:
-            client.bus.senders.append(client)
-            lo = now - self.max_backdate_s
-        else:
-            lo = max(queue[-1][0], now - self.max_backdate_s)
-        seq = self._seq
+        lo = now - self.max_backdate_s
+        if queue and queue[-1][0] > lo:
+            lo = queue[-1][0]
         mono_offset = self._mono0 - self._wall0
+        timed = []
         for stamp, can_id, data, ext in frames:
-            seq += 1
             arrival = stamp + mono_offset
             if arrival < lo:
                 arrival = lo
             elif arrival > now:
                 arrival = now
             lo = arrival
+            timed.append((arrival, can_id, data, ext))
+        self._queue(client, timed)
+
+    def _queue(self, client: _Client, frames: list[tuple[float, int, bytes, bool]]) -> None:
+        """Append ``(arrival, id, data, is_extended)`` to ``client``'s queue for the bus."""
+        queue = client.queue
+        if not queue:
+            client.bus.senders.append(client)
+        seq = self._seq
+        for arrival, can_id, data, ext in frames:
+            seq += 1
             queue.append(
                 (
                     arrival,

@@ -218,35 +218,43 @@ _SEND_ELEMENT = re.compile(
 _BYTE_VALUES = {w.encode(): v for w, v in _BYTE_WORDS.items()}
 
 
+def _scan(
+    pattern: re.Pattern, chunk: bytes
+) -> tuple[list[tuple[re.Match, int, bytes, bool]], int]:
+    """The leading matches of ``pattern`` in ``chunk`` (its last three groups: id, length,
+    bytes) as ``(match, id, data, is_extended)``, and how many bytes they took; stops at the
+    first element that does not match, or has an id out of range or a length that differs from
+    its bytes."""
+    found: list[tuple[re.Match, int, bytes, bool]] = []
+    pos = 0
+    match = pattern.match
+    get = _BYTE_VALUES.__getitem__
+    last = pattern.groups
+    while True:
+        m = match(chunk, pos)
+        if m is None:
+            break
+        id_word, length, byte_words = m.group(last - 2, last - 1, last)
+        can_id = int(id_word, 16)
+        data = bytes(map(get, byte_words.split()))
+        if len(data) != int(length):
+            break
+        ext = len(id_word) == 8
+        if can_id > (0x1FFFFFFF if ext else 0x7FF):
+            break
+        found.append((m, can_id, data, ext))
+        pos = m.end()
+    return found, pos
+
+
 def scan_sends(chunk: bytes) -> tuple[list[tuple[int, bytes, bool]], int]:
     """The leading well-formed ``send`` elements of ``chunk`` as ``(id, data, is_extended)``,
     and how many bytes they took. Stops at the first element that is anything else (or has an
     id out of range, or a length that differs from its bytes): the caller hands the rest to
     :class:`CommandSplitter` and :func:`parse_send`, which give the precise answer. The hub's
     fast path for the frames python-can sends."""
-    frames: list[tuple[int, bytes, bool]] = []
-    pos = 0
-    match = _SEND_ELEMENT.match
-    get = _BYTE_VALUES.__getitem__
-    while True:
-        m = match(chunk, pos)
-        if m is None:
-            break
-        id_word, length, byte_words = m.groups()
-        can_id = int(id_word, 16)
-        data = bytes(map(get, byte_words.split()))
-        if len(data) != int(length):
-            break
-        if len(id_word) == 3:
-            if can_id > 0x7FF:
-                break
-            frames.append((can_id, data, False))
-        else:
-            if can_id > 0x1FFFFFFF:
-                break
-            frames.append((can_id, data, True))
-        pos = m.end()
-    return frames, pos
+    found, pos = _scan(_SEND_ELEMENT, chunk)
+    return [(can_id, data, ext) for _, can_id, data, ext in found], pos
 
 
 _SENDAT_ELEMENT = re.compile(
@@ -259,24 +267,8 @@ def scan_sendats(chunk: bytes) -> tuple[list[tuple[float, int, bytes, bool]], in
     """The leading well-formed ``sendat`` elements of ``chunk`` as ``(unix_time_s, id, data,
     is_extended)``, and how many bytes they took; stops like :func:`scan_sends` at the first
     element that is anything else (the caller's full path gives the precise answer)."""
-    frames: list[tuple[float, int, bytes, bool]] = []
-    pos = 0
-    match = _SENDAT_ELEMENT.match
-    get = _BYTE_VALUES.__getitem__
-    while True:
-        m = match(chunk, pos)
-        if m is None:
-            break
-        secs, usecs, id_word, length, byte_words = m.groups()
-        can_id = int(id_word, 16)
-        data = bytes(map(get, byte_words.split()))
-        if len(data) != int(length):
-            break
-        ext = len(id_word) == 8
-        if can_id > (0x1FFFFFFF if ext else 0x7FF):
-            break
-        frames.append((int(secs) + int(usecs) * 1e-6, can_id, data, ext))
-        pos = m.end()
+    found, pos = _scan(_SENDAT_ELEMENT, chunk)
+    frames = [(int(m[1]) + int(m[2]) * 1e-6, i, data, ext) for m, i, data, ext in found]
     return frames, pos
 
 

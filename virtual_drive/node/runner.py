@@ -180,9 +180,6 @@ class Runner:
         """Run ``n`` samples in pieces that end at the due points of :attr:`timer_at` up to
         ``now``; the timer runs at each (its frames carry that time), and once more at the
         end (a reconfigured TPDO is seen within one tick)."""
-        timer_at = self.timer_at
-        step = self._step
-        stats = self.stats
         scale = self.speed / TS
         t0 = self._t0
         end = self._done + n
@@ -196,32 +193,31 @@ class Runner:
             k = math.ceil((due - t0) * scale - 1e-9)  # the sample that reaches `due`
             if k > end:
                 break  # (catching up: the rest of the backlog comes in the next chunks)
-            m = k - self._done
-            if m > 0:
-                step(m)
-                self._done = k
-                stats.samples += m
-                if m > stats.max_chunk:
-                    stats.max_chunk = m
-            try:
-                self._timer_due = timer_at(due)  # type: ignore[misc]
-            except Exception:  # the timer never dies: log, retry in 10 ms
-                logger.exception("pacer timer")
-                self._timer_due = now + 0.01
-        m = end - self._done
+            self._run_to(k)
+            self._run_timer_at(due, now)
+        self._run_to(end)
+        # where the simulation stands now: sees a reconfigured TPDO within one tick
+        self._run_timer_at(t0 + end / scale, now)
+        if self._flush is not None:
+            self._flush()  # the tick's frames in one write
+
+    def _run_to(self, k: int) -> None:
+        """Run the samples up to sample ``k`` (counted from the start) in one step."""
+        m = k - self._done
         if m > 0:
-            step(m)
-            self._done = end
+            self._step(m)
+            self._done = k
+            stats = self.stats
             stats.samples += m
             if m > stats.max_chunk:
                 stats.max_chunk = m
-        try:  # where the simulation stands now: sees a reconfigured TPDO within one tick
-            self._timer_due = timer_at(t0 + end / scale)
-        except Exception:
+
+    def _run_timer_at(self, at: float, now: float) -> None:
+        try:
+            self._timer_due = self.timer_at(at)  # type: ignore[misc]
+        except Exception:  # the timer never dies: log, retry in 10 ms
             logger.exception("pacer timer")
             self._timer_due = now + 0.01
-        if self._flush is not None:
-            self._flush()  # the tick's frames in one write
 
     def _behind(self, now: float) -> bool:
         """More than one chunk of backlog (catch-up: no sleeping)."""
