@@ -64,6 +64,7 @@ def _error(message: str, code: int) -> int:
 
 def run_hub_command(args: argparse.Namespace) -> int:
     """Run the hub (and the ``--nodes`` drives) until SIGINT/SIGTERM; returns the exit code."""
+    from virtual_drive.bus_load import overload_warning
     from virtual_drive.launch import parse_nodes, virtual_bench
 
     faults = {
@@ -99,6 +100,9 @@ def run_hub_command(args: argparse.Namespace) -> int:
             print(hub.join_line(args.channel), flush=True)
             for n, proc in bench.drives.items():
                 print(f"virtual-drive: node {n} ready (pid {proc.pid})", flush=True)
+            warning = overload_warning(len(nodes), args.bitrate) if nodes else None
+            if warning is not None:
+                print(f"virtual-drive hub: {warning}", file=sys.stderr, flush=True)
             while not stop.wait(0.2):
                 if not hub.running:
                     return _error("hub thread stopped", 1)
