@@ -52,16 +52,23 @@ def format_send(cob_id: int, data: bytes, is_extended: bool = False) -> bytes:
 _WALL_OFFSET = time.time() - time.monotonic()
 
 
+def _sendat_head(at: float) -> bytes:
+    """``b"< sendat <secs>.<usecs> "`` for frames ready at ``at`` (``time.monotonic()`` s)."""
+    usecs = round((at + _WALL_OFFSET) * 1e6)
+    return b"< sendat %d.%06d " % (usecs // 1_000_000, usecs % 1_000_000)
+
+
+def _sendat_tail(cob_id: int, data: bytes, is_extended: bool = False) -> bytes:
+    """``b"<id> <len> <b0> ... >"``: the rest of a ``sendat`` element (no data: ``"<id> 0  >"``,
+    as python-can writes an empty ``send``)."""
+    ident = b"%08X" % cob_id if is_extended else b"%03X" % cob_id
+    return b"%s %X %s >" % (ident, len(data), data.hex(" ").encode())
+
+
 def format_sendat(at: float, cob_id: int, data: bytes, is_extended: bool = False) -> bytes:
     """``< sendat <secs>.<usecs> <id> <len> <b0> ... >`` for a frame ready at ``at``
     (``time.monotonic()`` seconds) — the loopback hub's element (:mod:`hub_protocol`)."""
-    usecs = round((at + _WALL_OFFSET) * 1e6)
-    ident = b"%08X" % cob_id if is_extended else b"%03X" % cob_id
-    if data:
-        return b"< sendat %d.%06d %s %X %s >" % (
-            usecs // 1_000_000, usecs % 1_000_000, ident, len(data), data.hex(" ").encode()
-        )
-    return b"< sendat %d.%06d %s 0 >" % (usecs // 1_000_000, usecs % 1_000_000, ident)
+    return _sendat_head(at) + _sendat_tail(cob_id, data, is_extended)
 
 
 class HubBus(can.BusABC):
@@ -183,19 +190,15 @@ class HubBus(can.BusABC):
             ignored and they are sent now.
         """
         if at is not None and self.timed_sends:
-            usecs = round((at + _WALL_OFFSET) * 1e6)  # format_sendat inlined, one time stamp
-            head = b"< sendat %d.%06d " % (usecs // 1_000_000, usecs % 1_000_000)
-            held = self._held
-            for cob_id, data in frames:
-                held.append(head + b"%03X %X %s >" % (cob_id, len(data), data.hex(" ").encode()))
+            head = _sendat_head(at)  # one time stamp for the batch
+            self._held.extend(head + _sendat_tail(cob_id, data) for cob_id, data in frames)
             return len(frames)
-        else:
-            lines = [
-                b"< send %03X %X %s >" % (cob_id, len(data), data.hex(" ").encode())
-                if data
-                else b"< send %03X 0 >" % cob_id
-                for cob_id, data in frames
-            ]  # format_send inlined (the pacing loop's path)
+        lines = [
+            b"< send %03X %X %s >" % (cob_id, len(data), data.hex(" ").encode())
+            if data
+            else b"< send %03X 0 >" % cob_id
+            for cob_id, data in frames
+        ]  # format_send inlined (the pacing loop's path)
         if lines:
             with self._send_lock:
                 self._sock.sendall(b"".join(lines))
@@ -392,7 +395,8 @@ class HubConnection:
         self, src: HubPort, frames: list[tuple[int, bytes, bool]], at: float | None = None
     ) -> None:
         if at is not None and self._bus.timed_sends:
-            lines = [format_sendat(at, cob_id, data, ext) for cob_id, data, ext in frames]
+            head = _sendat_head(at)
+            lines = [head + _sendat_tail(cob_id, data, ext) for cob_id, data, ext in frames]
         else:
             lines = [format_send(cob_id, data, ext) for cob_id, data, ext in frames]
         if threading.get_ident() == self._batch_ident:

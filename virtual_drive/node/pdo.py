@@ -458,8 +458,5 @@ class PdoEngine:
                 frames.append((t.cob_id, payload))
                 t.last_sent = now
         if frames:
-            if stamped:
-                self._send_many(frames, now)
-            else:
-                self._send_many(frames)
+            self._send_many(frames, now if stamped else None)
             self.sent += len(frames)

@@ -25,7 +25,6 @@ logger = logging.getLogger(__name__)
 def make_send_many(drive: Any) -> Callable[..., None]:
     """``send_many(frames, at=None)`` for ``drive`` (a VirtualDrive: ``bus``, ``_send``,
     ``_send_lock``, ``tx_errors``, ``last_tx_ok``); never raises."""
-    timed = bool(getattr(drive.bus, "timed_sends", False))
 
     def send_many(frames: list[tuple[int, bytes]], at: float | None = None) -> None:
         bus_send_many = getattr(drive.bus, "send_many", None)
@@ -35,10 +34,10 @@ def make_send_many(drive: Any) -> Callable[..., None]:
             return
         try:
             with drive._send_lock:
-                if timed and at is not None:
-                    bus_send_many(frames, at)
-                else:
+                if at is None:
                     bus_send_many(frames)
+                else:  # (the bus sends them now if it cannot say when they were due)
+                    bus_send_many(frames, at)
             drive.last_tx_ok = time.monotonic()
         except (can.CanError, OSError) as exc:
             drive.tx_errors += len(frames)
