@@ -11,6 +11,7 @@ python-can's own ``socketcand`` interface, which takes the hub's frame times as 
 from __future__ import annotations
 
 import itertools
+import math
 import socket
 import statistics
 import struct
@@ -232,3 +233,106 @@ def test_batched_drive_sends_each_tpdo_on_its_own_ms_with_its_own_value():
     assert statistics.median(steps) == pytest.approx(1.0, abs=0.1)
     slope = (refs[-1] - refs[0]) / (stamps[-1] - stamps[0])
     assert slope == pytest.approx(1000.0, rel=0.05)
+
+
+def test_batched_drive_runs_a_steady_tick_in_one_call_with_each_ms_its_own_value():
+    """With its setpoint steady (mode -1, i_p* = 15 A from standstill) the drive runs each
+    5 ms tick in one simulator call, yet TPDO2's speed on the bus moves every 1 ms as the
+    shaft equation says: J dw/dt = K_t i_p - B w - k_gen n - T_load (K_t = K_rpm 60/(2 pi),
+    parameters as the object dictionary gives them)."""
+    from virtual_drive.node import VirtualDrive
+
+    with Hub(port=0, bitrate=1_000_000) as hub:
+        bus = HubBus(channel="vcan0", host="127.0.0.1", port=hub.port)
+        drive = VirtualDrive(bus, node_id=1)
+        bus.rx_wanted = drive.network.subscribers
+        rx = can.Bus(
+            interface="socketcand", host="127.0.0.1", port=hub.port, channel="vcan0",
+            tcp_tune=True,
+        )
+        frames = _Frames()
+        notifier = can.Notifier(rx, [frames])
+        drive.start()
+        try:
+            node = drive.node
+            view = drive.view
+            J, B, k_gen, T_load, K_rpm = (
+                node.stored(view.entry(name).index, view.entry(name).subindex)
+                for name in (
+                    "sim_load.J", "sim_load.B", "sim_load.k_gen", "sim_load.T_load", "motor.K_rpm"
+                )
+            )
+            drive.nmt.command(0x01)
+            node.set_data(0x6060, 0, struct.pack("<b", -1))
+            node.set_data(0x2030, 1, struct.pack("<f", 15.0))
+            n0 = len(frames.msgs)
+            for cw in (0x06, 0x07, 0x0F):
+                node.set_data(0x6040, 0, struct.pack("<H", cw))
+            time.sleep(0.3)
+            chunk0 = drive.runner.stats.max_chunk
+            time.sleep(0.5)
+            window = frames.msgs[n0:]
+        finally:
+            notifier.stop()
+            rx.shutdown()
+            drive.stop()
+            bus.shutdown()
+    # whole ticks in one call (pieces ending at each 1 ms due point are <= 50 samples)
+    assert chunk0 >= 200, chunk0
+    tpdo2 = [m for m in window if m.arbitration_id == 0x281]
+    values = [struct.unpack("<ff", bytes(m.data)) for m in tpdo2]
+    moving = [(m.timestamp, i_p, n) for m, (i_p, n) in zip(tpdo2, values, strict=True) if n > 1.0]
+    assert len(moving) >= 300, len(moving)
+    K_t = K_rpm * 60.0 / (2.0 * math.pi)  # N m/A
+    rad = 2.0 * math.pi / 60.0
+    predicted = 0.0  # rpm: the shaft equation integrated over the received frames
+    for (t0, i0, n0_), (t1, _i1, _n1) in itertools.pairwise(moving):
+        torque = K_t * i0 - B * n0_ * rad - k_gen * n0_ - T_load
+        predicted += torque / J / rad * (t1 - t0)
+    gained = moving[-1][2] - moving[0][2]
+    assert gained == pytest.approx(predicted, rel=0.05)
+    steps = [b[2] - a[2] for a, b in itertools.pairwise(moving)]
+    # each 1 ms frame carries the speed of its own instant: no staircase of repeated values
+    assert sum(s <= 0.0 for s in steps) <= 0.02 * len(steps), steps[:20]
+    assert statistics.median(i for _, i, _ in moving) == pytest.approx(15.0, abs=0.5)
+
+
+def test_batched_drive_keeps_an_inhibit_time_on_the_bus():
+    """CiA 301 §7.5.2.37: TPDO2 with a 1 ms event timer and a 2 ms inhibit time (sub 3 =
+    20 x 100 us) is on the bus every 2 ms, never closer, when the drive plans a whole 5 ms
+    tick's TPDOs at once."""
+    from virtual_drive.node import VirtualDrive
+
+    with Hub(port=0, bitrate=1_000_000) as hub:
+        bus = HubBus(channel="vcan0", host="127.0.0.1", port=hub.port)
+        drive = VirtualDrive(bus, node_id=1)
+        bus.rx_wanted = drive.network.subscribers
+        rx = can.Bus(
+            interface="socketcand", host="127.0.0.1", port=hub.port, channel="vcan0",
+            tcp_tune=True,
+        )
+        frames = _Frames()
+        notifier = can.Notifier(rx, [frames])
+        drive.start()
+        try:
+            node = drive.node
+            node.set_data(0x1801, 1, struct.pack("<I", 0x80000281))
+            node.set_data(0x1801, 3, struct.pack("<H", 20))
+            node.set_data(0x1801, 1, struct.pack("<I", 0x281))
+            drive.nmt.command(0x01)
+            time.sleep(0.2)
+            n0 = len(frames.msgs)
+            time.sleep(0.6)
+            window = frames.msgs[n0:]
+        finally:
+            notifier.stop()
+            rx.shutdown()
+            drive.stop()
+            bus.shutdown()
+    stamps = [m.timestamp for m in window if m.arbitration_id == 0x281]
+    gaps = [b - a for a, b in itertools.pairwise(stamps)]
+    assert len(stamps) >= 200, len(stamps)
+    # the bus time of each frame is its due time plus its arbitration (a frame ahead of it
+    # may delay it by up to one frame time, 135 us, which the next gap gives back)
+    assert min(gaps) >= 2.0e-3 - 0.14e-3, min(gaps)
+    assert statistics.median(gaps) == pytest.approx(2.0e-3, abs=0.05e-3)

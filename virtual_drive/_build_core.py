@@ -72,6 +72,7 @@ int plant_hall_sector(double theta_e);
 void loop_init(loop_t *L);
 void loop_update_mech(loop_t *L);
 int loop_run(loop_t *L, int n, float **sig, double *t_out);
+int loop_run_points(loop_t *L, int n, const int *at, int n_at, float *snap);
 void loop_reset_fault(loop_t *L);
 """
 

@@ -433,3 +433,22 @@ int loop_run(loop_t *L, int n, float **sig, double *t_out)
     }
     return n;
 }
+
+int loop_run_points(loop_t *L, int n, const int *at, int n_at, float *snap)
+{
+    int done = 0, j, x;
+    for (j = 0; j < n_at; ++j) {
+        int a = (at[j] < n) ? at[j] : n;
+        if (a > done) {
+            loop_run(L, a - done, NULL, NULL);
+            done = a;
+        }
+        for (x = 0; x < LOOP_NSIG; ++x) {
+            snap[j * LOOP_NSIG + x] = L->last[x];
+        }
+    }
+    if (n > done) {
+        loop_run(L, n - done, NULL, NULL);
+    }
+    return n;
+}

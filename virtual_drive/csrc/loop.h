@@ -97,6 +97,12 @@ void loop_update_mech(loop_t *L);
  * or point to n doubles.  Returns the number of samples run (n). */
 int loop_run(loop_t *L, int n, float **sig, double *t_out);
 
+/* Run n samples in one call (no record) and copy the LOOP_NSIG latest values (L->last) into
+ * snap + LOOP_NSIG * j once at[j] samples have run, for j < n_at (0 <= at[0] <= at[1] <= ...;
+ * an at[j] > n counts as n): the values of the instants a pacing tick's TPDOs are due at,
+ * without a call per instant.  Returns n. */
+int loop_run_points(loop_t *L, int n, const int *at, int n_at, float *snap);
+
 void loop_reset_fault(loop_t *L);
 
 #endif

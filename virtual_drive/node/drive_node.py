@@ -48,6 +48,7 @@ from canopen import objectdictionary as odm
 from firmware_protocol import abort_codes
 from firmware_protocol.enums import StoreStatus
 from firmware_protocol.od import load_od
+from virtual_drive.sim.signals import SIGNALS
 
 from . import communication, parameters, ramps, resets, statusword, storage, writes
 from .cia402 import Cia402StateMachine
@@ -75,7 +76,7 @@ from .params import ParamChecker
 from .pdo import PdoEngine
 from .reads import make_live_getters
 from .recorder import ARMED, RECORDING, TraceRecorder
-from .runner import Runner
+from .runner import TS, Runner
 from .sdo_block import BlockSdoServer
 from .tx import make_send_many
 
@@ -215,6 +216,8 @@ class VirtualDrive:
             timer=self.pdo.tick,
             timer_at=self.pdo.tick_at if self.timed_sends else None,
             flush=self._flush_timed if self.timed_sends else None,
+            step_timed=self._step_timed if self.timed_sends else None,
+            due_times=self.pdo.due_times,
         )
         self._live_getters = make_live_getters(self)
         # control state (touched by the runner between chunks)
@@ -231,6 +234,8 @@ class VirtualDrive:
         self._last_fault = None
         self._started = False
         self._reset_deferred_at: float | None = None  # sim time of a deferred reset node
+        #: sim time (s) of the TPDO instant a timed tick is at (None: the simulator's clock)
+        self._t_point: float | None = None
         if self.store_path is not None:
             storage.remove_stale_temps(self.store_path)  # left by a kill during a store
         self._load_parameters()
@@ -417,17 +422,66 @@ class VirtualDrive:
                 live[name] = float(rec[name][-1])
         statusword.update_windows(self)
         if fault is not None and fault != self._last_fault:
-            self._last_fault = fault
-            recorder.note_fault(float(fault.t))
-            self.emcy.raise_error(int(fault.code))
-            self.cia402.fault(int(fault.code), tripped=True)
-            with self.sim_lock:
-                ramps.set_sim_mode(self, "off")
+            self._on_trip(fault)
         if need_rec:
             setpoint = "speed_ref" if self._mode == MODE_PROFILE_VELOCITY else "i_p_ref"
             recorder.feed(rec, setpoint=setpoint)
             for tap in self.taps:
                 tap(rec)
+
+    def _step_timed(self, n: int, at: list[int], at_point: Callable[[int], None]) -> bool:
+        """A timed tick's ``n`` samples in one simulator call (runner thread): the live values
+        are those of the instant ``at[j]`` samples in when ``at_point(j)`` runs (it sends the
+        TPDOs due then), and the velocity windows and a trip are seen at those instants, as
+        :meth:`_step_chunk` pieces ending there would see them. Returns False (nothing done)
+        while that cannot be: a setpoint ramps (:func:`ramps.ramping`: it moves every
+        piece), the recorder or a tap needs the full-rate arrays, or the simulator has no
+        ``run_points``."""
+        run_points = getattr(self.sim, "run_points", None)
+        if (
+            run_points is None
+            or self.taps
+            or self.recorder.state in (ARMED, RECORDING)
+            or ramps.ramping(self)
+        ):
+            return False
+        with self.sim_lock:
+            ramps.prepare_chunk(self, n)
+            t0 = float(self.sim.time)
+            rows = run_points(n, at)
+            fault = self.sim.fault
+        if fault is not None and fault == self._last_fault:
+            fault = None  # (seen before)
+        live = self.live
+        # the velocity window / threshold timers only show in profile velocity (bits 10, 12):
+        # in the other modes they follow at the end of the tick
+        windows = self._mode == MODE_PROFILE_VELOCITY
+        try:
+            for j, k in enumerate(at):
+                t = self._t_point = t0 + min(k, n) * TS
+                if fault is not None and t > fault.t:
+                    self._on_trip(fault)  # from its own sample on, as a 1-sample piece would
+                    fault = None
+                live.update(zip(SIGNALS, rows[j], strict=True))
+                if windows:
+                    statusword.update_windows(self)
+                at_point(j)
+        finally:
+            self._t_point = None
+        live.update(zip(SIGNALS, rows[-1], strict=True))
+        statusword.update_windows(self)
+        if fault is not None:
+            self._on_trip(fault)
+        return True
+
+    def _on_trip(self, fault: Any) -> None:
+        """A new trip of the simulator: recorder mark, EMCY, CiA 402 FAULT, bridge off."""
+        self._last_fault = fault
+        self.recorder.note_fault(float(fault.t))
+        self.emcy.raise_error(int(fault.code))
+        self.cia402.fault(int(fault.code), tripped=True)
+        with self.sim_lock:
+            ramps.set_sim_mode(self, "off")
 
     def _periodic(self, now: float) -> None:
         if self._reset_deferred_at is not None:

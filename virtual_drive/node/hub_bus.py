@@ -65,6 +65,35 @@ def _sendat_tail(cob_id: int, data: bytes, is_extended: bool = False) -> bytes:
     return b"%s %X %s >" % (ident, len(data), data.hex(" ").encode())
 
 
+def format_sendat_batch(at: float, frames: list[tuple[int, bytes]]) -> bytes:
+    """The ``< sendat >`` elements of standard frames ``(cob_id, data)`` ready at ``at``
+    (``time.monotonic()`` s), one time stamp for all, as one bytes."""
+    head = _sendat_head(at)
+    return b"".join([head + _sendat_tail(cob_id, data) for cob_id, data in frames])
+
+
+def _format_held(
+    held: list[tuple[float, list[tuple[int, bytes]]]], prefixes: dict[tuple[int, int], bytes]
+) -> bytes:
+    """:func:`format_sendat_batch` of every batch in ``held`` as one bytes (the flush of a
+    tick), with ``b"<id> <len> "`` kept per (id, len) in ``prefixes``: a drive sends the same
+    few TPDOs every tick, so this is the time stamp, the data's hex and four joins a frame."""
+    out: list[bytes] = []
+    add = out.append
+    for at, frames in held:
+        head = _sendat_head(at)
+        for cob_id, data in frames:
+            key = (cob_id, len(data))
+            prefix = prefixes.get(key)
+            if prefix is None:
+                prefix = prefixes[key] = b"%03X %X " % key
+            add(head)
+            add(prefix)
+            add(data.hex(" ").encode() if data else b"")
+            add(b" >")
+    return b"".join(out)
+
+
 def format_sendat(at: float, cob_id: int, data: bytes, is_extended: bool = False) -> bytes:
     """``< sendat <secs>.<usecs> <id> <len> <b0> ... >`` for a frame ready at ``at``
     (``time.monotonic()`` seconds) — the loopback hub's element (:mod:`hub_protocol`)."""
@@ -98,7 +127,9 @@ class HubBus(can.BusABC):
         self._buf = b""
         self._queue: deque[can.Message] = deque()
         self._send_lock = threading.Lock()
-        self._held: list[bytes] = []  #: timed frames waiting for flush()
+        #: timed frames waiting for flush(): (ready time, frames) per send_many call
+        self._held: list[tuple[float, list[tuple[int, bytes]]]] = []
+        self._prefixes: dict[tuple[int, int], bytes] = {}  #: b"<id> <len> " per (id, len)
         self._eof = False
         #: CAN-IDs to deliver (None: all). Consulted per frame, so a live dict works.
         self.rx_wanted: Container[int] | None = None
@@ -190,8 +221,7 @@ class HubBus(can.BusABC):
             ignored and they are sent now.
         """
         if at is not None and self.timed_sends:
-            head = _sendat_head(at)  # one time stamp for the batch
-            self._held.extend(head + _sendat_tail(cob_id, data) for cob_id, data in frames)
+            self._held.append((at, frames))  # (formatted in flush: one pass per tick)
             return len(frames)
         lines = [
             b"< send %03X %X %s >" % (cob_id, len(data), data.hex(" ").encode())
@@ -208,8 +238,9 @@ class HubBus(can.BusABC):
         """Write the frames held by :meth:`send_many` (``at`` given) in one ``sendall``."""
         if self._held:
             held, self._held = self._held, []
+            data = _format_held(held, self._prefixes)
             with self._send_lock:
-                self._sock.sendall(b"".join(held))
+                self._sock.sendall(data)
 
     # -- receiving --------------------------------------------------------------------------
     def _recv_internal(self, timeout: float | None) -> tuple[can.Message | None, bool]:

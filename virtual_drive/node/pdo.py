@@ -169,6 +169,8 @@ class PdoEngine:
         # new table, so a changed configuration is never missed)
         self._earliest = 0.0
         self._tpdos_seen: list[_Tpdo] | None = None
+        #: due_times' plan: (the table it was made from, {due time: [TPDOs due then]})
+        self._plan: tuple[list[_Tpdo], dict[float, list[_Tpdo]]] | None = None
         self.rpdos: dict[int, _Rpdo] = {}
         self.missed = [0] * N_TPDO  #: 0x2070: event periods without a frame, per TPDO
         self._wake = threading.Event()
@@ -386,7 +388,37 @@ class PdoEngine:
         ``at`` (monotonic s, in the past), the TPDOs due then carry its values and are sent
         with ``at`` as their bus time (``send_many(frames, at)``); the inhibit time counts from
         ``at``. Returns the monotonic time the next TPDO is due."""
+        plan = self._plan
+        if plan is not None and plan[0] is self.tpdos and self._allowed():
+            planned = plan[1].pop(at, None)
+            if planned is not None:  # (due_times found them due exactly then: none missed)
+                self._send_tpdos(planned, at, True)
+                for t in planned:
+                    grid = at + t.event_s
+                    t.next_due = max(grid, at + t.inhibit_s) if t.inhibit_s > 0 else grid
+                return min(t.next_due for t in planned)
         return self._tick(at, True)
+
+    def due_times(self, until: float) -> list[float]:
+        """The instants (monotonic s, up to ``until``) :meth:`tick_at` will send event-driven
+        TPDOs at, in order, from the present table (nothing is sent): a batched tick runs its
+        simulation in one call and keeps the values of these instants. :meth:`tick_at` then
+        sends the TPDOs planned for each instant without searching the table again (unless
+        it was reconfigured meanwhile)."""
+        tpdos = self.tpdos
+        if not self._allowed():
+            self._plan = None
+            return []
+        plan: dict[float, list[_Tpdo]] = {}
+        for t in tpdos:
+            if t.event_s > 0 and t.trans_type >= 0xFE:
+                due = t.next_due
+                while due <= until:
+                    plan.setdefault(due, []).append(t)
+                    grid = due + t.event_s
+                    due = max(grid, due + t.inhibit_s) if t.inhibit_s > 0 else grid
+        self._plan = (tpdos, plan)
+        return sorted(plan)
 
     def _tick(self, now: float, stamped: bool) -> float:
         idle = 0.05

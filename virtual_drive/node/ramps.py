@@ -35,7 +35,14 @@ from .runner import TS
 if TYPE_CHECKING:
     from .drive_node import VirtualDrive
 
-__all__ = ["current_ref", "prepare_chunk", "ramp_step", "ramp_towards", "set_sim_mode"]
+__all__ = [
+    "current_ref",
+    "prepare_chunk",
+    "ramp_step",
+    "ramp_towards",
+    "ramping",
+    "set_sim_mode",
+]
 
 
 def set_sim_mode(d: VirtualDrive, mode: str) -> None:
@@ -78,19 +85,46 @@ def prepare_chunk(d: VirtualDrive, n: int) -> None:
 def current_ref(d: VirtualDrive, mode: int, halt: bool = False, dt: float = 0.0) -> float:
     """i_p* (A) of the current modes: profile torque follows 0x6087 (per mille of rated per s,
     0 = step) toward target_torque, or toward 0 on halt; mode -1 steps to i_p_ref."""
+    target, cap = _current_target(d, mode, halt)
+    if mode == MODE_PROFILE_TORQUE:
+        slope = d._param(TORQUE_SLOPE) / 1000.0 * (d._param(MOTOR_RATED_CURRENT) / 1000.0)  # A/s
+        d._i_ref = ramp_towards(d._i_ref, target, slope, slope, dt)
+    else:
+        d._i_ref = target
+    d._i_target = target
+    return max(-cap, min(cap, d._i_ref))
+
+
+def _current_target(d: VirtualDrive, mode: int, halt: bool) -> tuple[float, float]:
+    """(target, cap) of i_p* (A) in the current modes: target_torque (profile torque) or
+    i_p_ref (mode -1), 0 on halt, within +-cap = 0x6073 x 0x6075."""
     rated = d._param(MOTOR_RATED_CURRENT) / 1000.0
     cap = d._param(MAX_CURRENT) / 1000.0 * rated
     if mode == MODE_PROFILE_TORQUE:
         target = 0.0 if halt else d._param(TARGET_TORQUE) / 1000.0 * rated
-        slope = d._param(TORQUE_SLOPE) / 1000.0 * rated  # A/s
-        target = max(-cap, min(cap, target))
-        d._i_ref = ramp_towards(d._i_ref, target, slope, slope, dt)
     else:
         target = 0.0 if halt else float(d._param(SETPOINT_I_P_REF))
-        target = max(-cap, min(cap, target))
-        d._i_ref = target
-    d._i_target = target
-    return max(-cap, min(cap, d._i_ref))
+    return max(-cap, min(cap, target)), cap
+
+
+def ramping(d: VirtualDrive) -> bool:
+    """True while a setpoint moves within a chunk (a stop ramp, a profile velocity ramp, a
+    torque slope on its way): :func:`prepare_chunk` must then run once per piece of at most a
+    TPDO period, as a DSP updates its ramps every millisecond. False when the setpoints hold
+    for the whole chunk (a step is applied at its start either way)."""
+    st = d.cia402
+    if not st.torque_enabled:
+        return False
+    if st.ramp is not None:
+        return True
+    halt = bool(st.controlword & CW_HALT)
+    mode = d._mode
+    if mode == MODE_PROFILE_VELOCITY:
+        target = 0.0 if halt else float(d._param(TARGET_VELOCITY))
+        return d._speed_ref != target
+    if mode == MODE_PROFILE_TORQUE:
+        return d._i_ref != _current_target(d, mode, halt)[0]
+    return False
 
 
 def ramp_step(d: VirtualDrive, dt: float) -> None:

@@ -72,6 +72,12 @@ class Runner:
         ``period`` (e.g. 5 ms: a fifth of the wake-ups and socket writes of 1 ms ticks) and
         the frames still show their exact event-timer spacing on the bus.
     :param flush: called at the end of each timed tick (the bus writes the frames it held).
+    :param step_timed: ``step_timed(n, at, at_point) -> bool``: runs a timed tick's ``n``
+        samples in one call and calls ``at_point(j)`` with the values of the instant ``at[j]``
+        samples in (:meth:`VirtualDrive._step_timed`); False: it cannot now (nothing done),
+        the tick goes in pieces.
+    :param due_times: ``due_times(until) -> [t, ...]``: the instants (monotonic s) ``timer_at``
+        will be due at up to ``until`` (:meth:`PdoEngine.due_times`), for ``step_timed``.
     """
 
     def __init__(
@@ -86,6 +92,8 @@ class Runner:
         pacer: Pacer | None = None,
         timer_at: Callable[[float], float] | None = None,
         flush: Callable[[], None] | None = None,
+        step_timed: Callable[[int, list[int], Callable[[int], None]], bool] | None = None,
+        due_times: Callable[[float], list[float]] | None = None,
     ) -> None:
         if not speed > 0:
             raise ValueError("speed must be > 0")
@@ -94,6 +102,8 @@ class Runner:
         self.timer = timer
         self.timer_at = timer_at
         self._flush = flush
+        self._step_timed = step_timed if due_times is not None else None
+        self._due_times = due_times
         self.speed = float(speed)
         self.period = float(period)
         self.max_lag = float(max_lag)
@@ -186,20 +196,60 @@ class Runner:
         # catching up after a stall (more than this chunk behind): no frame per due point; the
         # timer below sends one per TPDO and counts the missed periods, as the 1 ms ticks do
         behind = (now - t0) * scale - end > 0.5 * self._chunk_n
-        while not behind:
-            due = self._timer_due
-            if due > now:
-                break
-            k = math.ceil((due - t0) * scale - 1e-9)  # the sample that reaches `due`
-            if k > end:
-                break  # (catching up: the rest of the backlog comes in the next chunks)
-            self._run_to(k)
-            self._run_timer_at(due, now)
-        self._run_to(end)
+        if not behind and self._step_timed is not None and self._run_points(end, now):
+            pass  # the whole tick in one simulator call, the timer run at each due point
+        else:
+            while not behind:
+                due = self._timer_due
+                if due > now:
+                    break
+                k = math.ceil((due - t0) * scale - 1e-9)  # the sample that reaches `due`
+                if k > end:
+                    break  # (catching up: the rest of the backlog comes in the next chunks)
+                self._run_to(k)
+                self._run_timer_at(due, now)
+            self._run_to(end)
         # where the simulation stands now: sees a reconfigured TPDO within one tick
         self._run_timer_at(t0 + end / scale, now)
         if self._flush is not None:
             self._flush()  # the tick's frames in one write
+
+    def _run_points(self, end: int, now: float) -> bool:
+        """The samples up to ``end`` in one ``step_timed`` call, the timer run at each of its
+        due points up to ``now`` whose sample is reached by then; False: not possible now."""
+        scale = self.speed / TS
+        t0 = self._t0
+        done = self._done
+        dues = []
+        at = []
+        for due in self._due_times(now):  # type: ignore[misc]
+            k = math.ceil((due - t0) * scale - 1e-9)  # the sample that reaches `due`
+            if k > end:
+                break  # (its sample comes with the next tick)
+            dues.append(due)
+            at.append(k - done if k > done else 0)
+        if len(at) > 64:
+            return False
+
+        timer_at = self.timer_at
+
+        def at_point(j: int) -> None:  # (_run_timer_at inlined: this runs at every due point)
+            try:
+                self._timer_due = timer_at(dues[j])  # type: ignore[misc]
+            except Exception:  # the timer never dies: log, retry in 10 ms
+                logger.exception("pacer timer")
+                self._timer_due = now + 0.01
+
+        if not self._step_timed(end - done, at, at_point):  # type: ignore[misc]
+            return False
+        m = end - done
+        if m > 0:
+            self._done = end
+            stats = self.stats
+            stats.samples += m
+            if m > stats.max_chunk:
+                stats.max_chunk = m
+        return True
 
     def _run_to(self, k: int) -> None:
         """Run the samples up to sample ``k`` (counted from the start) in one step."""

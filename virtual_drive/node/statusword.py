@@ -26,7 +26,14 @@ from .od_maps import CURRENT_WINDOW_A, MODE_PROFILE_VELOCITY
 if TYPE_CHECKING:
     from .drive_node import VirtualDrive
 
-__all__ = ["held", "statusword", "update_windows", "velocity_reached", "velocity_target"]
+__all__ = [
+    "held",
+    "sim_now",
+    "statusword",
+    "update_windows",
+    "velocity_reached",
+    "velocity_target",
+]
 
 
 def statusword(d: VirtualDrive) -> int:
@@ -67,9 +74,16 @@ def velocity_target(d: VirtualDrive) -> float:
     return float(d._param(TARGET_VELOCITY))
 
 
+def sim_now(d: VirtualDrive) -> float:
+    """Simulated time (s) of the values in ``d.live``: the instant a timed tick's TPDO shows
+    (``d._t_point``) while it is sent, else the simulator's clock."""
+    t = d._t_point
+    return float(d.sim.time) if t is None else t
+
+
 def held(d: VirtualDrive, since: float | None, time_ms: int) -> bool:
     """True when a window opened at ``since`` (sim s) has lasted ``time_ms``."""
-    return since is not None and float(d.sim.time) - since >= time_ms / 1000.0 - 1e-9
+    return since is not None and sim_now(d) - since >= time_ms / 1000.0 - 1e-9
 
 
 def velocity_reached(d: VirtualDrive) -> bool:
@@ -80,8 +94,9 @@ def velocity_reached(d: VirtualDrive) -> bool:
 
 
 def update_windows(d: VirtualDrive) -> None:
-    """After a chunk: restart or keep the velocity window / threshold timers (sim time)."""
-    t = float(d.sim.time)
+    """After a chunk (or at a timed tick's TPDO instant): restart or keep the velocity window /
+    threshold timers (sim time)."""
+    t = sim_now(d)
     speed = float(d.live["speed"])
     target = velocity_target(d)
     inside = abs(speed - target) <= d._param(VELOCITY_WINDOW)

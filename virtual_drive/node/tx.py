@@ -26,8 +26,17 @@ def make_send_many(drive: Any) -> Callable[..., None]:
     """``send_many(frames, at=None)`` for ``drive`` (a VirtualDrive: ``bus``, ``_send``,
     ``_send_lock``, ``tx_errors``, ``last_tx_ok``); never raises."""
 
+    bus = drive.bus
+    if getattr(bus, "timed_sends", False):
+        hold = bus.send_many  # (the pacing thread's frames, held until its flush: no lock)
+    else:
+        hold = None
+
     def send_many(frames: list[tuple[int, bytes]], at: float | None = None) -> None:
-        bus_send_many = getattr(drive.bus, "send_many", None)
+        if at is not None and hold is not None:
+            hold(frames, at)
+            return
+        bus_send_many = getattr(bus, "send_many", None)
         if bus_send_many is None:
             for cob_id, data in frames:
                 drive._send(cob_id, data)

@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import threading
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -51,6 +52,9 @@ FAULT_KINDS: dict[str, int] = {
     "undervoltage": FAULT_UNDERVOLTAGE,
 }
 """inject_fault kinds; OD 0x5010 sub1 codes 0..3 map to them in this order."""
+
+#: most instants :meth:`Simulator.run_points` copies in one call
+_MAX_POINTS = 64
 
 _REASONS = {
     1: "overcurrent: phase current above protection.overcurrent_trip",
@@ -115,6 +119,12 @@ class Simulator:
         self._last: dict[str, float] | None = None
         #: float32 view of the C loop's latest values (SIGNALS order), read without a copy
         self._last_view = np.frombuffer(ffi.buffer(ffi.addressof(L, "last")), dtype=np.float32)
+        # run_points' buffers: sample counts and the rows copied at them (+1: the chunk's end)
+        self._points_at = ffi.new("int[]", _MAX_POINTS + 1)
+        self._points_buf = ffi.new("float[]", (_MAX_POINTS + 1) * len(SIGNALS))
+        self._points_rows = np.frombuffer(ffi.buffer(self._points_buf), dtype=np.float32).reshape(
+            _MAX_POINTS + 1, len(SIGNALS)
+        )
 
     @classmethod
     def from_defaults(cls, model: str = "pwm") -> Simulator:
@@ -479,6 +489,29 @@ class Simulator:
                 n -= m
             self._last = None
             out.update(zip(SIGNALS, self._last_view.tolist(), strict=True))
+
+    def run_points(self, n_samples: int, at: Sequence[int]) -> list[list[float]]:
+        """Run ``n_samples`` samples (an int >= 0) in one C call without recording and return
+        the latest value of every signal (a list in SIGNALS order) once ``at[j]`` samples have
+        run, for each ``j`` (non-decreasing sample counts, at most 64; a count above
+        ``n_samples`` counts as ``n_samples``), then once more at the end: ``len(at) + 1``
+        rows. The pacing loop's timed tick: the values of each instant a TPDO is due at."""
+        m = len(at)
+        if m > _MAX_POINTS:
+            raise ValueError(f"at most {_MAX_POINTS} points per call, got {m}")
+        if not 0 <= n_samples <= 1 << 20:
+            raise ValueError(f"n_samples must be 0..{1 << 20}, got {n_samples!r}")
+        buf = self._points_at
+        last = -1
+        for j, a in enumerate(at):
+            if a < last or a < 0:
+                raise ValueError(f"sample counts must be >= 0 and non-decreasing, got {at!r}")
+            buf[j] = last = a
+        buf[m] = n_samples
+        with self._lock:
+            lib.loop_run_points(self._L, n_samples, buf, m + 1, self._points_buf)
+            self._last = None
+            return self._points_rows[: m + 1].tolist()
 
     def update_state(self, out: dict[str, float]) -> None:
         """Write the latest value of every signal (SIGNALS names, float; hall_sector too) into
