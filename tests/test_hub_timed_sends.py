@@ -19,6 +19,7 @@ import time
 
 import can
 import pytest
+from conftest import RunQueueProbe, min_rate
 
 from virtual_drive.hub import Hub
 from virtual_drive.hub_protocol import (
@@ -30,6 +31,16 @@ from virtual_drive.hub_protocol import (
 from virtual_drive.node.hub_bus import HubBus, format_send, format_sendat
 
 pytestmark = pytest.mark.timeout(120)
+
+#: run-queue wait (s/s) of this process (drive, hub and receiver threads) below which the
+#: frames' bus times show the drive's own timing: a hub thread kept waiting more than its
+#: 50 ms back-dating window puts a backlog back to back (hub_protocol.SENDAT_MAX_BACKDATE_S)
+CLEAN_WAIT = 0.25
+
+
+def _skip_if_starved(probe: RunQueueProbe, what: str) -> None:
+    if probe.wait >= CLEAN_WAIT:
+        pytest.skip(f"{what} not observable: {probe!r}")
 
 _WALL = time.time() - time.monotonic()
 
@@ -208,7 +219,9 @@ def test_batched_drive_sends_each_tpdo_on_its_own_ms_with_its_own_value():
             time.sleep(0.3)
             it0, t0 = drive.runner.stats.iterations, time.monotonic()
             n0 = len(frames.msgs)
+            probe = RunQueueProbe()
             time.sleep(1.0)
+            probe.stop()
             wakes = (drive.runner.stats.iterations - it0) / (time.monotonic() - t0)
             window = frames.msgs[n0:]
         finally:
@@ -219,13 +232,10 @@ def test_batched_drive_sends_each_tpdo_on_its_own_ms_with_its_own_value():
     assert drive.runner.period == pytest.approx(0.005)
     assert wakes <= 1.2 / 0.005, wakes  # about 200 wake-ups/s, not 1000
     tpdo3 = [m for m in window if m.arbitration_id == 0x381]
-    assert len(tpdo3) >= 900, len(tpdo3)
+    assert len(tpdo3) >= min_rate(1000, probe.wait), (len(tpdo3), probe)
     stamps = [m.timestamp for m in tpdo3]
     gaps = [b - a for a, b in itertools.pairwise(stamps)]
     assert statistics.median(gaps) == pytest.approx(1e-3, abs=0.05e-3)
-    # one frame per event period: the bus time moves by ~1 ms (a TPDO1/TPDO2 ahead in
-    # arbitration shifts it by at most a couple of frame times)
-    assert sum(0.7e-3 <= g <= 1.3e-3 for g in gaps) >= 0.95 * len(gaps), sorted(gaps)[:5]
     refs = [struct.unpack("<ff", bytes(m.data))[1] for m in tpdo3]
     steps = [b - a for a, b in itertools.pairwise(refs)]
     # 1000 rpm/s: 1 rpm per 1 ms frame; a value sampled once per 5 ms tick would repeat
@@ -233,6 +243,10 @@ def test_batched_drive_sends_each_tpdo_on_its_own_ms_with_its_own_value():
     assert statistics.median(steps) == pytest.approx(1.0, abs=0.1)
     slope = (refs[-1] - refs[0]) / (stamps[-1] - stamps[0])
     assert slope == pytest.approx(1000.0, rel=0.05)
+    _skip_if_starved(probe, "1 ms spacing of every frame")
+    # one frame per event period: the bus time moves by ~1 ms (a TPDO1/TPDO2 ahead in
+    # arbitration shifts it by at most a couple of frame times)
+    assert sum(0.7e-3 <= g <= 1.3e-3 for g in gaps) >= 0.95 * len(gaps), sorted(gaps)[:5]
 
 
 def test_batched_drive_runs_a_steady_tick_in_one_call_with_each_ms_its_own_value():
@@ -270,7 +284,9 @@ def test_batched_drive_runs_a_steady_tick_in_one_call_with_each_ms_its_own_value
                 node.set_data(0x6040, 0, struct.pack("<H", cw))
             time.sleep(0.3)
             chunk0 = drive.runner.stats.max_chunk
+            probe = RunQueueProbe()
             time.sleep(0.5)
+            probe.stop()
             window = frames.msgs[n0:]
         finally:
             notifier.stop()
@@ -282,7 +298,7 @@ def test_batched_drive_runs_a_steady_tick_in_one_call_with_each_ms_its_own_value
     tpdo2 = [m for m in window if m.arbitration_id == 0x281]
     values = [struct.unpack("<ff", bytes(m.data)) for m in tpdo2]
     moving = [(m.timestamp, i_p, n) for m, (i_p, n) in zip(tpdo2, values, strict=True) if n > 1.0]
-    assert len(moving) >= 300, len(moving)
+    assert len(moving) >= min_rate(1000, probe.wait) * 0.3, (len(moving), probe)
     K_t = K_rpm * 60.0 / (2.0 * math.pi)  # N m/A
     rad = 2.0 * math.pi / 60.0
     predicted = 0.0  # rpm: the shaft equation integrated over the received frames
@@ -300,7 +316,7 @@ def test_batched_drive_runs_a_steady_tick_in_one_call_with_each_ms_its_own_value
 def test_batched_drive_keeps_an_inhibit_time_on_the_bus():
     """CiA 301 §7.5.2.37: TPDO2 with a 1 ms event timer and a 2 ms inhibit time (sub 3 =
     20 x 100 us) is on the bus every 2 ms, never closer, when the drive plans a whole 5 ms
-    tick's TPDOs at once."""
+    tick's TPDOs at once; TPDO3 at 3 ms and TPDO1/TPDO4 at 10 ms keep their own periods."""
     from virtual_drive.node import VirtualDrive
 
     with Hub(port=0, bitrate=1_000_000) as hub:
@@ -319,10 +335,13 @@ def test_batched_drive_keeps_an_inhibit_time_on_the_bus():
             node.set_data(0x1801, 1, struct.pack("<I", 0x80000281))
             node.set_data(0x1801, 3, struct.pack("<H", 20))
             node.set_data(0x1801, 1, struct.pack("<I", 0x281))
+            node.set_data(0x1802, 5, struct.pack("<H", 3))  # TPDO3 every 3 ms
             drive.nmt.command(0x01)
             time.sleep(0.2)
             n0 = len(frames.msgs)
+            probe = RunQueueProbe()
             time.sleep(0.6)
+            probe.stop()
             window = frames.msgs[n0:]
         finally:
             notifier.stop()
@@ -331,8 +350,19 @@ def test_batched_drive_keeps_an_inhibit_time_on_the_bus():
             bus.shutdown()
     stamps = [m.timestamp for m in window if m.arbitration_id == 0x281]
     gaps = [b - a for a, b in itertools.pairwise(stamps)]
-    assert len(stamps) >= 200, len(stamps)
+    assert len(stamps) >= min_rate(500, probe.wait) * 0.6, (len(stamps), probe)
+    _skip_if_starved(probe, "the spacing of every frame")
+    assert statistics.median(gaps) == pytest.approx(2.0e-3, abs=0.05e-3)
     # the bus time of each frame is its due time plus its arbitration (a frame ahead of it
     # may delay it by up to one frame time, 135 us, which the next gap gives back)
     assert min(gaps) >= 2.0e-3 - 0.14e-3, min(gaps)
-    assert statistics.median(gaps) == pytest.approx(2.0e-3, abs=0.05e-3)
+    # the other TPDOs keep their own event timers meanwhile (3 ms; TPDO1 and TPDO4: 10 ms):
+    # every gap is the period give or take the arbitration behind a frame due at the same
+    # time (TPDO3 and TPDO2 meet every 6 ms: up to one frame time, 135 us, either way)
+    for cob_id, period in ((0x381, 3e-3), (0x181, 10e-3), (0x481, 10e-3)):
+        t = [m.timestamp for m in window if m.arbitration_id == cob_id]
+        assert len(t) >= 0.5 / period, (hex(cob_id), len(t))
+        gaps = [b - a for a, b in itertools.pairwise(t)]
+        near = [g for g in gaps if abs(g - period) <= 0.3e-3]
+        assert len(near) >= 0.95 * len(gaps), (hex(cob_id), sorted(gaps))
+        assert statistics.fmean(near) == pytest.approx(period, abs=0.03e-3), hex(cob_id)

@@ -38,6 +38,7 @@ from dataclasses import dataclass
 from firmware_protocol.can_bits import arbitration_key, frame_bits_fast
 from virtual_drive.hub_protocol import (
     FEATURES_REPLY,
+    SENDAT_MAX_BACKDATE_S,
     CommandSplitter,
     ProtocolError,
     format_error,
@@ -165,9 +166,9 @@ class Hub:
     #: After ``< rawmode >`` is acknowledged, frames for that client wait this long (s), so
     #: python-can's handshake ``recv`` sees ``< ok >`` alone and not glued to a frame.
     handshake_hold_s = 0.05
-    #: A ``sendat`` frame stated longer ago than this (s) arrives this long ago: a sender's
-    #: batch covers a few ms; an older time is a clock the hub does not share.
-    max_backdate_s = 0.05
+    #: A ``sendat`` frame stated longer ago than this (s) arrives this long ago
+    #: (:data:`hub_protocol.SENDAT_MAX_BACKDATE_S`).
+    max_backdate_s = SENDAT_MAX_BACKDATE_S
     #: Frames one client may have waiting for the bus before the hub stops reading it
     #: (its TCP send then blocks: back-pressure like a full CAN controller TX queue).
     max_pending_per_client = 1024

@@ -36,6 +36,7 @@ __all__ = [
     "FEATURES_REPLY",
     "LINE_BYTES",
     "MAX_ELEMENT_BYTES",
+    "SENDAT_MAX_BACKDATE_S",
     "CommandSplitter",
     "Frame",
     "ProtocolError",
@@ -52,6 +53,11 @@ __all__ = [
 
 #: Reply of the hub to ``< features >`` (the elements it understands beyond socketcand).
 FEATURES_REPLY = b"< features sendat >"
+
+#: The oldest time (s before its arrival) a ``sendat`` frame may state: an older one is put on
+#: the bus as if stated this long ago. A sender's batch covers a few ms; an older time is a
+#: clock the hub does not share (or a sender that was not scheduled for that long).
+SENDAT_MAX_BACKDATE_S = 0.05
 
 #: SocketCAN error-frame flag and "protocol violation" error class (linux/can/error.h).
 CAN_ERR_FLAG = 0x20000000

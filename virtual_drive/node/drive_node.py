@@ -48,6 +48,7 @@ from canopen import objectdictionary as odm
 from firmware_protocol import abort_codes
 from firmware_protocol.enums import StoreStatus
 from firmware_protocol.od import load_od
+from virtual_drive.hub_protocol import SENDAT_MAX_BACKDATE_S
 from virtual_drive.sim.signals import SIGNALS
 
 from . import communication, parameters, ramps, resets, statusword, storage, writes
@@ -198,6 +199,8 @@ class VirtualDrive:
             clear=self.emcy.clear_error,
             send_many=make_send_many(self),
             align=lambda t: self.runner.align(t),
+            # (a bus time the hub still takes after the frames' trip to it)
+            stamp_max_age=0.8 * SENDAT_MAX_BACKDATE_S,
         )
         self.cia402 = Cia402StateMachine(self._options, self._reset_fault)
         self.recorder = TraceRecorder()

@@ -32,6 +32,7 @@ fits 64 bits (0x06040042). Mapping and COB-IDs may be changed in PRE-OPERATIONAL
 from __future__ import annotations
 
 import logging
+import math
 import operator
 import struct
 import threading
@@ -136,6 +137,9 @@ class PdoEngine:
         time, see :meth:`tick_at`); default: ``send`` each.
     :param align: ``align(t)`` → the first pacing tick at or after ``t``: event timers start
         there, so the frames are sent in the tick's wake-up (no second wake-up per period).
+    :param stamp_max_age: the oldest bus time (s before now) the bus takes from
+        ``send_many(frames, at)`` (:data:`virtual_drive.hub_protocol.SENDAT_MAX_BACKDATE_S`
+        less a margin on the hub); see :meth:`tick_at`.
     """
 
     def __init__(
@@ -151,10 +155,13 @@ class PdoEngine:
         clear: Callable[[int], object] = lambda code: None,
         send_many: Callable[..., None] | None = None,
         align: Callable[[float], float] = lambda t: t,
+        stamp_max_age: float = math.inf,
     ) -> None:
         self.node = node
         self._send = send
         self._send_many = send_many
+        #: oldest bus time (s before now) :meth:`tick_at` states; older ones are moved up
+        self.stamp_max_age = stamp_max_age
         self._align = align
         self._subscribe = subscribe
         self._unsubscribe = unsubscribe
@@ -169,8 +176,9 @@ class PdoEngine:
         # new table, so a changed configuration is never missed)
         self._earliest = 0.0
         self._tpdos_seen: list[_Tpdo] | None = None
-        #: due_times' plan: (the table it was made from, {due time: [TPDOs due then]})
-        self._plan: tuple[list[_Tpdo], dict[float, list[_Tpdo]]] | None = None
+        #: due_times' plan: (the table it was made from, {due time: [TPDOs due then]}, the
+        #: table's event-driven TPDOs)
+        self._plan: tuple[list[_Tpdo], dict[float, list[_Tpdo]], list[_Tpdo]] | None = None
         self.rpdos: dict[int, _Rpdo] = {}
         self.missed = [0] * N_TPDO  #: 0x2070: event periods without a frame, per TPDO
         self._wake = threading.Event()
@@ -387,16 +395,30 @@ class PdoEngine:
         """:meth:`tick` for a drive that runs its ticks in batches: the simulation stands at
         ``at`` (monotonic s, in the past), the TPDOs due then carry its values and are sent
         with ``at`` as their bus time (``send_many(frames, at)``); the inhibit time counts from
-        ``at``. Returns the monotonic time the next TPDO is due."""
+        ``at``. Returns the monotonic time the next TPDO is due.
+
+        A time more than :attr:`stamp_max_age` s ago (the drive was not scheduled for that
+        long) is stated as that long ago instead, and the event timers and inhibit times count
+        from it: the bus would otherwise take the frames of a catch-up as all sent at its own
+        oldest time and put them back to back, closer than their inhibit time."""
+        floor = time.monotonic() - self.stamp_max_age
+        if at < floor:
+            return self._tick(floor, True)
         plan = self._plan
         if plan is not None and plan[0] is self.tpdos and self._allowed():
             planned = plan[1].pop(at, None)
             if planned is not None:  # (due_times found them due exactly then: none missed)
                 self._send_tpdos(planned, at, True)
                 for t in planned:
-                    grid = at + t.event_s
-                    t.next_due = max(grid, at + t.inhibit_s) if t.inhibit_s > 0 else grid
-                return min(t.next_due for t in planned)
+                    due = at + t.event_s
+                    if t.inhibit_s > 0 and at + t.inhibit_s > due:
+                        due = at + t.inhibit_s
+                    t.next_due = due
+                earliest = at + 0.05
+                for t in plan[2]:  # (every event-driven TPDO: another may be due first)
+                    if t.next_due < earliest:
+                        earliest = t.next_due
+                return earliest
         return self._tick(at, True)
 
     def due_times(self, until: float) -> list[float]:
@@ -410,18 +432,19 @@ class PdoEngine:
             self._plan = None
             return []
         plan: dict[float, list[_Tpdo]] = {}
-        for t in tpdos:
-            if t.event_s > 0 and t.trans_type >= 0xFE:
-                due = t.next_due
-                while due <= until:
-                    plan.setdefault(due, []).append(t)
-                    grid = due + t.event_s
-                    due = max(grid, due + t.inhibit_s) if t.inhibit_s > 0 else grid
-        self._plan = (tpdos, plan)
+        event = [t for t in tpdos if t.event_s > 0 and t.trans_type >= 0xFE]
+        for t in event:
+            due = t.next_due
+            while due <= until:
+                plan.setdefault(due, []).append(t)
+                grid = due + t.event_s
+                due = max(grid, due + t.inhibit_s) if t.inhibit_s > 0 else grid
+        self._plan = (tpdos, plan, event)
         return sorted(plan)
 
     def _tick(self, now: float, stamped: bool) -> float:
         idle = 0.05
+        self._plan = None  # (a plan holds from due_times to the end of that tick only)
         if not self._allowed():
             return now + idle
         if now < self._earliest and self._tpdos_seen is self.tpdos:
