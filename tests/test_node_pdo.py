@@ -4,6 +4,7 @@ PRE-OPERATIONAL only. Truth: the default mapping table in docs/contracts.md §1.
 
 from __future__ import annotations
 
+import itertools
 import struct
 import time
 
@@ -200,3 +201,39 @@ def test_emcy_cob_id_invalid_bit_silences_emcy(bench):
     time.sleep(0.05)
     assert bench.log.of(0x81, t0) == []
     assert bench.read("error_code") == 0x2310  # bookkeeping still done
+
+
+def test_batched_tick_states_no_bus_time_older_than_the_bus_takes():
+    """A drive that runs its ticks in batches states each TPDO's bus time (``tick_at``). After
+    a stall its catch-up states times long past; the engine states them as at most
+    ``stamp_max_age`` ago and counts its event timers and inhibit times from there, so a
+    catch-up never puts two frames of one TPDO closer than its event period (CiA 301: one
+    late frame, the missed periods counted in 0x2070, no burst)."""
+    from virtual_drive.node import VirtualDrive
+
+    bus = can.Bus(interface="virtual", channel="batched-stamps", receive_own_messages=False)
+    drive = VirtualDrive(bus, node_id=1)
+    sent: list[tuple[float, int]] = []
+    drive.pdo._send_many = lambda frames, at=None: sent.extend((at, c) for c, _ in frames)
+    try:
+        drive.nmt.boot()
+        drive.nmt.command(0x01)  # OPERATIONAL: the TPDO table is built (no pacing thread)
+        age = drive.pdo.stamp_max_age
+        assert 0 < age <= 0.05
+        start = time.monotonic()
+        time.sleep(0.5)  # the drive stalled for half a second
+        now = time.monotonic()
+        # its catch-up: the chunks that end 0.5 s, 0.48 s, ... ago, run back to back
+        for k in range(26):
+            drive.pdo.tick_at(start + 0.02 * k)
+        done = time.monotonic()
+    finally:
+        bus.shutdown()
+    tpdo2 = [at for at, cob_id in sent if cob_id == 0x281]
+    assert tpdo2, sent
+    assert min(tpdo2) >= now - age - 1e-6  # never older than the bus takes
+    assert max(tpdo2) <= done
+    gaps = [b - a for a, b in itertools.pairwise(tpdo2)]
+    assert all(g >= 1e-3 - 1e-9 for g in gaps), gaps  # TPDO2's event timer: 1 ms
+    missed = drive.pdo.missed[1]
+    assert missed >= 400, missed  # about half a second of 1 ms periods without a frame
