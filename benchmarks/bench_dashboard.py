@@ -174,6 +174,128 @@ def server_side_latency(hub_port: int, steps: int) -> list[float]:
     return out
 
 
+#: counts WebGL draw calls (the 3D canvas's rendering work) and animation frames in the page
+GL_COUNT_JS = """
+(() => {
+  window.__gl = 0;
+  for (const P of [WebGLRenderingContext.prototype, WebGL2RenderingContext.prototype]) {
+    for (const f of ['drawElements', 'drawArrays', 'drawElementsInstanced',
+                     'drawArraysInstanced']) {
+      const orig = P[f];
+      if (orig) P[f] = function (...a) { window.__gl++; return orig.apply(this, a); };
+    }
+  }
+})();
+"""
+
+
+def browser_pids(browser) -> list[int]:
+    """Every process of one Playwright-launched Chromium (browser, renderers, GPU, utility)."""
+    cdp = browser.new_browser_cdp_session()
+    try:
+        info = cdp.send("SystemInfo.getProcessInfo")["processInfo"]
+    finally:
+        cdp.detach()
+    return [int(p["id"]) for p in info]
+
+
+def cpu_of(pids: list[int]) -> float:
+    """utime + stime (s) summed over ``pids`` (processes gone meanwhile count 0)."""
+    total = 0.0
+    for pid in pids:
+        with contextlib.suppress(OSError):
+            total += cpu_seconds(pid)
+    return total
+
+
+def rotor_figures(page, browser, dash_pid: int, window: float, frames: list) -> str:
+    """Server CPU, browser CPU, WebGL draw calls/s and rotor scene messages/s over ``window``
+    s, each with the load average (1 min) at its end; one line of text."""
+    pids = browser_pids(browser)
+    n_frames = len(frames)
+    gl0 = page.evaluate("window.__gl")
+    s0, b0, w0 = cpu_seconds(dash_pid), cpu_of(pids), time.monotonic()
+    page.wait_for_timeout(window * 1e3)
+    dt = time.monotonic() - w0
+    server = (cpu_seconds(dash_pid) - s0) / dt * 100
+    chromium = (cpu_of(pids) - b0) / dt * 100
+    gl = (page.evaluate("window.__gl") - gl0) / dt
+    scene = sum(scene_messages(decode_frame(pl)) for _, pl in frames[n_frames:]) / dt
+    return (
+        f"server {server:.1f} % · browser {chromium:.1f} % (all its processes) · "
+        f"{gl:.0f} WebGL draws/s · {scene:.1f} rotor scene messages/s "
+        f"[load {os.getloadavg()[0]:.1f}]"
+    )
+
+
+def scene_messages(messages: list[dict]) -> int:
+    """How many of ``messages`` create, change or remove a node of the 3D rotor view."""
+    return sum(1 for m in messages if str(m.get("name", "")).startswith(ROTOR_PREFIXES))
+
+
+ROTOR_PREFIXES = ("/motor", "/rotor", "/stator", "/floor", "/shaft", "/status", "/legend")
+
+
+def rotor_cost(window: float) -> None:
+    """The 3D rotor's cost with one browser streaming the live plots at 500 rpm: dashboard with
+    the rotor shown, hidden (the page's "3D rotor" checkbox off) and without it (``--no-3d``)."""
+    from playwright.sync_api import sync_playwright
+
+    from dashboard.browser import click as click_el
+
+    hub_port = free_port()
+    drive = subprocess.Popen(
+        [sys.executable, "-m", "virtual_drive.cli", "run", "--hub", "--hub-port", str(hub_port),
+         "--log-level", "ERROR"],
+        stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+    )
+    lines = []
+    try:
+        assert "ready" in drive.stdout.readline(), "virtual drive did not start"
+        for variant in ("3d", "no-3d"):
+            extra = [] if variant == "3d" else ["--no-3d"]
+            with run_dashboard(["--join-hub", str(hub_port), *extra]) as running, \
+                    sync_playwright() as p:
+                browser = launch(p)
+                page = browser.new_page(viewport={"width": 1280, "height": 800})
+                page.add_init_script(GL_COUNT_JS)
+                frames: list[tuple[float, bytes]] = []
+
+                def on_ws(ws, frames=frames):
+                    if "/api/" not in ws.url:
+                        ws.on("framereceived", lambda pl: isinstance(pl, bytes)
+                              and frames.append((time.monotonic(), pl)))
+
+                page.on("websocket", on_ws)
+                page.goto(running.gui_url)
+                page.get_by_role("button", name="Enable").wait_for(timeout=120_000)
+                click_el(page, page.get_by_role("button", name="Enable"))
+                page.wait_for_timeout(1000)
+                click_el(page, page.get_by_role("button", name="+ step"))  # 500 rpm
+                page.wait_for_timeout(3000)
+                if variant == "3d":
+                    lines.append("3D rotor shown:  " + rotor_figures(
+                        page, browser, running.proc.pid, window, frames))
+                    box = page.get_by_label("3D rotor", exact=True)
+                    if box.count():
+                        click_el(page, box)
+                        page.wait_for_timeout(2000)
+                        lines.append("3D rotor hidden: " + rotor_figures(
+                            page, browser, running.proc.pid, window, frames))
+                    else:
+                        lines.append("3D rotor hidden: (this dashboard has no '3D rotor' toggle)")
+                else:
+                    lines.append("--no-3d:         " + rotor_figures(
+                        page, browser, running.proc.pid, window, frames))
+                browser.close()
+    finally:
+        stop_process(drive)
+    print(f"3D rotor cost, 1 browser streaming at 500 rpm, {window:.0f} s windows, "
+          f"{os.cpu_count()} cores:")
+    for ln in lines:
+        print("  " + ln)
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=6, help="speed steps for the latency figure")
@@ -182,7 +304,15 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument(
         "--browsers", type=int, default=3, help="browsers for the many-viewer CPU figure"
     )
+    ap.add_argument(
+        "--rotor",
+        action="store_true",
+        help="only the 3D rotor's cost: shown vs hidden vs --no-3d (1 browser)",
+    )
     args = ap.parse_args(argv)
+    if args.rotor:
+        rotor_cost(args.window)
+        return 0
     from playwright.sync_api import sync_playwright
 
     load_start = os.getloadavg()[0]

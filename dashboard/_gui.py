@@ -6,7 +6,9 @@ Capture · Loop, :mod:`dashboard._gui_tabs.plots`); the control panel is docked 
 who controls, Take control, Drive buttons, progress/cancel of a long action, then tabs Speed ·
 Current · Tuning · Identify · Captures · Config, one module each in
 :mod:`dashboard._gui_tabs`); the 3D rotor (:mod:`dashboard._gui_scene`, off with ``--no-3d``)
-gets the strip between them. Status texts: :mod:`dashboard._gui_status`.
+gets the strip between them: each browser has its own copy and a "3D rotor" checkbox at the end
+of its control panel; unchecked, that browser is sent no scene message and renders no rotor.
+Status texts: :mod:`dashboard._gui_status`.
 
 Streaming cannot die silently: the plot loop catches every failure of a tick (counted, shown),
 a watchdog in the status loop restarts a plot thread that died or stopped beating, and the page
@@ -118,7 +120,11 @@ class BenchGui:
         self.server.gui.main_panel.set_width(CONTROL_WIDTH_PX)  # the plots take the rest
         self.server.on_client_connect(self._on_connect)
         self.server.on_client_disconnect(self._on_disconnect)
-        self.scene = RotorScene(self.server) if self.config.scene_3d else None
+        self.scene = (
+            RotorScene(self.server, read_theta_e=self._read_theta_e)
+            if self.config.scene_3d
+            else None
+        )
         if self.scene is None:  # a calm strip between the plots and the controls
             self.server.scene.set_background_image(scene_background())
         self.bench.lease.on_change(self._on_lease_change)
@@ -156,14 +162,31 @@ class BenchGui:
         self._wake.set()  # the plot thread starts ticking for this browser
         with contextlib.suppress(Exception):
             panel.load_gains()
+        if self.scene is not None:  # its "3D rotor" checkbox and, shown, its rotor
+            self.scene.attach(client)
         self.refresh_status()
 
     def _on_disconnect(self, client: viser.ClientHandle) -> None:
+        if self.scene is not None:
+            self.scene.detach(client.client_id)
         with self._panels_lock:
             panel = self.panels.pop(client.client_id, None)
         if panel is not None and panel.token is not None and panel.holds_control():
             self._gone[panel.token] = time.monotonic()
             self.refresh_status()
+
+    def _read_theta_e(self) -> tuple[float, float] | None:
+        """The drive's electrical angle θ_e (rad, one SDO read) and the host time (s,
+        ``time.time()``, the live stream's clock) it was read at; None while an action holds
+        the drive."""
+        if not self.bench.lock.acquire(timeout=0.05):
+            return None
+        try:
+            t0 = time.time()
+            theta_e = float(self.bench.drive.read("measurements.theta_e"))
+            return theta_e, (t0 + time.time()) / 2
+        finally:
+            self.bench.lock.release()
 
     def panel_list(self) -> list[Panel]:
         with self._panels_lock:
@@ -322,6 +345,8 @@ class BenchGui:
                 self._watchdog()
                 self._expire_leases()
                 self.refresh_status()
+                if self.scene is not None:
+                    self.scene.maybe_anchor()  # θ_e again while a browser shows the rotor
             except Exception as exc:  # shown on the next good tick; never die
                 log.warning("status tick failed: %s", exc)
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import time
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -60,25 +61,43 @@ def server():
     s.stop()
 
 
+def _wxyz_angle(w) -> float:
+    """The rotation about z of a quaternion (w, x, y, z), rad in [0, 2π)."""
+    return 2 * math.atan2(w[3], w[0]) % (2 * math.pi)
+
+
 def test_rotor_turns_with_the_speed_and_lights_the_pair(server):
-    scene = RotorScene(server, pole_pairs=4)
+    theta_e0 = 2.5  # rad, what the drive reports when the view is shown
+    t0 = time.time()
+    scene = RotorScene(server, pole_pairs=4, read_theta_e=lambda: (theta_e0, t0))
+    browser = SimpleNamespace(client_id=7, gui=server.gui, scene=server.scene)
     cam = server.initial_camera
     d = np.asarray(cam.position) - np.asarray(cam.look_at)
     assert 2.0 < np.linalg.norm(d) < 4.0  # framed on the motor (outer radius 1.12)
-    scene._t -= 1.0  # pretend the last update was 1 s ago
-    t0 = scene._t
-    scene.update(60.0)  # 60 rpm = one turn per second
-    elapsed = scene._t - t0
-    assert scene.angle == pytest.approx((2 * math.pi * elapsed) % (2 * math.pi), abs=1e-6)
-    w = scene.rotor.wxyz
-    assert 2 * math.atan2(w[3], w[0]) % (2 * math.pi) == pytest.approx(scene.angle, abs=1e-5)
-    sector = int((scene.angle * 4 % (2 * math.pi)) // (math.pi / 3))
+    scene.attach(browser)
+    view = scene.views[7]
+    # shown at the drive's angle: mechanical angle = θ_e / pole pairs
+    assert (_wxyz_angle(view.rotor.wxyz) * 4) % (2 * math.pi) == pytest.approx(theta_e0)
+    # the live stream: 1 kHz samples, the speed ramping 0 → 120 rpm over 1 s after t0
+    t = t0 + np.arange(1, 1001) * 1e-3
+    speed = 120.0 * (t - t0)
+    scene._sent = -math.inf  # not rate limited
+    scene.update(float(speed[-1]), {"t": t, "measurements.speed": speed})
+    # ∫ speed dt = 60 rpm·s = 1 turn (the samples are held to the next: + 0.5 ms × 120 rpm)
+    turned = (120.0 * 1.0**2 / 2 + 120.0 * 0.5e-3) / 60.0 * 2 * math.pi
+    want = (theta_e0 / 4 + turned) % (2 * math.pi)
+    assert scene.angle == pytest.approx(want, abs=1e-6)
+    assert _wxyz_angle(view.rotor.wxyz) == pytest.approx(want, abs=1e-5)
+    sector = int((want * 4 % (2 * math.pi)) // (math.pi / 3))
     on = SIX_STEP[sector]
     for ph in range(3):
-        want = PHASE_COLORS[ph] if ph in on else DIM
-        assert all(tuple(h.color) == want for h in scene.coils[ph])
-    time.sleep(0.12)
+        want_color = PHASE_COLORS[ph] if ph in on else DIM
+        assert all(tuple(h.color) == want_color for h in view.coils[ph])
+    scene._sent = -math.inf
     scene.update(0.0)  # standing still: every coil dark
-    assert all(tuple(h.color) == DIM for c in scene.coils for h in c)
+    assert all(tuple(h.color) == DIM for c in view.coils for h in c)
     scene.show_status("500 rpm · OPERATION ENABLED · i_p 32.4 A")
-    assert scene.status_label.text == "500 rpm · OPERATION ENABLED · i_p 32.4 A"
+    assert view.status_label.text == "500 rpm · OPERATION ENABLED · i_p 32.4 A"
+    scene.set_shown(browser, False)
+    assert scene.shown == 0
+    scene.detach(7)
