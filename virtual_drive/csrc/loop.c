@@ -288,36 +288,89 @@ static void trip(loop_t *L, int code, int reason)
     L->active = 0;
 }
 
+/* apply_pattern over a whole period for the common case -- PWM model, bridge on, no blanking
+ * time, no switch drop, no oversampled record -- with the set-up of its fast path: the same
+ * sub-intervals [a, b) and leg voltages, handed to plant_advance_six_step in one call. */
+static void pattern_six_step(loop_t *L, float m, int sec, double u0, double u1)
+{
+    const double Ts = L->Ts, Vd = L->p.V_dc;
+    const double dp = 0.5 * (1.0 + (double)m), dm = 0.5 * (1.0 - (double)m);
+    const int xp = sec_plus[sec], xm = sec_minus[sec], open = sec_open[sec];
+    const int p_hi = (dp >= dm);
+    const double d_hi = p_hi ? dp : dm, d_lo = p_hi ? dm : dp;
+    /* leg a (the lower-numbered driven leg) is the one with the larger duty? */
+    const int a_hi = (((open == 0) ? 1 : 0) == (p_hi ? xp : xm));
+    const double v1a = a_hi ? Vd : 0.0, v1b = a_hi ? 0.0 : Vd; /* sub-intervals 1 and 3 */
+    double edge[6], va[5], vb[5], dt[5];
+    int ns = 0, k;
+    if (u1 <= u0) {
+        return;
+    }
+    edge[0] = 0.0;
+    edge[1] = (d_hi >= 1.0) ? 0.0 : 0.5 * (1.0 - d_hi) * Ts;
+    edge[2] = (d_lo <= 0.0) ? 0.5 * Ts : 0.5 * (1.0 - d_lo) * Ts;
+    edge[3] = (d_lo <= 0.0) ? 0.5 * Ts : 0.5 * (1.0 + d_lo) * Ts;
+    edge[4] = (d_hi >= 1.0) ? Ts : 0.5 * (1.0 + d_hi) * Ts;
+    edge[5] = Ts;
+    for (k = 0; k < 5; ++k) {
+        double a = (edge[k] > u0) ? edge[k] : u0;
+        double b = (edge[k + 1] < u1) ? edge[k + 1] : u1;
+        if (b - a < 1e-15) {
+            continue;
+        }
+        /* sub-intervals: 0 and 4 both legs low, 1 and 3 only the larger duty high, 2 both high */
+        va[ns] = (k == 2) ? Vd : ((k & 1) ? v1a : 0.0);
+        vb[ns] = (k == 2) ? Vd : ((k & 1) ? v1b : 0.0);
+        dt[ns] = b - a;
+        ++ns;
+    }
+    L->segments += plant_advance_six_step(&L->p, open, va, vb, dt, ns);
+}
+
 int loop_run(loop_t *L, int n, float **sig, double *t_out)
 {
     int k;
+    plant_t *const p = &L->p;
     const double Ts = L->Ts;
     float *sp[LOOP_NSIG];
     int all_sig = (sig != NULL);
-    plant_update(&L->p); /* R, L may have been changed between chunks */
+    double hw, inv2w, mid_gain;
+    int six; /* the period's pattern is pattern_six_step's case whenever the bridge is on */
+    plant_update(p); /* R, L may have been changed between chunks */
     for (k = 0; all_sig && k < LOOP_NSIG; ++k) {
         sp[k] = sig[k];
         all_sig = (sig[k] != NULL);
     }
+    {
+        /* constants of this chunk (the parameters change only between calls) */
+        const double w = p->emf_rounding;
+        hw = (w > 0.0) ? 0.5 * w : 0.0;
+        inv2w = 0.5 / w;
+        mid_gain = 0.5 * Ts * p->pole_pairs;
+        six = (L->model == LOOP_MODEL_PWM && L->T_BT == 0.0 && L->os_n <= 0 && p->V_G == 0.0);
+    }
     for (k = 0; k < n; ++k) {
-        plant_t *p = &L->p;
-        int sec = plant_hall_sector(p->theta_e);
+        const double theta = p->theta_e, omega = p->omega;
+        const int sec = plant_hall_sector_in(theta);
+        const int last = (k == n - 1);
         double e[3], e_L, i_p, speed, Te, i_ref = 0.0, w_ref = L->w_ref_set;
         float m = 0.0f;
-        int on = 0, x;
+        int on = 0;
         {
-            double F[3];
-            plant_emf_shapes(p, p->theta_e, F);
+            double F[3], kw = p->k_e * omega;
+            plant_emf_shapes_in(theta, hw, inv2w, F);
+            e[0] = kw * F[0];
+            e[1] = kw * F[1];
+            e[2] = kw * F[2];
             Te = 0.0;
-            for (x = 0; x < 3; ++x) {
-                e[x] = p->k_e * p->omega * F[x];
-                Te += F[x] * p->i[x];
-            }
+            Te += F[0] * p->i[0];
+            Te += F[1] * p->i[1];
+            Te += F[2] * p->i[2];
             Te *= p->k_e;
         }
         e_L = e[sec_plus[sec]] - e[sec_minus[sec]];
-        i_p = pseudo_current(p->i, sec, p->omega);
-        speed = p->omega * RPM_PER_RAD_S;
+        i_p = pseudo_current(p->i, sec, omega);
+        speed = omega * RPM_PER_RAD_S;
         /* protection */
         if (L->fault_code == 0) {
             if (p->nonfinite || !(i_p == i_p)) {
@@ -375,31 +428,61 @@ int loop_run(loop_t *L, int n, float **sig, double *t_out)
         if (L->mode != LOOP_SPEED) {
             w_ref = (L->mode == LOOP_OFF) ? 0.0 : w_ref;
         }
-        /* record sample k */
-        L->last[SIG_I_P] = (float)i_p;
-        L->last[SIG_I_A] = (float)p->i[0];
-        L->last[SIG_I_B] = (float)p->i[1];
-        L->last[SIG_I_C] = (float)p->i[2];
-        L->last[SIG_SPEED] = (float)speed;
-        L->last[SIG_V_L] = m * (float)p->V_dc;
-        L->last[SIG_E_L] = (float)e_L;
-        L->last[SIG_M] = m;
-        L->last[SIG_HALL] = (float)sec;
-        L->last[SIG_I_P_REF] = (float)i_ref;
-        L->last[SIG_SPEED_REF] = (float)((L->mode == LOOP_SPEED) ? w_ref : 0.0);
-        L->last[SIG_V_DC] = (float)p->V_dc;
-        L->last[SIG_T_E] = (float)Te;
-        L->last[SIG_THETA_E] = (float)p->theta_e;
-        if (all_sig) { /* every signal recorded (the common case): no test per signal */
+        /* record sample k (L->last: only the chunk's last sample is kept, the one seen after
+         * the call) */
+        if (all_sig || last) {
+            float r[LOOP_NSIG];
             int j;
-            for (j = 0; j < LOOP_NSIG; ++j) {
-                sp[j][k] = L->last[j];
+            r[SIG_I_P] = (float)i_p;
+            r[SIG_I_A] = (float)p->i[0];
+            r[SIG_I_B] = (float)p->i[1];
+            r[SIG_I_C] = (float)p->i[2];
+            r[SIG_SPEED] = (float)speed;
+            r[SIG_V_L] = m * (float)p->V_dc;
+            r[SIG_E_L] = (float)e_L;
+            r[SIG_M] = m;
+            r[SIG_HALL] = (float)sec;
+            r[SIG_I_P_REF] = (float)i_ref;
+            r[SIG_SPEED_REF] = (float)((L->mode == LOOP_SPEED) ? w_ref : 0.0);
+            r[SIG_V_DC] = (float)p->V_dc;
+            r[SIG_T_E] = (float)Te;
+            r[SIG_THETA_E] = (float)p->theta_e;
+            if (all_sig) { /* every signal recorded (the common case): no test per signal */
+                for (j = 0; j < LOOP_NSIG; ++j) {
+                    sp[j][k] = r[j];
+                }
+            } else if (sig != NULL) {
+                for (j = 0; j < LOOP_NSIG; ++j) {
+                    if (sig[j] != NULL) {
+                        sig[j][k] = r[j];
+                    }
+                }
+            }
+            if (last) {
+                for (j = 0; j < LOOP_NSIG; ++j) {
+                    L->last[j] = r[j];
+                }
             }
         } else if (sig != NULL) {
             int j;
+            float r[LOOP_NSIG];
+            r[SIG_I_P] = (float)i_p;
+            r[SIG_I_A] = (float)p->i[0];
+            r[SIG_I_B] = (float)p->i[1];
+            r[SIG_I_C] = (float)p->i[2];
+            r[SIG_SPEED] = (float)speed;
+            r[SIG_V_L] = m * (float)p->V_dc;
+            r[SIG_E_L] = (float)e_L;
+            r[SIG_M] = m;
+            r[SIG_HALL] = (float)sec;
+            r[SIG_I_P_REF] = (float)i_ref;
+            r[SIG_SPEED_REF] = (float)((L->mode == LOOP_SPEED) ? w_ref : 0.0);
+            r[SIG_V_DC] = (float)p->V_dc;
+            r[SIG_T_E] = (float)Te;
+            r[SIG_THETA_E] = (float)p->theta_e;
             for (j = 0; j < LOOP_NSIG; ++j) {
                 if (sig[j] != NULL) {
-                    sig[j][k] = L->last[j];
+                    sig[j][k] = r[j];
                 }
             }
         }
@@ -410,11 +493,22 @@ int loop_run(loop_t *L, int n, float **sig, double *t_out)
             os_record(L, L->t);
         }
         /* advance the circuit over [t_k, t_k + Ts), back-EMF at the sample's mid-angle */
-        plant_set_segment_emf(p, p->theta_e + 0.5 * Ts * p->pole_pairs * p->omega);
+        plant_set_segment_emf(p, p->theta_e + mid_gain * p->omega);
         if (L->T_delay > 0.0) {
-            apply_pattern(L, L->m_prev2, L->sec_prev2, L->on_prev2, Ts - L->T_delay, Ts, L->t);
-            apply_pattern(L, L->m_prev, L->sec_prev, L->on_prev, 0.0, Ts - L->T_delay,
-                          L->t + L->T_delay);
+            if (six && L->on_prev2) {
+                pattern_six_step(L, L->m_prev2, L->sec_prev2, Ts - L->T_delay, Ts);
+            } else {
+                apply_pattern(L, L->m_prev2, L->sec_prev2, L->on_prev2, Ts - L->T_delay, Ts,
+                              L->t);
+            }
+            if (six && L->on_prev) {
+                pattern_six_step(L, L->m_prev, L->sec_prev, 0.0, Ts - L->T_delay);
+            } else {
+                apply_pattern(L, L->m_prev, L->sec_prev, L->on_prev, 0.0, Ts - L->T_delay,
+                              L->t + L->T_delay);
+            }
+        } else if (six && L->on_prev) {
+            pattern_six_step(L, L->m_prev, L->sec_prev, 0.0, Ts);
         } else {
             apply_pattern(L, L->m_prev, L->sec_prev, L->on_prev, 0.0, Ts, L->t);
         }
@@ -427,7 +521,7 @@ int loop_run(loop_t *L, int n, float **sig, double *t_out)
         L->m_prev = m;
         L->sec_prev = sec;
         L->on_prev = on;
-        plant_mech_step(p, Ts, L->a_m);
+        plant_mech_step_in(p, Ts, L->a_m);
         L->k += 1;
         L->t = L->k * Ts;
     }

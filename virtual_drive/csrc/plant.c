@@ -9,18 +9,6 @@
 
 static const double phase_shift[3] = {0.0, 2.0 * PI_D / 3.0, 4.0 * PI_D / 3.0};
 
-static double wrap_2pi(double x)
-{
-    if (x >= 0.0 && x < 2.0 * TWO_PI_D) {
-        return (x >= TWO_PI_D) ? x - TWO_PI_D : x;
-    }
-    if (x < 0.0 && x >= -TWO_PI_D) {
-        return x + TWO_PI_D;
-    }
-    x = fmod(x, TWO_PI_D);
-    return (x < 0.0) ? x + TWO_PI_D : x;
-}
-
 void plant_update(plant_t *p)
 {
     p->r_over_l = p->R / p->L;
@@ -29,38 +17,16 @@ void plant_update(plant_t *p)
 
 double plant_emf_shape(double theta, double w)
 {
-    double sgn = 1.0, T, x;
-    const double c = PI_D / 6.0;    /* corner at 30 deg */
-    const double slope = 6.0 / PI_D; /* ramp slope, 1/rad */
+    double hw = (w > 0.0) ? 0.5 * w : 0.0;
     if (theta >= TWO_PI_D || theta < 0.0) {
-        theta = wrap_2pi(theta);
+        theta = plant_wrap_2pi(theta);
     }
-    if (theta >= PI_D) { /* F(theta + pi) = -F(theta) */
-        theta -= PI_D;
-        sgn = -1.0;
-    }
-    if (theta > 0.5 * PI_D) { /* F(pi - theta) = F(theta) */
-        theta = PI_D - theta;
-    }
-    T = (theta < c) ? theta * slope : 1.0;
-    x = theta - c;
-    if (w > 0.0 && x > -0.5 * w && x < 0.5 * w) {
-        /* moving average of width w across a slope change of -slope */
-        double y = x + 0.5 * w;
-        T -= slope * (y * y * (0.5 / w) - (x > 0.0 ? x : 0.0));
-    }
-    return sgn * T;
+    return plant_emf_shape_in(theta, hw, 0.5 / w);
 }
 
 int plant_hall_sector(double theta_e)
 {
-    double u = wrap_2pi(theta_e - PI_D / 6.0);
-    int s;
-    s = (int)(u * (3.0 / PI_D));
-    if (s > 5) {
-        s = 5;
-    }
-    return s + 1;
+    return plant_hall_sector_in(theta_e);
 }
 
 void plant_emf(const plant_t *p, double theta_e, double e[3])
@@ -73,23 +39,20 @@ void plant_emf(const plant_t *p, double theta_e, double e[3])
 
 void plant_emf_shapes(const plant_t *p, double theta_e, double F[3])
 {
-    int x;
-    if (theta_e >= TWO_PI_D || theta_e < 0.0) {
-        theta_e = wrap_2pi(theta_e);
-    }
-    for (x = 0; x < 3; ++x) {
-        double th = theta_e - phase_shift[x];
-        F[x] = plant_emf_shape(th < 0.0 ? th + TWO_PI_D : th, p->emf_rounding);
-    }
+    double w = p->emf_rounding;
+    plant_emf_shapes_in(theta_e, (w > 0.0) ? 0.5 * w : 0.0, 0.5 / w, F);
 }
 
 void plant_set_segment_emf(plant_t *p, double theta_e)
 {
-    int x;
-    plant_emf_shapes(p, theta_e, p->F_seg);
-    for (x = 0; x < 3; ++x) {
-        p->e_seg[x] = p->k_e * p->omega * p->F_seg[x];
-    }
+    double w = p->emf_rounding, kw = p->k_e * p->omega, F[3];
+    plant_emf_shapes_in(theta_e, (w > 0.0) ? 0.5 * w : 0.0, 0.5 / w, F);
+    p->F_seg[0] = F[0];
+    p->F_seg[1] = F[1];
+    p->F_seg[2] = F[2];
+    p->e_seg[0] = kw * F[0];
+    p->e_seg[1] = kw * F[1];
+    p->e_seg[2] = kw * F[2];
 }
 
 static double sgn_d(double x) { return (x > 0.0) ? 1.0 : ((x < 0.0) ? -1.0 : 0.0); }
@@ -284,17 +247,33 @@ int plant_advance(plant_t *p, const int mode[3], const double v_drv[3], double d
     return nseg;
 }
 
-int plant_advance_six_step(plant_t *p, int z, const double *va_seg, const double *vb_seg,
-                           const double *dt_seg, int n)
+/* plant_advance_six_step for one open leg z (a compile-time constant where it is inlined, so
+ * e_seg[0..2] are ea, eb, ez in registers).  The fast path of plant_advance (legs a < b driven,
+ * z open, V_G = 0) over n consecutive segments, with the state in locals: the same floating-
+ * point operations in the same order, so the result is bit-identical to n calls of
+ * plant_advance.  Two bookkeeping simplifications, exact by construction: (1) at most two
+ * sub-segments per segment (a diode current-zero event leaves the open leg at zero current,
+ * after which no event can occur), so plant_advance's cap of 24 is never reached and not
+ * counted; (2) with the open leg not conducting (iz0 = iz1 = 0) its torque term Fz (0 + 0) is
+ * a signed zero, which leaves Te_int unchanged (Te_int starts at +0, so it is never -0), and
+ * |ib1| = |ia1|, |iz1| = 0 leave the current maximum at |ia1|. */
+#if defined(__GNUC__)
+#define PLANT_ALWAYS_INLINE inline __attribute__((always_inline))
+#else
+#define PLANT_ALWAYS_INLINE inline
+#endif
+
+static PLANT_ALWAYS_INLINE int six_step_z(plant_t *p, const int z, const double *va_seg,
+                             const double *vb_seg, const double *dt_seg, int n)
 {
-    /* The fast path of plant_advance (legs a < b driven, z open, V_G = 0) over n consecutive
-     * segments, with the state in locals: the same operations in the same order, so the
-     * result is bit-identical to n calls of plant_advance. */
     const int a = (z == 0) ? 1 : 0, b = (z == 2) ? 1 : 2;
     const double Vd = p->V_dc, R = p->R, Lh = p->L;
-    const double r_over_l = p->r_over_l, inv_r = p->inv_r, k_e = p->k_e, l_over_r = Lh / R;
+    const double r_over_l = p->r_over_l, inv_r = p->inv_r, kh = p->k_e * 0.5, l_over_r = Lh / R;
     const double ea = p->e_seg[a], eb = p->e_seg[b], ez = p->e_seg[z];
-    const double e0 = p->e_seg[0], e1 = p->e_seg[1], e2 = p->e_seg[2];
+    /* e_seg[0], e_seg[1], e_seg[2] (the order of the sum in vn) */
+    const double e0 = (z == 0) ? ez : ea;
+    const double e1 = (z == 1) ? ez : ((z == 0) ? ea : eb);
+    const double e2 = (z == 2) ? ez : eb;
     const double Fa = p->F_seg[a], Fb = p->F_seg[b], Fz = p->F_seg[z];
     double ia = p->i[a], ib = p->i[b], iz = p->i[z];
     double Te_int = p->Te_int, i_abs_max = p->i_abs_max;
@@ -302,12 +281,10 @@ int plant_advance_six_step(plant_t *p, int z, const double *va_seg, const double
     for (s = 0; s < n; ++s) {
         const double va = va_seg[s], vb = vb_seg[s];
         double remaining = dt_seg[s];
-        int iter = 0;
-        while (remaining > 1e-15 && iter < 24) {
+        while (remaining > 1e-15) {
             double Phi, G, t_seg = remaining, ia0 = ia, ib0 = ib, iz0 = iz;
-            double ia1, ib1, iz1, vz, ai;
+            double ia1, ib1, iz1, ai;
             int dz;
-            ++iter;
             if (iz0 > I_EPS) {
                 dz = 1;
             } else if (iz0 < -I_EPS) {
@@ -324,15 +301,18 @@ int plant_advance_six_step(plant_t *p, int z, const double *va_seg, const double
                 ib1 = -ia1;
                 iz1 = 0.0;
                 ia0 = 0.5 * (ia0 - ib0);
+                Te_int += kh * t_seg * (Fa * (ia0 + ia1) + Fb * (ib0 + ib1));
+                ai = fabs(ia1);
             } else { /* case A: leg z clamped by its diode */
-                double vn, ua, ub, uz;
-                vz = (dz > 0) ? 0.0 : Vd;
+                double vn, ua, ub, uz, vz = (dz > 0) ? 0.0 : Vd;
                 vn = (va + vb + vz - e0 - e1 - e2) * (1.0 / 3.0);
                 ua = va - vn - ea;
                 ub = vb - vn - eb;
                 uz = vz - vn - ez;
-                if (uz * dz < 0.0 && iz0 != 0.0
+                if (iz0 != 0.0 && ((dz > 0) ? (uz < 0.0) : (uz > 0.0))
                     && fabs(iz0) * Lh < t_seg * (fabs(uz) + R * fabs(iz0))) {
+                    /* (the pre-check: the current cannot reach zero sooner than at its initial
+                     * slope, so no event within t_seg unless i0 L / (|u| + R |i0|) < t_seg) */
                     double t_star = log1p_small(-iz0 * R / uz) * l_over_r;
                     if (t_star < t_seg) {
                         t_seg = t_star;
@@ -347,15 +327,15 @@ int plant_advance_six_step(plant_t *p, int z, const double *va_seg, const double
                     ia1 -= r;
                     ib1 -= r;
                 }
+                Te_int += kh * t_seg * (Fa * (ia0 + ia1) + Fb * (ib0 + ib1) + Fz * (iz0 + iz1));
+                ai = fabs(ia1) > fabs(ib1) ? fabs(ia1) : fabs(ib1);
+                if (fabs(iz1) > ai) {
+                    ai = fabs(iz1);
+                }
             }
-            Te_int += k_e * 0.5 * t_seg * (Fa * (ia0 + ia1) + Fb * (ib0 + ib1) + Fz * (iz0 + iz1));
             ia = ia1;
             ib = ib1;
             iz = iz1;
-            ai = fabs(ia1) > fabs(ib1) ? fabs(ia1) : fabs(ib1);
-            if (fabs(iz1) > ai) {
-                ai = fabs(iz1);
-            }
             if (ai > i_abs_max) {
                 i_abs_max = ai;
             }
@@ -378,18 +358,20 @@ int plant_advance_six_step(plant_t *p, int z, const double *va_seg, const double
     return nseg;
 }
 
+int plant_advance_six_step(plant_t *p, int z, const double *va_seg, const double *vb_seg,
+                           const double *dt_seg, int n)
+{
+    switch (z) {
+    case 0:
+        return six_step_z(p, 0, va_seg, vb_seg, dt_seg, n);
+    case 1:
+        return six_step_z(p, 1, va_seg, vb_seg, dt_seg, n);
+    default:
+        return six_step_z(p, 2, va_seg, vb_seg, dt_seg, n);
+    }
+}
+
 void plant_mech_step(plant_t *p, double Ts, double a_m)
 {
-    double Te = p->Te_int * (1.0 / Ts);
-    double w0 = p->omega;
-    if (p->B_tot > 0.0) {
-        p->omega = a_m * w0 + p->mech_gain * (Te - p->T_load);
-    } else {
-        p->omega = w0 + Ts * (Te - p->T_load) / p->J;
-    }
-    p->theta_e = wrap_2pi(p->theta_e + p->pole_pairs * 0.5 * (p->omega + w0) * Ts);
-    p->Te_int = 0.0;
-    if (!(p->omega == p->omega)) {
-        p->nonfinite = 1;
-    }
+    plant_mech_step_in(p, Ts, a_m);
 }

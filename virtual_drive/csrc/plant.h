@@ -28,6 +28,8 @@
 #ifndef BLDC_PLANT_H
 #define BLDC_PLANT_H
 
+#include <math.h>
+
 #define PLANT_DRIVEN 0
 #define PLANT_OPEN 1
 
@@ -91,5 +93,94 @@ void plant_emf(const plant_t *p, double theta_e, double e[3]);
 /* Shaft update over Ts with mean torque Te_int / Ts; resets Te_int; advances theta_e with the
  * mean speed.  a_m = exp(-B_tot Ts / J). */
 void plant_mech_step(plant_t *p, double Ts, double a_m);
+
+/* ---- inline helpers (the one home of this arithmetic; inlined into the sample loop) ---- */
+#define PLANT_PI 3.14159265358979323846
+#define PLANT_TWO_PI (2.0 * PLANT_PI)
+
+/* x (rad) wrapped into [0, 2 pi). */
+static inline double plant_wrap_2pi(double x)
+{
+    if (x >= 0.0 && x < 2.0 * PLANT_TWO_PI) {
+        return (x >= PLANT_TWO_PI) ? x - PLANT_TWO_PI : x;
+    }
+    if (x < 0.0 && x >= -PLANT_TWO_PI) {
+        return x + PLANT_TWO_PI;
+    }
+    x = fmod(x, PLANT_TWO_PI);
+    return (x < 0.0) ? x + PLANT_TWO_PI : x;
+}
+
+/* Trapezoid F(theta) of phase a for theta in [0, 2 pi), rounding half-width hw = w / 2 (rad;
+ * 0: ideal trapezoid) and inv2w = 0.5 / w. */
+static inline double plant_emf_shape_in(double theta, double hw, double inv2w)
+{
+    const double c = PLANT_PI / 6.0;    /* corner at 30 deg */
+    const double slope = 6.0 / PLANT_PI; /* ramp slope, 1/rad */
+    double T, x;
+    int neg = 0;
+    if (theta >= PLANT_PI) { /* F(theta + pi) = -F(theta) */
+        theta -= PLANT_PI;
+        neg = 1;
+    }
+    if (theta > 0.5 * PLANT_PI) { /* F(pi - theta) = F(theta) */
+        theta = PLANT_PI - theta;
+    }
+    T = (theta < c) ? theta * slope : 1.0;
+    x = theta - c;
+    if (x > -hw && x < hw) {
+        /* moving average of width w across a slope change of -slope */
+        double y = x + hw;
+        T -= slope * (y * y * inv2w - (x > 0.0 ? x : 0.0));
+    }
+    return neg ? -T : T;
+}
+
+/* F of the three phases at theta_e (rad, any value); hw, inv2w as plant_emf_shape_in. */
+static inline void plant_emf_shapes_in(double theta_e, double hw, double inv2w, double F[3])
+{
+    double tb, tc;
+    if (theta_e >= PLANT_TWO_PI || theta_e < 0.0) {
+        theta_e = plant_wrap_2pi(theta_e);
+    }
+    tb = theta_e - 2.0 * PLANT_PI / 3.0;
+    tc = theta_e - 4.0 * PLANT_PI / 3.0;
+    if (tb < 0.0) {
+        tb += PLANT_TWO_PI; /* (may round to 2 pi: wrapped to 0) */
+        tb = (tb >= PLANT_TWO_PI) ? tb - PLANT_TWO_PI : tb;
+    }
+    if (tc < 0.0) {
+        tc += PLANT_TWO_PI;
+        tc = (tc >= PLANT_TWO_PI) ? tc - PLANT_TWO_PI : tc;
+    }
+    F[0] = plant_emf_shape_in(theta_e, hw, inv2w);
+    F[1] = plant_emf_shape_in(tb, hw, inv2w);
+    F[2] = plant_emf_shape_in(tc, hw, inv2w);
+}
+
+/* Hall sector 1..6 of theta_e (rad). */
+static inline int plant_hall_sector_in(double theta_e)
+{
+    double u = plant_wrap_2pi(theta_e - PLANT_PI / 6.0);
+    int s = (int)(u * (3.0 / PLANT_PI));
+    return (s > 5) ? 6 : s + 1;
+}
+
+/* plant_mech_step's body. */
+static inline void plant_mech_step_in(plant_t *p, double Ts, double a_m)
+{
+    double Te = p->Te_int * (1.0 / Ts);
+    double w0 = p->omega;
+    if (p->B_tot > 0.0) {
+        p->omega = a_m * w0 + p->mech_gain * (Te - p->T_load);
+    } else {
+        p->omega = w0 + Ts * (Te - p->T_load) / p->J;
+    }
+    p->theta_e = plant_wrap_2pi(p->theta_e + p->pole_pairs * 0.5 * (p->omega + w0) * Ts);
+    p->Te_int = 0.0;
+    if (!(p->omega == p->omega)) {
+        p->nonfinite = 1;
+    }
+}
 
 #endif
