@@ -14,24 +14,17 @@ static const int sec_open[7] = {0, 2, 1, 0, 2, 1, 0};
 
 static double sgn_d(double x) { return (x > 0.0) ? 1.0 : ((x < 0.0) ? -1.0 : 0.0); }
 
-static int phase_sign(int sec, int ph)
-{
-    if (sec_plus[sec] == ph) {
-        return 1;
-    }
-    if (sec_minus[sec] == ph) {
-        return -1;
-    }
-    return 0;
-}
+/* sign of the open phase of sector s in the previous sector along the direction of rotation:
+ * [0][s] for omega >= 0 (previous = s - 1), [1][s] otherwise (previous = s + 1) */
+static const double open_sign[2][7] = {{0.0, 1.0, -1.0, 1.0, -1.0, 1.0, -1.0},
+                                       {0.0, -1.0, 1.0, -1.0, 1.0, -1.0, 1.0}};
 
 /* Signed pseudo current: (s+ i+ + s- i- + s_o i_o)/2 with the open phase signed as in the
  * previous sector along the direction of rotation; equals eq. (1) when motoring. */
 static double pseudo_current(const double i[3], int sec, double omega)
 {
-    int prev = (omega >= 0.0) ? (sec == 1 ? 6 : sec - 1) : (sec == 6 ? 1 : sec + 1);
     int o = sec_open[sec];
-    return 0.5 * (i[sec_plus[sec]] - i[sec_minus[sec]] + phase_sign(prev, o) * i[o]);
+    return 0.5 * (i[sec_plus[sec]] - i[sec_minus[sec]] + open_sign[!(omega >= 0.0)][sec] * i[o]);
 }
 
 void loop_update_mech(loop_t *L)
@@ -492,8 +485,15 @@ int loop_run(loop_t *L, int n, float **sig, double *t_out)
         if (L->os_n > 0) {
             os_record(L, L->t);
         }
-        /* advance the circuit over [t_k, t_k + Ts), back-EMF at the sample's mid-angle */
-        plant_set_segment_emf(p, p->theta_e + mid_gain * p->omega);
+        /* advance the circuit over [t_k, t_k + Ts), back-EMF at the sample's mid-angle (as
+         * plant_set_segment_emf) */
+        {
+            const double kw = p->k_e * p->omega;
+            plant_emf_shapes_in(p->theta_e + mid_gain * p->omega, hw, inv2w, p->F_seg);
+            p->e_seg[0] = kw * p->F_seg[0];
+            p->e_seg[1] = kw * p->F_seg[1];
+            p->e_seg[2] = kw * p->F_seg[2];
+        }
         if (L->T_delay > 0.0) {
             if (six && L->on_prev2) {
                 pattern_six_step(L, L->m_prev2, L->sec_prev2, Ts - L->T_delay, Ts);

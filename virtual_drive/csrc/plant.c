@@ -247,8 +247,7 @@ int plant_advance(plant_t *p, const int mode[3], const double v_drv[3], double d
     return nseg;
 }
 
-/* plant_advance_six_step for one open leg z (a compile-time constant where it is inlined, so
- * e_seg[0..2] are ea, eb, ez in registers).  The fast path of plant_advance (legs a < b driven,
+/* plant_advance_six_step for the open leg z.  The fast path of plant_advance (legs a < b driven,
  * z open, V_G = 0) over n consecutive segments, with the state in locals: the same floating-
  * point operations in the same order, so the result is bit-identical to n calls of
  * plant_advance.  Two bookkeeping simplifications, exact by construction: (1) at most two
@@ -257,14 +256,8 @@ int plant_advance(plant_t *p, const int mode[3], const double v_drv[3], double d
  * counted; (2) with the open leg not conducting (iz0 = iz1 = 0) its torque term Fz (0 + 0) is
  * a signed zero, which leaves Te_int unchanged (Te_int starts at +0, so it is never -0), and
  * |ib1| = |ia1|, |iz1| = 0 leave the current maximum at |ia1|. */
-#if defined(__GNUC__)
-#define PLANT_ALWAYS_INLINE inline __attribute__((always_inline))
-#else
-#define PLANT_ALWAYS_INLINE inline
-#endif
-
-static PLANT_ALWAYS_INLINE int six_step_z(plant_t *p, const int z, const double *va_seg,
-                             const double *vb_seg, const double *dt_seg, int n)
+static int six_step_z(plant_t *p, const int z, const double *va_seg, const double *vb_seg,
+                      const double *dt_seg, int n)
 {
     const int a = (z == 0) ? 1 : 0, b = (z == 2) ? 1 : 2;
     const double Vd = p->V_dc, R = p->R, Lh = p->L;
@@ -282,33 +275,34 @@ static PLANT_ALWAYS_INLINE int six_step_z(plant_t *p, const int z, const double 
         const double va = va_seg[s], vb = vb_seg[s];
         double remaining = dt_seg[s];
         while (remaining > 1e-15) {
-            double Phi, G, t_seg = remaining, ia0 = ia, ib0 = ib, iz0 = iz;
-            double ia1, ib1, iz1, ai;
-            int dz;
-            if (iz0 > I_EPS) {
+            double Phi, G, t_seg = remaining, ia0 = ia, ib0 = ib, ia1, ib1, iz1, ai;
+            int dz = 0;
+            if (iz > I_EPS) {
                 dz = 1;
-            } else if (iz0 < -I_EPS) {
+            } else if (iz < -I_EPS) {
                 dz = -1;
             } else {
                 double v_open = 0.5 * (va + vb - ea - eb) + ez;
-                iz0 = 0.0;
-                dz = (v_open > Vd) ? -1 : ((v_open < 0.0) ? 1 : 0);
+                if (v_open > Vd) {
+                    dz = -1;
+                } else if (v_open < 0.0) {
+                    dz = 1;
+                }
+                iz = 0.0;
             }
             if (dz == 0) { /* case B: one loop current through a and b */
                 double ul = 0.5 * (va - vb - ea + eb);
                 phi_g(r_over_l, inv_r, t_seg, &Phi, &G);
                 ia1 = Phi * ia0 + G * ul;
                 ib1 = -ia1;
-                iz1 = 0.0;
-                ia0 = 0.5 * (ia0 - ib0);
-                Te_int += kh * t_seg * (Fa * (ia0 + ia1) + Fb * (ib0 + ib1));
+                Te_int += kh * t_seg * (Fa * (0.5 * (ia0 - ib0) + ia1) + Fb * (ib0 + ib1));
                 ai = fabs(ia1);
+                iz1 = 0.0;
             } else { /* case A: leg z clamped by its diode */
-                double vn, ua, ub, uz, vz = (dz > 0) ? 0.0 : Vd;
-                vn = (va + vb + vz - e0 - e1 - e2) * (1.0 / 3.0);
-                ua = va - vn - ea;
-                ub = vb - vn - eb;
-                uz = vz - vn - ez;
+                const double iz0 = iz, vz = (dz > 0) ? 0.0 : Vd;
+                const double vn = (va + vb + vz - e0 - e1 - e2) * (1.0 / 3.0);
+                const double ua = va - vn - ea, ub = vb - vn - eb, uz = vz - vn - ez;
+                double r;
                 if (iz0 != 0.0 && ((dz > 0) ? (uz < 0.0) : (uz > 0.0))
                     && fabs(iz0) * Lh < t_seg * (fabs(uz) + R * fabs(iz0))) {
                     /* (the pre-check: the current cannot reach zero sooner than at its initial
@@ -322,11 +316,9 @@ static PLANT_ALWAYS_INLINE int six_step_z(plant_t *p, const int z, const double 
                 iz1 = (t_seg < remaining) ? 0.0 : Phi * iz0 + G * uz;
                 ia1 = Phi * ia0 + G * ua;
                 ib1 = Phi * ib0 + G * ub;
-                { /* star constraint against rounding */
-                    double r = 0.5 * (ia1 + ib1 + iz1);
-                    ia1 -= r;
-                    ib1 -= r;
-                }
+                r = 0.5 * (ia1 + ib1 + iz1); /* star constraint against rounding */
+                ia1 -= r;
+                ib1 -= r;
                 Te_int += kh * t_seg * (Fa * (ia0 + ia1) + Fb * (ib0 + ib1) + Fz * (iz0 + iz1));
                 ai = fabs(ia1) > fabs(ib1) ? fabs(ia1) : fabs(ib1);
                 if (fabs(iz1) > ai) {
@@ -339,7 +331,7 @@ static PLANT_ALWAYS_INLINE int six_step_z(plant_t *p, const int z, const double 
             if (ai > i_abs_max) {
                 i_abs_max = ai;
             }
-            if (!(ai == ai) || ai > 1e12) {
+            if (!(ai <= 1e12)) { /* (NaN or beyond 1e12 A) */
                 nonfinite = 1;
                 break;
             }
