@@ -20,9 +20,16 @@ first one whose speed* series ends at the new setpoint; the first redraw of the 
 after its arrival is the one that shows the step. CPU is utime + stime of the dashboard process from
 /proc over a window of wall time.
 
+  5. the 3D rotor's cost (with ``--3d``, or alone with ``--rotor``): one browser streaming at
+     500 rpm, the dashboard's CPU and the browser's (every Chromium process), WebGL draw calls/s
+     and rotor scene messages/s received by the page, with the rotor shown, hidden (the page's
+     "3D rotor" checkbox unchecked) and for reference without it (``--no-3d``). Goal: hidden
+     costs what ``--no-3d`` costs (no scene message, only the empty scene's 1 Hz heartbeat).
+
 Every figure is printed with the load average (1 min) at the time it was taken.
 
 Run: python benchmarks/bench_dashboard.py [--steps 6] [--window 10] [--browsers 3] [--3d]
+     [--rotor]
 """
 
 from __future__ import annotations
@@ -236,9 +243,10 @@ def scene_messages(messages: list[dict]) -> int:
 ROTOR_PREFIXES = ("/motor", "/rotor", "/stator", "/floor", "/shaft", "/status", "/legend")
 
 
-def rotor_cost(window: float) -> None:
+def rotor_cost(window: float) -> list[str]:
     """The 3D rotor's cost with one browser streaming the live plots at 500 rpm: dashboard with
-    the rotor shown, hidden (the page's "3D rotor" checkbox off) and without it (``--no-3d``)."""
+    the rotor shown, hidden (the page's "3D rotor" checkbox off) and without it (``--no-3d``).
+    Returns the lines to print (a virtual drive of its own, as :func:`main`)."""
     from playwright.sync_api import sync_playwright
 
     from dashboard.browser import click as click_el
@@ -290,10 +298,10 @@ def rotor_cost(window: float) -> None:
                 browser.close()
     finally:
         stop_process(drive)
-    print(f"3D rotor cost, 1 browser streaming at 500 rpm, {window:.0f} s windows, "
-          f"{os.cpu_count()} cores:")
-    for ln in lines:
-        print("  " + ln)
+    head = (f"3D rotor cost, 1 browser streaming at 500 rpm, {window:.0f} s windows, "
+            f"{os.cpu_count()} cores (server: the dashboard process; browser: every Chromium "
+            "process, software WebGL):")
+    return [head, *("  " + ln for ln in lines)]
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -311,7 +319,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     args = ap.parse_args(argv)
     if args.rotor:
-        rotor_cost(args.window)
+        print("\n".join(rotor_cost(args.window)))
         return 0
     from playwright.sync_api import sync_playwright
 
@@ -439,6 +447,7 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         stack.close()  # the dashboard first, then the drive and its hub
         stop_process(drive)
+    rotor = rotor_cost(args.window) if args.scene else []
 
     print()
     print(
@@ -465,6 +474,8 @@ def main(argv: list[str] | None = None) -> int:
         f"[load {stream_load:.1f}]; {many_cpu:.1f} % with {max(1, args.browsers)} browsers "
         f"(goal <= 25 %) [load {many_load:.1f}]"
     )
+    for ln in rotor:
+        print(ln)
     return 0
 
 

@@ -276,6 +276,7 @@ class RotorScene:
         """Set the angle from the drive's θ_e (one SDO read); False if it could not be read."""
         if self.read_theta_e is None:
             return False
+        self._anchored = time.monotonic()  # tried: a drive without θ_e is asked again only later
         got = None
         with contextlib.suppress(Exception):
             got = self.read_theta_e()
@@ -286,7 +287,6 @@ class RotorScene:
             self.angle = (theta_e / self.pole_pairs) % (2 * math.pi)
             self._t = t
             self._mono = time.monotonic()
-            self._anchored = time.monotonic()
             if self.sector != -1:
                 self.sector = self._sector()
         return True

@@ -11,7 +11,16 @@ import numpy as np
 import pytest
 import viser
 
-from dashboard._gui_scene import DIM, PHASE_COLORS, SIX_STEP, RotorScene, _tube, background
+from dashboard._gui_scene import (
+    ANCHOR_PERIOD_S,
+    DIM,
+    PHASE_COLORS,
+    ROOT,
+    SIX_STEP,
+    RotorScene,
+    _tube,
+    background,
+)
 
 pytestmark = pytest.mark.timeout(60)
 
@@ -101,3 +110,41 @@ def test_rotor_turns_with_the_speed_and_lights_the_pair(server):
     scene.set_shown(browser, False)
     assert scene.shown == 0
     scene.detach(7)
+
+
+def test_hidden_everywhere_sends_nothing_and_theta_e_is_asked_rarely(server, monkeypatch):
+    """What viser is asked to send (its queue, wrapped): nothing for the rotor while no browser
+    shows it, though the drive turns; a drive that cannot tell θ_e is asked once per
+    ANCHOR_PERIOD_S at most, and the angle then follows the speed alone."""
+    asked = []
+
+    def no_theta_e():
+        asked.append(time.monotonic())
+        raise OSError("SDO abort 0x06020000: object does not exist")
+
+    scene = RotorScene(server, pole_pairs=4, read_theta_e=no_theta_e)
+    browser = SimpleNamespace(client_id=8, gui=server.gui, scene=server.scene)
+    scene.attach(browser, shown=False)
+    assert scene.shown == 0 and asked == []
+    queued = []
+    ws = server._websock_server
+    orig = ws.queue_message
+    monkeypatch.setattr(ws, "queue_message", lambda m: (queued.append(m), orig(m))[1])
+    t = time.time() + np.arange(1, 101) * 1e-3
+    for k in range(5):  # 500 rpm, five pushes 0.1 s apart (the rate limit lifted)
+        scene._sent = -math.inf
+        scene.update(500.0, {"t": t + 0.1 * k, "measurements.speed": np.full(100, 500.0)})
+    scene.show_status("500 rpm")
+    assert [m for m in queued if str(getattr(m, "name", "")).startswith(ROOT)] == []
+    assert scene.angle != 0.0  # the angle kept up meanwhile
+    scene.set_shown(browser, True)  # shown: θ_e asked (and refused), the view built
+    assert len(asked) == 1 and scene.shown == 1
+    assert any(str(getattr(m, "name", "")).startswith(ROOT) for m in queued)  # the probe sees
+    for _ in range(20):
+        scene.maybe_anchor()  # the status loop's 0.25 s tick
+    assert len(asked) == 1  # not again before ANCHOR_PERIOD_S
+    scene._anchored -= ANCHOR_PERIOD_S
+    scene.maybe_anchor()
+    assert len(asked) == 2
+    scene.set_shown(browser, False)
+    scene.detach(8)
