@@ -175,16 +175,19 @@ class BenchGui:
             self._gone[panel.token] = time.monotonic()
             self.refresh_status()
 
-    def _read_theta_e(self) -> tuple[float, float] | None:
-        """The drive's electrical angle θ_e (rad, one SDO read) and the host time (s,
-        ``time.time()``, the live stream's clock) it was read at; None while an action holds
-        the drive."""
+    def _read_theta_e(self) -> tuple[float, float, int] | None:
+        """The drive's electrical angle θ_e (rad, one SDO read), the host time (s,
+        ``time.time()``, the live stream's clock) it was read at and its motor's pole pairs
+        (the rotor's mechanical angle is θ_e / pole pairs); None while an action holds the
+        drive."""
         if not self.bench.lock.acquire(timeout=0.05):
             return None
         try:
             t0 = time.time()
             theta_e = float(self.bench.drive.read("measurements.theta_e"))
-            return theta_e, (t0 + time.time()) / 2
+            t = (t0 + time.time()) / 2
+            pole_pairs = int(self.bench.drive.read("motor.pole_pairs"))
+            return theta_e, t, pole_pairs
         finally:
             self.bench.lock.release()
 

@@ -48,8 +48,9 @@ ROOT = "/motor"  #: every node of the view lies under this scene path
 TOGGLE_LABEL = "3D rotor"  #: the per-browser checkbox that shows / hides the view
 ANCHOR_PERIOD_S = 10.0  #: while shown, θ_e is read again this often (s)
 
-#: reads the drive's electrical angle: () → (θ_e rad, time.time() of the read) or None
-ThetaReader = Callable[[], "tuple[float, float] | None"]
+#: reads the drive's electrical angle: () → (θ_e rad, time.time() of the read) or None, or
+#: (θ_e, time, pole pairs of the drive's motor)
+ThetaReader = Callable[[], "tuple[float, float] | tuple[float, float, int] | None"]
 
 
 def _wxyz_z(angle: float) -> tuple[float, float, float, float]:
@@ -282,8 +283,10 @@ class RotorScene:
             got = self.read_theta_e()
         if got is None or not math.isfinite(got[0]):
             return False
-        theta_e, t = got
+        theta_e, t = got[0], got[1]
         with self._lock:
+            if len(got) > 2 and int(got[2]) >= 1:  # the drive's motor.pole_pairs (0x2000:4)
+                self.pole_pairs = int(got[2])  # (the magnets drawn follow on the next show)
             self.angle = (theta_e / self.pole_pairs) % (2 * math.pi)
             self._t = t
             self._mono = time.monotonic()

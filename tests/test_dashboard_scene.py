@@ -148,3 +148,13 @@ def test_hidden_everywhere_sends_nothing_and_theta_e_is_asked_rarely(server, mon
     assert len(asked) == 2
     scene.set_shown(browser, False)
     scene.detach(8)
+
+
+def test_rotor_angle_uses_the_drives_pole_pairs(server):
+    """The mechanical angle is θ_e / p with p the drive's motor.pole_pairs (0x2000:4) when
+    the reader gives it, not the drawing's default of 4."""
+    theta_e0 = 3.0
+    scene = RotorScene(server, pole_pairs=4, read_theta_e=lambda: (theta_e0, time.time(), 2))
+    assert scene.anchor()
+    assert scene.pole_pairs == 2
+    assert scene.angle == pytest.approx(theta_e0 / 2)
