@@ -20,6 +20,9 @@ first one whose speed* series ends at the new setpoint; the first redraw of the 
 after its arrival is the one that shows the step. CPU is utime + stime of the dashboard process from
 /proc over a window of wall time.
 
+The dashboard runs as users get it (the 3D rotor exists, its checkbox unchecked: it costs
+nothing); ``--3d`` shows it on every page (``drive-dashboard --show-3d``).
+
   5. the 3D rotor's cost (with ``--3d``, or alone with ``--rotor``): one browser streaming at
      500 rpm, the dashboard's CPU and the browser's (every Chromium process), WebGL draw calls/s
      and rotor scene messages/s received by the page, with the rotor shown, hidden (the page's
@@ -261,7 +264,7 @@ def rotor_cost(window: float) -> list[str]:
     try:
         assert "ready" in drive.stdout.readline(), "virtual drive did not start"
         for variant in ("3d", "no-3d"):
-            extra = [] if variant == "3d" else ["--no-3d"]
+            extra = ["--show-3d"] if variant == "3d" else ["--no-3d"]
             with run_dashboard(["--join-hub", str(hub_port), *extra]) as running, \
                     sync_playwright() as p:
                 browser = launch(p)
@@ -308,7 +311,13 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=6, help="speed steps for the latency figure")
     ap.add_argument("--window", type=float, default=10.0, help="CPU / refresh window, s")
-    ap.add_argument("--3d", dest="scene", action="store_true", help="keep the 3D rotor view")
+    ap.add_argument(
+        "--3d",
+        dest="scene",
+        action="store_true",
+        help="the 3D rotor shown on every page (--show-3d); by default the dashboard runs as "
+        "users get it: the rotor's checkbox unchecked",
+    )
     ap.add_argument(
         "--browsers", type=int, default=3, help="browsers for the many-viewer CPU figure"
     )
@@ -345,7 +354,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         ready = drive.stdout.readline()
         assert "ready" in ready, f"virtual drive did not start: {ready!r}"
-        args_dash = ["--join-hub", str(hub_port)] + ([] if args.scene else ["--no-3d"])
+        args_dash = ["--join-hub", str(hub_port)] + (["--show-3d"] if args.scene else [])
         running = stack.enter_context(run_dashboard(args_dash))
         dash, url = running.proc, running.gui_url
         time.sleep(2.0)

@@ -163,7 +163,7 @@ class BenchGui:
         with contextlib.suppress(Exception):
             panel.load_gains()
         if self.scene is not None:  # its "3D rotor" checkbox and, shown, its rotor
-            self.scene.attach(client)
+            self.scene.attach(client, shown=self.config.scene_3d_shown)
         self.refresh_status()
 
     def _on_disconnect(self, client: viser.ClientHandle) -> None:

@@ -68,6 +68,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--gui-port", type=int, default=8080, help="GUI port (default 8080; 0 = any)")
     p.add_argument("--no-3d", action="store_true", help="no 3D rotor view (lighter browsers)")
     p.add_argument(
+        "--show-3d",
+        action="store_true",
+        help="show the 3D rotor when a page opens (default: its checkbox starts unchecked; a "
+        "turning rotor costs a browser with software WebGL 50-130 %% of a core)",
+    )
+    p.add_argument(
         "--allow-remote", action="store_true", help="allow a non-loopback --host (needs --token)"
     )
     p.add_argument(
@@ -110,6 +116,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         channel=args.channel,
         bitrate=args.bitrate,
         scene_3d=not args.no_3d,
+        scene_3d_shown=args.show_3d,
         node_id=args.node,
         allow_remote=args.allow_remote,
         token=args.token,

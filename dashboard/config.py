@@ -34,6 +34,10 @@ class BenchConfig:
     hub_port: TCP port of the loopback hub on 127.0.0.1 (0 = any free port).
     join_hub: TCP port of an already running loopback hub to join (instead of interface).
     token: access token; required (and checked on every request) when ``allow_remote``.
+    scene_3d: the 3D rotor view exists (each browser then has a "3D rotor" checkbox).
+    scene_3d_shown: the checkbox starts checked. Off by default: a turning rotor keeps the
+    page re-rendering, 50–130 % of a core in a browser with software WebGL (benchmarks/
+    bench_dashboard.py --rotor), while hidden it costs nothing.
     """
 
     host: str = "127.0.0.1"
@@ -53,6 +57,7 @@ class BenchConfig:
     live_window_s: float = 4.0
     gui_rate_hz: float = 24.0  # plot refreshes/s (≤ 0.5 MB/s per tab); a step pushes at once
     scene_3d: bool = True
+    scene_3d_shown: bool = False
     stream_rate_hz: float = 20.0
     extra_origins: list[str] = field(default_factory=list)
 

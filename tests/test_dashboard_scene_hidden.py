@@ -136,7 +136,9 @@ def wrap(a: float) -> float:
 
 @pytest.fixture(scope="module")
 def bench():
-    cfg = BenchConfig(virtual=True, speed_factor=1.0, gui_port=0, scene_3d=True)
+    cfg = BenchConfig(
+        virtual=True, speed_factor=1.0, gui_port=0, scene_3d=True, scene_3d_shown=True
+    )
     with TestClient(create_app(cfg), base_url="http://127.0.0.1:8000") as c:
         yield c.app.state.gui, c.app.state.bench
 
@@ -235,3 +237,34 @@ def hide_and_watch(page, drive_bench, other: RawViewer) -> float | None:
     # the empty scene's heartbeat (~1 render/s); the turning rotor drew ~800 calls/s here
     assert draws <= 5 * dt + 20, f"{draws} WebGL draws in {dt:.1f} s with the rotor hidden"
     return hidden_angle
+
+
+def test_by_default_a_page_opens_with_the_rotor_hidden_and_is_sent_none():
+    """``drive-dashboard`` as users start it (``BenchConfig()`` defaults, no ``--show-3d``): a
+    new viser client gets the "3D rotor" checkbox unchecked and, while the live plots stream,
+    no message for any rotor node."""
+    cfg = BenchConfig(virtual=True, speed_factor=1.0, gui_port=0)
+    assert cfg.scene_3d and not cfg.scene_3d_shown
+    with TestClient(create_app(cfg), base_url="http://127.0.0.1:8000") as c:
+        gui = c.app.state.gui
+        viewer = RawViewer(gui.port)
+        try:
+            seen = viewer.seen
+
+            def toggle() -> dict | None:
+                """The checkbox's creation message (``value``: checked, ``props``: label...)."""
+                for _, m in list(seen.messages):
+                    if (m.get("props") or {}).get("label") == TOGGLE_LABEL:
+                        return m
+                return None
+
+            deadline = time.monotonic() + WAIT_S
+            while (toggle() is None or seen.plot_updates() < 10) and time.monotonic() < deadline:
+                time.sleep(0.1)
+            box = toggle()
+            assert box is not None, "no '3D rotor' checkbox reached the client"
+            assert box.get("value") is False
+            assert seen.plot_updates() >= 10, "the live plots did not stream"
+            assert seen.rotor() == [], "rotor messages sent to a client that did not ask"
+        finally:
+            viewer.close()
