@@ -42,7 +42,7 @@ def take(out: Path, scene_3d: bool = True, settle_s: float = 0.2) -> None:
     """Write the bench screenshot (PNG) to ``out``."""
     from playwright.sync_api import sync_playwright
 
-    args = ["--virtual"] + ([] if scene_3d else ["--no-3d"])
+    args = ["--virtual"] + (["--show-3d"] if scene_3d else ["--no-3d"])
     with run_dashboard(args) as dash, sync_playwright() as p:
         browser = launch(p)
         try:
