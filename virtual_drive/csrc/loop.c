@@ -423,7 +423,7 @@ int loop_run(loop_t *L, int n, float **sig, double *t_out)
         }
         /* record sample k (L->last: only the chunk's last sample is kept, the one seen after
          * the call) */
-        if (all_sig || last) {
+        if (sig != NULL || last) {
             float r[LOOP_NSIG];
             int j;
             r[SIG_I_P] = (float)i_p;
@@ -454,28 +454,6 @@ int loop_run(loop_t *L, int n, float **sig, double *t_out)
             if (last) {
                 for (j = 0; j < LOOP_NSIG; ++j) {
                     L->last[j] = r[j];
-                }
-            }
-        } else if (sig != NULL) {
-            int j;
-            float r[LOOP_NSIG];
-            r[SIG_I_P] = (float)i_p;
-            r[SIG_I_A] = (float)p->i[0];
-            r[SIG_I_B] = (float)p->i[1];
-            r[SIG_I_C] = (float)p->i[2];
-            r[SIG_SPEED] = (float)speed;
-            r[SIG_V_L] = m * (float)p->V_dc;
-            r[SIG_E_L] = (float)e_L;
-            r[SIG_M] = m;
-            r[SIG_HALL] = (float)sec;
-            r[SIG_I_P_REF] = (float)i_ref;
-            r[SIG_SPEED_REF] = (float)((L->mode == LOOP_SPEED) ? w_ref : 0.0);
-            r[SIG_V_DC] = (float)p->V_dc;
-            r[SIG_T_E] = (float)Te;
-            r[SIG_THETA_E] = (float)p->theta_e;
-            for (j = 0; j < LOOP_NSIG; ++j) {
-                if (sig[j] != NULL) {
-                    sig[j][k] = r[j];
                 }
             }
         }
