@@ -28,13 +28,14 @@ from virtual_drive.hub_protocol import (
     parse_sendat_fields,
     scan_sendats,
 )
+from virtual_drive.node.drive_node import TIMED_PERIOD
 from virtual_drive.node.hub_bus import HubBus, format_send, format_sendat
 
 pytestmark = pytest.mark.timeout(120)
 
 #: run-queue wait (s/s) of this process (drive, hub and receiver threads) below which the
 #: frames' bus times show the drive's own timing: a hub thread kept waiting more than its
-#: 50 ms back-dating window puts a backlog back to back (hub_protocol.SENDAT_MAX_BACKDATE_S)
+#: back-dating window puts a backlog back to back (hub_protocol.SENDAT_MAX_BACKDATE_S)
 CLEAN_WAIT = 0.25
 
 
@@ -192,7 +193,7 @@ class _Frames(can.Listener):
 
 
 def test_batched_drive_sends_each_tpdo_on_its_own_ms_with_its_own_value():
-    """The drive on the hub wakes every 5 ms (not every 1 ms), yet TPDO3's speed reference
+    """The drive on the hub wakes every TIMED_PERIOD (not every 1 ms), yet TPDO3's speed reference
     is on the bus every 1 ms and follows a 1000 rpm/s ramp sample by sample (1 rpm per frame,
     not a staircase of five equal values)."""
     from virtual_drive.node import VirtualDrive
@@ -229,8 +230,8 @@ def test_batched_drive_sends_each_tpdo_on_its_own_ms_with_its_own_value():
             rx.shutdown()
             drive.stop()
             bus.shutdown()
-    assert drive.runner.period == pytest.approx(0.005)
-    assert wakes <= 1.2 / 0.005, wakes  # about 200 wake-ups/s, not 1000
+    assert drive.runner.period == pytest.approx(TIMED_PERIOD) and TIMED_PERIOD >= 0.005
+    assert wakes <= 1.2 / TIMED_PERIOD, wakes  # 1 / TIMED_PERIOD wake-ups/s, not 1000
     tpdo3 = [m for m in window if m.arbitration_id == 0x381]
     assert len(tpdo3) >= min_rate(1000, probe.wait), (len(tpdo3), probe)
     stamps = [m.timestamp for m in tpdo3]
@@ -238,7 +239,7 @@ def test_batched_drive_sends_each_tpdo_on_its_own_ms_with_its_own_value():
     assert statistics.median(gaps) == pytest.approx(1e-3, abs=0.05e-3)
     refs = [struct.unpack("<ff", bytes(m.data))[1] for m in tpdo3]
     steps = [b - a for a, b in itertools.pairwise(refs)]
-    # 1000 rpm/s: 1 rpm per 1 ms frame; a value sampled once per 5 ms tick would repeat
+    # 1000 rpm/s: 1 rpm per 1 ms frame; a value sampled once per tick would repeat
     assert sum(abs(s) < 0.25 for s in steps) <= 0.05 * len(steps), steps[:20]
     assert statistics.median(steps) == pytest.approx(1.0, abs=0.1)
     slope = (refs[-1] - refs[0]) / (stamps[-1] - stamps[0])
@@ -251,7 +252,7 @@ def test_batched_drive_sends_each_tpdo_on_its_own_ms_with_its_own_value():
 
 def test_batched_drive_runs_a_steady_tick_in_one_call_with_each_ms_its_own_value():
     """With its setpoint steady (mode -1, i_p* = 15 A from standstill) the drive runs each
-    5 ms tick in one simulator call, yet TPDO2's speed on the bus moves every 1 ms as the
+    tick in one simulator call, yet TPDO2's speed on the bus moves every 1 ms as the
     shaft equation says: J dw/dt = K_t i_p - B w - k_gen n - T_load (K_t = K_rpm 60/(2 pi),
     parameters as the object dictionary gives them)."""
     from virtual_drive.node import VirtualDrive
@@ -315,7 +316,7 @@ def test_batched_drive_runs_a_steady_tick_in_one_call_with_each_ms_its_own_value
 
 def test_batched_drive_keeps_an_inhibit_time_on_the_bus():
     """CiA 301 §7.5.2.37: TPDO2 with a 1 ms event timer and a 2 ms inhibit time (sub 3 =
-    20 x 100 us) is on the bus every 2 ms, never closer, when the drive plans a whole 5 ms
+    20 x 100 us) is on the bus every 2 ms, never closer, when the drive plans a whole
     tick's TPDOs at once; TPDO3 at 3 ms and TPDO1/TPDO4 at 10 ms keep their own periods."""
     from virtual_drive.node import VirtualDrive
 

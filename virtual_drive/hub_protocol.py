@@ -55,9 +55,12 @@ __all__ = [
 FEATURES_REPLY = b"< features sendat >"
 
 #: The oldest time (s before its arrival) a ``sendat`` frame may state: an older one is put on
-#: the bus as if stated this long ago. A sender's batch covers a few ms; an older time is a
-#: clock the hub does not share (or a sender that was not scheduled for that long).
-SENDAT_MAX_BACKDATE_S = 0.05
+#: the bus as if stated this long ago. A sender's batch covers a few ms, but on a busy host the
+#: hub itself may not be scheduled for tens of ms (its frames then arrive that much late and
+#: still take their stated times, keeping their spacing); an older time is a clock the hub does
+#: not share. (50 ms put a stalled hub's backlog back to back, closer than the TPDOs' inhibit
+#: times, at load 3-5.)
+SENDAT_MAX_BACKDATE_S = 0.5
 
 #: SocketCAN error-frame flag and "protocol violation" error class (linux/can/error.h).
 CAN_ERR_FLAG = 0x20000000

@@ -101,10 +101,13 @@ logger = logging.getLogger(__name__)
 #: Samples per piece while a stop ramp runs (1 ms at Ts = 20 µs): see :meth:`VirtualDrive._step`.
 RAMP_CHUNK = 50
 #: Pacing period (s) on a bus that takes frames with their bus time (``timed_sends``, the
-#: loopback hub): one wake-up and one socket write per 5 ms, the TPDOs still 1 ms apart on the
-#: bus with the values of their own instant (like a USB adapter that hands over frames in
-#: batches with hardware times). Elsewhere (SocketCAN, python-can ``virtual``): 1 ms.
-TIMED_PERIOD = 0.005
+#: loopback hub): one wake-up, one simulator call and one socket write per 10 ms, the TPDOs
+#: still 1 ms apart on the bus with the values of their own instant (like a USB adapter that
+#: hands over frames in batches with hardware times). Elsewhere (SocketCAN, python-can
+#: ``virtual``): 1 ms. The price: TPDOs reach hosts up to 10 ms after their bus time, and the
+#: simulation reads new setpoints once per tick (``--tick-ms`` sets it: 5 ms cost 5.5-6.4 % of
+#: a core against 4.3-5.6 % for 10 ms, benchmarks/bench_realtime.py, idle, issue 11).
+TIMED_PERIOD = 0.01
 
 ABORT_STORE = abort_codes.STORE  # kept for importers of the old module
 ABORT_HARDWARE = abort_codes.HARDWARE
