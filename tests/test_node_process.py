@@ -290,7 +290,15 @@ def test_bus_from_python_can_environment(hub):
             net.disconnect()
     finally:
         proc.send_signal(signal.SIGTERM)
-        assert proc.wait(15) == 0
+        # communicate() drains both pipes (wait() with PIPEs deadlocks once the child has
+        # written a pipe's worth of log lines); the drive's stderr explains a slow exit
+        try:
+            _out, err = proc.communicate(timeout=30)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            _out, err = proc.communicate()
+            raise AssertionError(f"no exit 30 s after SIGTERM; stderr: {err[-3000:]}") from None
+        assert proc.returncode == 0, err[-3000:]
     env["CAN_CONFIG"] = json.dumps({"host": "127.0.0.1", "port": 1})
     r = subprocess.run(
         [sys.executable, "-m", "virtual_drive.cli", "run"],
