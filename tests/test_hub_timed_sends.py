@@ -59,7 +59,9 @@ def test_sendat_elements_round_trip_through_both_parsers():
     assert used == len(chunk)
     assert [(i, d, e) for _, i, d, e in frames] == cases
     for stamp, *_ in frames:
-        assert stamp == pytest.approx(at + _WALL, abs=2e-6)
+        # (time.time() - time.monotonic() read here and in hub_bus differ by the µs between
+        # the two clock reads of each: a preemption there moved it by 2.8 µs once)
+        assert stamp == pytest.approx(at + _WALL, abs=100e-6)
     # the generic splitter sees the same elements, and the full parser agrees
     words = CommandSplitter().feed(chunk)
     assert [parse_sendat_fields(w)[1:] for w in words] == cases

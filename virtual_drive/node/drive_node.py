@@ -101,13 +101,17 @@ logger = logging.getLogger(__name__)
 #: Samples per piece while a stop ramp runs (1 ms at Ts = 20 µs): see :meth:`VirtualDrive._step`.
 RAMP_CHUNK = 50
 #: Pacing period (s) on a bus that takes frames with their bus time (``timed_sends``, the
-#: loopback hub): one wake-up, one simulator call and one socket write per 10 ms, the TPDOs
+#: loopback hub): one wake-up, one simulator call and one socket write per 5 ms, the TPDOs
 #: still 1 ms apart on the bus with the values of their own instant (like a USB adapter that
 #: hands over frames in batches with hardware times). Elsewhere (SocketCAN, python-can
-#: ``virtual``): 1 ms. The price: TPDOs reach hosts up to 10 ms after their bus time, and the
-#: simulation reads new setpoints once per tick (``--tick-ms`` sets it: 5 ms cost 5.5-6.4 % of
-#: a core against 4.3-5.6 % for 10 ms, benchmarks/bench_realtime.py, idle, issue 11).
-TIMED_PERIOD = 0.01
+#: ``virtual``): 1 ms. The price: TPDOs reach hosts up to 5 ms after their bus time, and the
+#: simulation reads new setpoints once per tick. 10 ms ticks cost about a quarter less CPU
+#: (benchmarks/bench_realtime.py: 6.6-7.6 % against 9.6-10.3 % in the same minutes, 4.3-5.6 %
+#: against 5.5-6.4 % in quieter ones) but doubled the SDO reply p99 of four drives sharing
+#: the bus (3.8 -> 7.2 ms at TPDO2/3 2 ms, bench_nodes.py): a longer batch of frames stated
+#: in the past occupies the emulated bus when it arrives, ahead of an SDO reply sent now.
+#: ``--tick-ms`` chooses.
+TIMED_PERIOD = 0.005
 
 ABORT_STORE = abort_codes.STORE  # kept for importers of the old module
 ABORT_HARDWARE = abort_codes.HARDWARE
@@ -183,7 +187,16 @@ class VirtualDrive:
         )
         self.node.sdo = self.sdo
         self.sdo2: BlockSdoServer | None = None
-        self.hb_producer = HeartbeatProducer(node_id, self._send, lambda: self.nmt.state)
+        self.timed_sends = bool(getattr(bus, "timed_sends", False))
+        send_many = make_send_many(self)
+        self.hb_producer = HeartbeatProducer(
+            node_id,
+            self._send,
+            lambda: self.nmt.state,
+            send_at=(lambda cob_id, data, at: send_many([(cob_id, data)], at))
+            if self.timed_sends
+            else None,
+        )
         self.hb_consumer = HeartbeatConsumer(
             self.network.subscribe,
             self.network.unsubscribe,
@@ -200,7 +213,7 @@ class VirtualDrive:
             lambda i, s: self._live_getters.get((i, s)),
             report=self.emcy.raise_error,
             clear=self.emcy.clear_error,
-            send_many=make_send_many(self),
+            send_many=send_many,
             align=lambda t: self.runner.align(t),
             # (a bus time the hub still takes after the frames' trip to it)
             stamp_max_age=0.8 * SENDAT_MAX_BACKDATE_S,
@@ -211,7 +224,6 @@ class VirtualDrive:
         # the pacing thread also sends the event-driven TPDOs (one wake-up per tick); on a bus
         # that takes frames with their bus time (the loopback hub) the ticks are TIMED_PERIOD
         # apart and each TPDO is sent with its due time and the values of that instant
-        self.timed_sends = bool(getattr(bus, "timed_sends", False))
         if period is None:
             period = TIMED_PERIOD if self.timed_sends else 1e-3
         self.runner = Runner(

@@ -38,11 +38,23 @@ def encode_consumer_entry(node_id: int, time_ms: int) -> int:
 
 
 class HeartbeatProducer:
-    """Sends ``[nmt_state]`` on 0x700+N every ``period_ms`` (0 = off)."""
+    """Sends ``[nmt_state]`` on 0x700+N every ``period_ms`` (0 = off).
 
-    def __init__(self, node_id: int, send: Callable[[int, bytes], None], state: Callable[[], int]):
+    ``send_at(cob_id, data, at)``, when given, sends it with its due time ``at`` (monotonic s)
+    as its bus time, in the batch of a drive whose TPDOs carry theirs (the loopback hub): a
+    heartbeat sent at once would reach the bus ahead of TPDOs due before it that are still
+    waiting for the tick's write, and push them back."""
+
+    def __init__(
+        self,
+        node_id: int,
+        send: Callable[[int, bytes], None],
+        state: Callable[[], int],
+        send_at: Callable[[int, bytes, float], None] | None = None,
+    ):
         self.node_id = node_id
         self._send = send
+        self._send_at = send_at
         self._state = state
         self.period_ms = 0
         self._next = 0.0
@@ -58,7 +70,10 @@ class HeartbeatProducer:
         state = self._state()
         if state == 0:  # INITIALISING: no heartbeat
             return
-        self._send(0x700 + self.node_id, bytes([state]))
+        if self._send_at is not None:
+            self._send_at(0x700 + self.node_id, bytes([state]), self._next)
+        else:
+            self._send(0x700 + self.node_id, bytes([state]))
         period = self.period_ms / 1000.0
         self._next += period
         if self._next <= now:  # fell behind (e.g. paused): no burst of catch-up frames

@@ -21,6 +21,7 @@ Registered as python-can interface ``vdhub`` (entry point ``can.interface``), so
 from __future__ import annotations
 
 import logging
+import operator
 import os
 import select
 import socket
@@ -72,14 +73,21 @@ def format_sendat_batch(at: float, frames: list[tuple[int, bytes]]) -> bytes:
     return b"".join([head + _sendat_tail(cob_id, data) for cob_id, data in frames])
 
 
+_first = operator.itemgetter(0)
+
+
 def _format_held(
     held: list[tuple[float, list[tuple[int, bytes]]]], prefixes: dict[tuple[int, int], bytes]
 ) -> bytes:
     """:func:`format_sendat_batch` of every batch in ``held`` as one bytes (the flush of a
-    tick), with ``b"<id> <len> "`` kept per (id, len) in ``prefixes``: a drive sends the same
-    few TPDOs every tick, so this is the time stamp, the data's hex and four joins a frame."""
+    tick), in the order of their times (the hub keeps a sender's order, so a batch stated
+    earlier but held later, e.g. a heartbeat and the next tick's TPDOs, must not come after),
+    with ``b"<id> <len> "`` kept per (id, len) in ``prefixes``: a drive sends the same few
+    TPDOs every tick, so this is the time stamp, the data's hex and four joins a frame."""
     out: list[bytes] = []
     add = out.append
+    if len(held) > 1:
+        held = sorted(held, key=_first)
     for at, frames in held:
         head = _sendat_head(at)
         for cob_id, data in frames:
@@ -391,7 +399,8 @@ class HubConnection:
         self.channel = channel
         self._ports: list[HubPort] = []
         self._lock = threading.Lock()
-        self._held: list[bytes] = []
+        #: (time the frames were ready, monotonic s; their lines) held for flush()
+        self._held: list[tuple[float, list[bytes]]] = []
         self._batch_ident: int | None = None
         self._broken: str | None = None
         self._closed = False
@@ -410,10 +419,14 @@ class HubConnection:
         self._batch_ident = ident
 
     def flush(self) -> None:
-        """Write the collected frames in one ``sendall``."""
+        """Write the collected frames in one ``sendall``, in the order of their times (the
+        hub keeps a sender's order: one node's frames stated earlier must not follow another
+        node's stated later, nor a heartbeat held after them)."""
         if self._held:
             held, self._held = self._held, []
-            data = b"".join(held)
+            if len(held) > 1:
+                held.sort(key=_first)
+            data = b"".join([b"".join(lines) for _, lines in held])
             try:
                 with self._bus._send_lock:
                     self._bus._sock.sendall(data)
@@ -431,7 +444,7 @@ class HubConnection:
         else:
             lines = [format_send(cob_id, data, ext) for cob_id, data, ext in frames]
         if threading.get_ident() == self._batch_ident:
-            self._held.extend(lines)
+            self._held.append((time.monotonic() if at is None else at, lines))
         else:
             with self._bus._send_lock:
                 self._bus._sock.sendall(b"".join(lines))
