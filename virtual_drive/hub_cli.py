@@ -9,11 +9,10 @@ from __future__ import annotations
 
 import argparse
 import errno
-import signal
 import sys
-import threading
 
 from virtual_drive.hub import DEFAULT_PORT, Hub
+from virtual_drive.stop_signal import StopSignal
 
 __all__ = ["add_parser", "run_hub_command"]
 
@@ -80,12 +79,7 @@ def run_hub_command(args: argparse.Namespace) -> int:
             raise ValueError(f"--speed must be > 0, got {args.speed}")
     except ValueError as exc:
         return _error(str(exc), 2)
-    stop = threading.Event()
-
-    def _on_signal(signum: int, frame: object) -> None:
-        stop.set()
-
-    previous = {s: signal.signal(s, _on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
+    stop = StopSignal().__enter__()  # (restored in the finally below)
     try:
         with virtual_bench(
             nodes,
@@ -119,8 +113,7 @@ def run_hub_command(args: argparse.Namespace) -> int:
     except RuntimeError as exc:  # a drive did not come up (all stopped again)
         return _error(str(exc).splitlines()[0] if str(exc) else "a drive did not come up", 1)
     finally:
-        for s, handler in previous.items():
-            signal.signal(s, handler)
+        stop.__exit__()
     print(
         f"virtual-drive hub: stopped; {st.frames_forwarded} frames forwarded, "
         f"{st.frames_dropped} dropped, {st.clients_total} clients",

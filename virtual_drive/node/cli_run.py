@@ -24,15 +24,15 @@ from __future__ import annotations
 import argparse
 import logging
 import os
-import signal
 import socket
 import sys
-import threading
 import time
 from pathlib import Path
 
 import can
 import can.cli
+
+from virtual_drive.stop_signal import StopSignal
 
 __all__ = [
     "BUS_GROUP_TITLE",
@@ -317,12 +317,7 @@ def run_command(args: argparse.Namespace) -> int:
     from virtual_drive.node.drive_node import TIMED_PERIOD, VirtualDrive
     from virtual_drive.node.runner import Pacer
 
-    stop = threading.Event()
-
-    def _on_signal(signum: int, frame: object) -> None:
-        stop.set()
-
-    previous = {s: signal.signal(s, _on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
+    stop = StopSignal().__enter__()  # (restored in the finally below)
     # The drive process runs a pacing thread (simulation chunks and TPDOs of all nodes) and a
     # receive thread per node: hand the GIL over every 0.5 ms instead of 5 ms so an SDO request
     # or a TPDO due on its exact time does not wait for another thread's Python work
@@ -393,5 +388,4 @@ def run_command(args: argparse.Namespace) -> int:
             conn.close()
         if hub is not None:
             hub.stop()
-        for s, handler in previous.items():
-            signal.signal(s, handler)
+        stop.__exit__()
