@@ -10,12 +10,14 @@ python-can's own ``socketcand`` interface, which takes the hub's frame times as 
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import math
 import socket
 import statistics
 import struct
 import time
+from collections.abc import Iterator
 
 import can
 import pytest
@@ -28,7 +30,7 @@ from virtual_drive.hub_protocol import (
     parse_sendat_fields,
     scan_sendats,
 )
-from virtual_drive.node.drive_node import TIMED_PERIOD
+from virtual_drive.node.drive_node import TIMED_PERIOD, VirtualDrive
 from virtual_drive.node.hub_bus import HubBus, format_send, format_sendat
 
 pytestmark = pytest.mark.timeout(120)
@@ -194,12 +196,10 @@ class _Frames(can.Listener):
         self.msgs.append(msg)
 
 
-def test_batched_drive_sends_each_tpdo_on_its_own_ms_with_its_own_value():
-    """The drive on the hub wakes every TIMED_PERIOD (not every 1 ms), yet TPDO3's speed reference
-    is on the bus every 1 ms and follows a 1000 rpm/s ramp sample by sample (1 rpm per frame,
-    not a staircase of five equal values)."""
-    from virtual_drive.node import VirtualDrive
-
+@contextlib.contextmanager
+def _drive_on_hub() -> Iterator[tuple[VirtualDrive, _Frames]]:
+    """A virtual drive (node 1) on an in-process hub at 1 Mbit/s, started, with python-can's
+    own socketcand client collecting every frame on the bus."""
     with Hub(port=0, bitrate=1_000_000) as hub:
         bus = HubBus(channel="vcan0", host="127.0.0.1", port=hub.port)
         drive = VirtualDrive(bus, node_id=1)
@@ -212,26 +212,34 @@ def test_batched_drive_sends_each_tpdo_on_its_own_ms_with_its_own_value():
         notifier = can.Notifier(rx, [frames])
         drive.start()
         try:
-            node = drive.node
-            drive.nmt.command(0x01)
-            node.set_data(0x6060, 0, struct.pack("<b", 3))  # profile velocity
-            node.set_data(0x6083, 0, struct.pack("<I", 1000))  # rpm/s
-            for cw in (0x06, 0x07, 0x0F):
-                node.set_data(0x6040, 0, struct.pack("<H", cw))
-            node.set_data(0x60FF, 0, struct.pack("<i", 3000))  # ramp for 3 s
-            time.sleep(0.3)
-            it0, t0 = drive.runner.stats.iterations, time.monotonic()
-            n0 = len(frames.msgs)
-            probe = RunQueueProbe()
-            time.sleep(1.0)
-            probe.stop()
-            wakes = (drive.runner.stats.iterations - it0) / (time.monotonic() - t0)
-            window = frames.msgs[n0:]
+            yield drive, frames
         finally:
             notifier.stop()
             rx.shutdown()
             drive.stop()
             bus.shutdown()
+
+
+def test_batched_drive_sends_each_tpdo_on_its_own_ms_with_its_own_value():
+    """The drive on the hub wakes every TIMED_PERIOD (not every 1 ms), yet TPDO3's speed reference
+    is on the bus every 1 ms and follows a 1000 rpm/s ramp sample by sample (1 rpm per frame,
+    not a staircase of five equal values)."""
+    with _drive_on_hub() as (drive, frames):
+        node = drive.node
+        drive.nmt.command(0x01)
+        node.set_data(0x6060, 0, struct.pack("<b", 3))  # profile velocity
+        node.set_data(0x6083, 0, struct.pack("<I", 1000))  # rpm/s
+        for cw in (0x06, 0x07, 0x0F):
+            node.set_data(0x6040, 0, struct.pack("<H", cw))
+        node.set_data(0x60FF, 0, struct.pack("<i", 3000))  # ramp for 3 s
+        time.sleep(0.3)
+        it0, t0 = drive.runner.stats.iterations, time.monotonic()
+        n0 = len(frames.msgs)
+        probe = RunQueueProbe()
+        time.sleep(1.0)
+        probe.stop()
+        wakes = (drive.runner.stats.iterations - it0) / (time.monotonic() - t0)
+        window = frames.msgs[n0:]
     assert drive.runner.period == pytest.approx(TIMED_PERIOD) and TIMED_PERIOD >= 0.005
     assert wakes <= 1.2 / TIMED_PERIOD, wakes  # 1 / TIMED_PERIOD wake-ups/s, not 1000
     tpdo3 = [m for m in window if m.arbitration_id == 0x381]
@@ -257,45 +265,27 @@ def test_batched_drive_runs_a_steady_tick_in_one_call_with_each_ms_its_own_value
     tick in one simulator call, yet TPDO2's speed on the bus moves every 1 ms as the
     shaft equation says: J dw/dt = K_t i_p - B w - k_gen n - T_load (K_t = K_rpm 60/(2 pi),
     parameters as the object dictionary gives them)."""
-    from virtual_drive.node import VirtualDrive
-
-    with Hub(port=0, bitrate=1_000_000) as hub:
-        bus = HubBus(channel="vcan0", host="127.0.0.1", port=hub.port)
-        drive = VirtualDrive(bus, node_id=1)
-        bus.rx_wanted = drive.network.subscribers
-        rx = can.Bus(
-            interface="socketcand", host="127.0.0.1", port=hub.port, channel="vcan0",
-            tcp_tune=True,
-        )
-        frames = _Frames()
-        notifier = can.Notifier(rx, [frames])
-        drive.start()
-        try:
-            node = drive.node
-            view = drive.view
-            J, B, k_gen, T_load, K_rpm = (
-                node.stored(view.entry(name).index, view.entry(name).subindex)
-                for name in (
-                    "sim_load.J", "sim_load.B", "sim_load.k_gen", "sim_load.T_load", "motor.K_rpm"
-                )
+    with _drive_on_hub() as (drive, frames):
+        node = drive.node
+        view = drive.view
+        J, B, k_gen, T_load, K_rpm = (
+            node.stored(view.entry(name).index, view.entry(name).subindex)
+            for name in (
+                "sim_load.J", "sim_load.B", "sim_load.k_gen", "sim_load.T_load", "motor.K_rpm"
             )
-            drive.nmt.command(0x01)
-            node.set_data(0x6060, 0, struct.pack("<b", -1))
-            node.set_data(0x2030, 1, struct.pack("<f", 15.0))
-            n0 = len(frames.msgs)
-            for cw in (0x06, 0x07, 0x0F):
-                node.set_data(0x6040, 0, struct.pack("<H", cw))
-            time.sleep(0.3)
-            chunk0 = drive.runner.stats.max_chunk
-            probe = RunQueueProbe()
-            time.sleep(0.5)
-            probe.stop()
-            window = frames.msgs[n0:]
-        finally:
-            notifier.stop()
-            rx.shutdown()
-            drive.stop()
-            bus.shutdown()
+        )
+        drive.nmt.command(0x01)
+        node.set_data(0x6060, 0, struct.pack("<b", -1))
+        node.set_data(0x2030, 1, struct.pack("<f", 15.0))
+        n0 = len(frames.msgs)
+        for cw in (0x06, 0x07, 0x0F):
+            node.set_data(0x6040, 0, struct.pack("<H", cw))
+        time.sleep(0.3)
+        chunk0 = drive.runner.stats.max_chunk
+        probe = RunQueueProbe()
+        time.sleep(0.5)
+        probe.stop()
+        window = frames.msgs[n0:]
     # whole ticks in one call (pieces ending at each 1 ms due point are <= 50 samples)
     assert chunk0 >= 200, chunk0
     tpdo2 = [m for m in window if m.arbitration_id == 0x281]
@@ -320,37 +310,19 @@ def test_batched_drive_keeps_an_inhibit_time_on_the_bus():
     """CiA 301 §7.5.2.37: TPDO2 with a 1 ms event timer and a 2 ms inhibit time (sub 3 =
     20 x 100 us) is on the bus every 2 ms, never closer, when the drive plans a whole
     tick's TPDOs at once; TPDO3 at 3 ms and TPDO1/TPDO4 at 10 ms keep their own periods."""
-    from virtual_drive.node import VirtualDrive
-
-    with Hub(port=0, bitrate=1_000_000) as hub:
-        bus = HubBus(channel="vcan0", host="127.0.0.1", port=hub.port)
-        drive = VirtualDrive(bus, node_id=1)
-        bus.rx_wanted = drive.network.subscribers
-        rx = can.Bus(
-            interface="socketcand", host="127.0.0.1", port=hub.port, channel="vcan0",
-            tcp_tune=True,
-        )
-        frames = _Frames()
-        notifier = can.Notifier(rx, [frames])
-        drive.start()
-        try:
-            node = drive.node
-            node.set_data(0x1801, 1, struct.pack("<I", 0x80000281))
-            node.set_data(0x1801, 3, struct.pack("<H", 20))
-            node.set_data(0x1801, 1, struct.pack("<I", 0x281))
-            node.set_data(0x1802, 5, struct.pack("<H", 3))  # TPDO3 every 3 ms
-            drive.nmt.command(0x01)
-            time.sleep(0.2)
-            n0 = len(frames.msgs)
-            probe = RunQueueProbe()
-            time.sleep(0.6)
-            probe.stop()
-            window = frames.msgs[n0:]
-        finally:
-            notifier.stop()
-            rx.shutdown()
-            drive.stop()
-            bus.shutdown()
+    with _drive_on_hub() as (drive, frames):
+        node = drive.node
+        node.set_data(0x1801, 1, struct.pack("<I", 0x80000281))
+        node.set_data(0x1801, 3, struct.pack("<H", 20))
+        node.set_data(0x1801, 1, struct.pack("<I", 0x281))
+        node.set_data(0x1802, 5, struct.pack("<H", 3))  # TPDO3 every 3 ms
+        drive.nmt.command(0x01)
+        time.sleep(0.2)
+        n0 = len(frames.msgs)
+        probe = RunQueueProbe()
+        time.sleep(0.6)
+        probe.stop()
+        window = frames.msgs[n0:]
     stamps = [m.timestamp for m in window if m.arbitration_id == 0x281]
     gaps = [b - a for a, b in itertools.pairwise(stamps)]
     assert len(stamps) >= min_rate(500, probe.wait) * 0.6, (len(stamps), probe)

@@ -121,6 +121,19 @@ static int leg_mode_pwm(double d, double u, double Ts, double T_BT)
     return 0;
 }
 
+/* Edges of a unipolar PWM period in pattern time: the leg with the larger duty d_hi rises at
+ * edge[1] and falls at edge[4], the other at edge[2] / edge[3] (centred windows; a duty of 1 is
+ * on for the whole period, 0 never); edge[0] = 0, edge[5] = Ts. */
+static inline void pwm_edges(double d_hi, double d_lo, double Ts, double edge[6])
+{
+    edge[0] = 0.0;
+    edge[1] = (d_hi >= 1.0) ? 0.0 : 0.5 * (1.0 - d_hi) * Ts;
+    edge[2] = (d_lo <= 0.0) ? 0.5 * Ts : 0.5 * (1.0 - d_lo) * Ts;
+    edge[3] = (d_lo <= 0.0) ? 0.5 * Ts : 0.5 * (1.0 + d_lo) * Ts;
+    edge[4] = (d_hi >= 1.0) ? Ts : 0.5 * (1.0 + d_hi) * Ts;
+    edge[5] = Ts;
+}
+
 static void sort_d(double *a, int n)
 {
     int i, j;
@@ -156,12 +169,7 @@ static void apply_pattern(loop_t *L, float m, int sec, int on, double u0, double
         double d_hi = (dp >= dm) ? dp : dm, d_lo = (dp >= dm) ? dm : dp;
         double edge[6];
         int open = 3 - xp - xm, k;
-        edge[0] = 0.0;
-        edge[1] = (d_hi >= 1.0) ? 0.0 : 0.5 * (1.0 - d_hi) * Ts;
-        edge[2] = (d_lo <= 0.0) ? 0.5 * Ts : 0.5 * (1.0 - d_lo) * Ts;
-        edge[3] = (d_lo <= 0.0) ? 0.5 * Ts : 0.5 * (1.0 + d_lo) * Ts;
-        edge[4] = (d_hi >= 1.0) ? Ts : 0.5 * (1.0 + d_hi) * Ts;
-        edge[5] = Ts;
+        pwm_edges(d_hi, d_lo, Ts, edge);
         mode[x_hi] = PLANT_DRIVEN;
         mode[x_lo] = PLANT_DRIVEN;
         mode[open] = PLANT_OPEN;
@@ -299,12 +307,7 @@ static void pattern_six_step(loop_t *L, float m, int sec, double u0, double u1)
     if (u1 <= u0) {
         return;
     }
-    edge[0] = 0.0;
-    edge[1] = (d_hi >= 1.0) ? 0.0 : 0.5 * (1.0 - d_hi) * Ts;
-    edge[2] = (d_lo <= 0.0) ? 0.5 * Ts : 0.5 * (1.0 - d_lo) * Ts;
-    edge[3] = (d_lo <= 0.0) ? 0.5 * Ts : 0.5 * (1.0 + d_lo) * Ts;
-    edge[4] = (d_hi >= 1.0) ? Ts : 0.5 * (1.0 + d_hi) * Ts;
-    edge[5] = Ts;
+    pwm_edges(d_hi, d_lo, Ts, edge);
     for (k = 0; k < 5; ++k) {
         double a = (edge[k] > u0) ? edge[k] : u0;
         double b = (edge[k + 1] < u1) ? edge[k + 1] : u1;
