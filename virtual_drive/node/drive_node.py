@@ -454,10 +454,11 @@ class VirtualDrive:
         :meth:`_step_chunk` pieces ending there would see them. Returns False (nothing done)
         while that cannot be: a setpoint ramps (:func:`ramps.ramping`: it moves every
         piece), the recorder or a tap needs the full-rate arrays, or the simulator has no
-        ``run_points``."""
+        ``run_points`` (or not for that many instants)."""
         run_points = getattr(self.sim, "run_points", None)
         if (
             run_points is None
+            or len(at) > getattr(self.sim, "MAX_POINTS", 0)
             or self.taps
             or self.recorder.state in (ARMED, RECORDING)
             or ramps.ramping(self)

@@ -114,6 +114,12 @@ class _Tpdo:
     sync_count: int = 0
 
 
+def _next_after(t: _Tpdo, at: float) -> float:
+    """When event-driven ``t``, sent on time at ``at`` (s), is due next: one event period on,
+    but not before its inhibit time has passed (CiA 301 §7.5.2.35)."""
+    return at + (t.inhibit_s if t.inhibit_s > t.event_s else t.event_s)
+
+
 @dataclass
 class _Rpdo:
     number: int
@@ -410,10 +416,7 @@ class PdoEngine:
             if planned is not None:  # (due_times found them due exactly then: none missed)
                 self._send_tpdos(planned, at, True)
                 for t in planned:
-                    due = at + t.event_s
-                    if t.inhibit_s > 0 and at + t.inhibit_s > due:
-                        due = at + t.inhibit_s
-                    t.next_due = due
+                    t.next_due = _next_after(t, at)
                 earliest = at + 0.05
                 for t in plan[2]:  # (every event-driven TPDO: another may be due first)
                     if t.next_due < earliest:
@@ -437,8 +440,7 @@ class PdoEngine:
             due = t.next_due
             while due <= until:
                 plan.setdefault(due, []).append(t)
-                grid = due + t.event_s
-                due = max(grid, due + t.inhibit_s) if t.inhibit_s > 0 else grid
+                due = _next_after(t, due)
         self._plan = (tpdos, plan, event)
         return sorted(plan)
 

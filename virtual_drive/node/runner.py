@@ -196,9 +196,8 @@ class Runner:
         # catching up after a stall (more than this chunk behind): no frame per due point; the
         # timer below sends one per TPDO and counts the missed periods, as the 1 ms ticks do
         behind = (now - t0) * scale - end > 0.5 * self._chunk_n
-        if not behind and self._step_timed is not None and self._run_points(end, now):
-            pass  # the whole tick in one simulator call, the timer run at each due point
-        else:
+        # the whole tick in one simulator call, the timer run at each due point; else in pieces
+        if behind or self._step_timed is None or not self._run_points(end, now):
             while not behind:
                 due = self._timer_due
                 if due > now:
@@ -228,8 +227,6 @@ class Runner:
                 break  # (its sample comes with the next tick)
             dues.append(due)
             at.append(k - done if k > done else 0)
-        if len(at) > 64:
-            return False
 
         timer_at = self.timer_at
 
@@ -242,13 +239,7 @@ class Runner:
 
         if not self._step_timed(end - done, at, at_point):  # type: ignore[misc]
             return False
-        m = end - done
-        if m > 0:
-            self._done = end
-            stats = self.stats
-            stats.samples += m
-            if m > stats.max_chunk:
-                stats.max_chunk = m
+        self._count_to(end)
         return True
 
     def _run_to(self, k: int) -> None:
@@ -256,6 +247,12 @@ class Runner:
         m = k - self._done
         if m > 0:
             self._step(m)
+            self._count_to(k)
+
+    def _count_to(self, k: int) -> None:
+        """The samples up to sample ``k`` have run: the count and the statistics follow."""
+        m = k - self._done
+        if m > 0:
             self._done = k
             stats = self.stats
             stats.samples += m

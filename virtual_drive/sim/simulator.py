@@ -37,6 +37,7 @@ __all__ = [
     "FAULT_OVERCURRENT",
     "FAULT_OVERVOLTAGE",
     "FAULT_UNDERVOLTAGE",
+    "MAX_POINTS",
     "Fault",
     "Simulator",
 ]
@@ -54,7 +55,7 @@ FAULT_KINDS: dict[str, int] = {
 """inject_fault kinds; OD 0x5010 sub1 codes 0..3 map to them in this order."""
 
 #: most instants :meth:`Simulator.run_points` copies in one call
-_MAX_POINTS = 64
+MAX_POINTS = 64
 
 _REASONS = {
     1: "overcurrent: phase current above protection.overcurrent_trip",
@@ -82,6 +83,8 @@ class Simulator:
     Parameters are the validated dataclasses of :mod:`virtual_drive.sim.params`;
     ``model`` is ``"pwm"`` (exact per PWM sub-interval) or ``"averaged"``.
     """
+
+    MAX_POINTS = MAX_POINTS  #: most instants :meth:`run_points` copies in one call
 
     Ts: float = Ts
 
@@ -120,10 +123,10 @@ class Simulator:
         #: float32 view of the C loop's latest values (SIGNALS order), read without a copy
         self._last_view = np.frombuffer(ffi.buffer(ffi.addressof(L, "last")), dtype=np.float32)
         # run_points' buffers: sample counts and the rows copied at them (+1: the chunk's end)
-        self._points_at = ffi.new("int[]", _MAX_POINTS + 1)
-        self._points_buf = ffi.new("float[]", (_MAX_POINTS + 1) * len(SIGNALS))
+        self._points_at = ffi.new("int[]", MAX_POINTS + 1)
+        self._points_buf = ffi.new("float[]", (MAX_POINTS + 1) * len(SIGNALS))
         self._points_rows = np.frombuffer(ffi.buffer(self._points_buf), dtype=np.float32).reshape(
-            _MAX_POINTS + 1, len(SIGNALS)
+            MAX_POINTS + 1, len(SIGNALS)
         )
 
     @classmethod
@@ -497,8 +500,8 @@ class Simulator:
         ``n_samples`` counts as ``n_samples``), then once more at the end: ``len(at) + 1``
         rows. The pacing loop's timed tick: the values of each instant a TPDO is due at."""
         m = len(at)
-        if m > _MAX_POINTS:
-            raise ValueError(f"at most {_MAX_POINTS} points per call, got {m}")
+        if m > MAX_POINTS:
+            raise ValueError(f"at most {MAX_POINTS} points per call, got {m}")
         if not 0 <= n_samples <= 1 << 20:
             raise ValueError(f"n_samples must be 0..{1 << 20}, got {n_samples!r}")
         buf = self._points_at
