@@ -1,11 +1,11 @@
-"""SIGTERM ends ``virtual-drive run`` / ``virtual-drive hub`` whatever the main thread holds.
+"""``StopSignal``: SIGTERM while the main thread holds a lock still records the stop request,
+``wait`` reports it, and leaving the block restores the previous handlers.
 
 Truth: a Python signal handler runs in the main thread between two bytecodes (Python's
-``signal`` documentation), possibly while that thread holds a lock; a handler that takes a lock
-the thread already holds waits for ever. ``threading.Event.set()`` takes the Event's Condition
-lock, which the main loop's ``Event.wait()`` holds at moments: a drive once hung that way on
-SIGTERM. Each check runs in a child process with a bounded wait, so a hang fails the test
-instead of stopping the run.
+``signal`` documentation), possibly while that thread holds a lock, so the handler must take
+none (``threading.Event.set()`` in the handler hung a drive once: the main loop's
+``Event.wait()`` held the Event's lock). The race itself is too rare to provoke here; this
+checks the replacement's behaviour, in a child process with a bounded wait.
 """
 
 from __future__ import annotations
