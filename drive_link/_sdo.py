@@ -213,16 +213,21 @@ class SdoChannel:
         self.restart_reasons = [*self.restart_reasons[-19:], reason]
 
     @contextlib.contextmanager
-    def patience(self, timeout: float) -> Iterator[None]:
+    def patience(self, timeout: float, retries: int | None = None) -> Iterator[None]:
         """Hold the channel with a response timeout of at least ``timeout`` s (for objects
-        whose write takes the drive long, e.g. store 0x1010 / restore 0x1011)."""
+        whose write takes the drive long, e.g. store 0x1010 / restore 0x1011) and, if
+        ``retries`` is given, at most that many resends and no restart (for a request that
+        must get no answer, e.g. an SDO in NMT STOPPED: silence is proved in
+        ``timeout`` × (2^(retries + 1) − 1) s, not the channel's full patience)."""
         with self.lock:
-            old = self.client.RESPONSE_TIMEOUT
-            self.client.RESPONSE_TIMEOUT = max(old, timeout)
+            old = self.client.RESPONSE_TIMEOUT, self.retries, self.restarts
+            self.client.RESPONSE_TIMEOUT = max(old[0], timeout)
+            if retries is not None:
+                self.retries, self.restarts = min(old[1], retries), 0
             try:
                 yield
             finally:
-                self.client.RESPONSE_TIMEOUT = old
+                self.client.RESPONSE_TIMEOUT, self.retries, self.restarts = old
 
     def upload(self, index: int, subindex: int, name: str = "") -> bytes:
         """Read an object (expedited or segmented) and return its raw bytes."""

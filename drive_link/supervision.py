@@ -148,9 +148,9 @@ class SupervisedSdoChannel(SdoChannel):
             self.supervisor.wait_ready()
 
     @contextlib.contextmanager
-    def patience(self, timeout: float) -> Iterator[None]:
+    def patience(self, timeout: float, retries: int | None = None) -> Iterator[None]:
         self._gate()
-        with super().patience(timeout):
+        with super().patience(timeout, retries):
             self._held.depth = getattr(self._held, "depth", 0) + 1
             try:
                 yield

@@ -75,6 +75,20 @@ def test_check_names_the_failing_item_on_a_defective_drive(virtual_node, capsys,
     assert lines[-1] == "2/3 passed; failed: limits"
 
 
+def test_nmt_stopped_fails_on_a_drive_that_answers_sdo_in_stopped(virtual_node, capsys):
+    """CiA 301 table 78: no SDO in STOPPED. A drive whose SDO server ignores the NMT state (the
+    defect, made here) fails the item by name although the item sends only two requests."""
+    vd, ch = virtual_node
+    argv = ["check", "--interface", "virtual", "--channel", ch, "--node", "4", "--json"]
+    assert cli.main([*argv, "--only", "nmt_stopped"]) == 0, capsys.readouterr().out
+    capsys.readouterr()
+    vd.sdo._allowed = lambda: True  # the defect: SDO served in every NMT state
+    rc = cli.main([*argv, "--only", "nmt_stopped"])
+    (r,) = json.loads(capsys.readouterr().out)
+    assert rc == 1 and r["name"] == "nmt_stopped" and not r["ok"]
+    assert r["detail"] == "SDO answered in STOPPED (CiA 301 table 78 forbids it)"
+
+
 def test_check_rejects_unknown_items(virtual_node, capsys):
     _, ch = virtual_node
     rc = cli.main(
