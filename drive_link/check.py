@@ -739,10 +739,14 @@ def _reach_speed(d: Drive, rpm: int, failure: str) -> float:
     return v[0]
 
 
+def _ramp_time(d: Drive, rpm: float, name: str = "quick_stop_deceleration") -> float:
+    """Time (s) of a ramp from ``rpm`` to 0 on deceleration object ``name`` (rpm/s)."""
+    return abs(rpm) / max(int(d.read(name)), 1)
+
+
 def _stop_time(d: Drive, rpm: float, name: str = "quick_stop_deceleration") -> float:
     """Bound (s) for a ramp from ``rpm`` to 0 on deceleration object ``name`` (rpm/s)."""
-    dec = max(int(d.read(name)), 1)
-    return 2.0 * abs(rpm) / dec + 2.0
+    return 2.0 * _ramp_time(d, rpm, name) + 2.0
 
 
 def _wait_standstill(d: Drive, timeout: float, window: float = 15.0) -> float:
@@ -767,14 +771,17 @@ def item_nmt_reaction(d: Drive, opts: dict) -> str:
         d.write("abort_connection_option_code", 3)
         for command, back in (("stop", "pre-operational"), ("reset communication", None)):
             v0 = _spin(d)
-            bound = _stop_time(d, v0)
+            ramp = _ramp_time(d, v0)
+            bound = 2.0 * ramp + 2.0
             t0 = time.monotonic()
             if back is None:
                 d.reset(communication_only=True, timeout=bound + 3.0)
             else:
                 d.nmt(command)
                 d.heartbeat.wait_for(("STOPPED",), 2.0, after=t0)
-                time.sleep(bound)  # no SDO in STOPPED: look once it is PRE-OPERATIONAL again
+                # no SDO in STOPPED: look once it is PRE-OPERATIONAL again, after the ramp's
+                # own time (the bound below still gives the ramp its full margin)
+                time.sleep(ramp)
                 t1 = time.monotonic()
                 d.nmt(back)
                 d.heartbeat.wait_for(("PRE-OPERATIONAL",), 2.0, after=t1)
