@@ -12,7 +12,6 @@ import subprocess
 import sys
 
 import pytest
-from conftest import RunQueueProbe, heartbeat_explained
 
 from drive_link import cli
 
@@ -161,24 +160,6 @@ def test_progress_bar_on_stderr(hub_drive):
     p = run(hub_drive, "trace", "--channels", "i_p", "--length", "2000", "--progress")
     assert p.returncode == 0, p.stderr
     assert "upload [" in p.stderr and "100.0 %" in p.stderr
-
-
-def test_check_passes_across_processes(hub_drive):
-    """Every item passes; a heartbeat period outside the item's tolerance is accepted only when
-    the kernel kept this process waiting enough to explain it (conftest RunQueueProbe: the
-    drive is a child on the same two cores)."""
-    probe = RunQueueProbe()
-    p = run_here(hub_drive, "check", "--json")
-    wait = probe.stop()
-    results = json.loads(p.stdout)
-    failed = [r for r in results if not r["ok"]]
-    unexplained = [
-        r
-        for r in failed
-        if not (r["name"] == "heartbeat" and heartbeat_explained(r["detail"], wait))
-    ]
-    assert p.returncode == 0 or not unexplained, (failed, probe)
-    assert {r["name"] for r in results} >= {"nmt_bootup", "limits", "trace", "pdo_rates"}
 
 
 def test_usage_errors_are_one_line():
