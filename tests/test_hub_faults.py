@@ -36,12 +36,24 @@ def _burst(a: can.BusABC, b: can.BusABC, count: int) -> list[int]:
         got.append(int.from_bytes(m.data, "big"))
 
 
-def _collect(a: can.BusABC, b: can.BusABC, count: int) -> list[int]:
-    """a sends count numbered frames; returns the numbers b received until the bus is quiet."""
+def _collect(hub: Hub, a: can.BusABC, b: can.BusABC, count: int) -> list[int]:
+    """a sends count numbered frames; returns the numbers b received, once the hub has passed or
+    dropped every one and b has read as many as were passed (a busy host may take seconds: a
+    fixed quiet time would end the count early), and then 0.2 s more (nothing else may come)."""
     for i in range(count):
         a.send(can.Message(arbitration_id=0x200, data=i.to_bytes(2, "big"), is_extended_id=False))
+    deadline = time.monotonic() + 20.0
+    while time.monotonic() < deadline:
+        st = hub.stats
+        if st.frames_forwarded + st.frames_dropped >= count:
+            break
+        time.sleep(0.01)
     got = []
-    while (m := b.recv(0.5)) is not None:
+    while len(got) < hub.stats.frames_forwarded and time.monotonic() < deadline:
+        m = b.recv(0.5)
+        if m is not None:
+            got.append(int.from_bytes(m.data, "big"))
+    while (m := b.recv(0.2)) is not None:
         got.append(int.from_bytes(m.data, "big"))
     return got
 
@@ -53,7 +65,7 @@ def test_drop_rate_loses_a_binomial_share_in_order_and_is_reproducible():
         with Hub(port=0, seed=1234) as hub:
             a, b = _pair(hub)
             hub.set_faults(drop_rate=p)
-            got = _collect(a, b, count)
+            got = _collect(hub, a, b, count)
             st = hub.stats
             a.shutdown()
             b.shutdown()
