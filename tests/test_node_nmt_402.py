@@ -14,7 +14,7 @@ import pytest
 from canopen.profiles.p402 import State402
 from canopen.sdo import SdoAbortedError, SdoCommunicationError
 from conftest import RunQueueProbe
-from test_node_support import Bench, emcy_frames
+from test_node_support import SDO_TIMEOUT_S, Bench, emcy_frames
 
 pytestmark = pytest.mark.timeout(60)
 
@@ -75,7 +75,7 @@ def test_nmt_states_gate_sdo_and_pdo(bench):
     bench.node.sdo.RESPONSE_TIMEOUT = 0.3
     with pytest.raises(SdoCommunicationError):
         bench.read("statusword")
-    bench.node.sdo.RESPONSE_TIMEOUT = 2.0
+    bench.node.sdo.RESPONSE_TIMEOUT = SDO_TIMEOUT_S
     t2 = time.monotonic()
     time.sleep(0.05)
     assert bench.log.of(0x281, t2) == []
