@@ -320,23 +320,31 @@ def field(page, label: str) -> str:
     return text_input(page, label).input_value()
 
 
-@explained
-def test_inputs_are_per_browser_and_only_the_controller_applies(api, pages):
-    a, b = pages
-    # A's first action takes control (a forced click that lands while viser re-renders the
-    # panel, or under a notification sliding in, reaches nothing: click again, at most 3 times)
+def click_until(page, locator, done, timeout: float = 20.0) -> None:
+    """Click, then wait ``timeout`` s for ``done()``; click again (at most 3 clicks in all)
+    when it did not come: a forced click that lands while viser re-renders the panel, or under
+    a notification sliding in, reaches nothing. Only for idempotent buttons (Enable, Apply)."""
     for attempt in range(3):
-        click(a, a.get_by_role("button", name="Enable"))
+        click(page, locator)
         try:
-            wait_until(
-                lambda: api.get("/api/control").json()["client"] is not None,
-                timeout=20.0,
-                what="A in control",
-            )
-            break
+            done(timeout)
+            return
         except AssertionError:
             if attempt == 2:
                 raise
+
+
+@explained
+def test_inputs_are_per_browser_and_only_the_controller_applies(api, pages):
+    a, b = pages
+    # A's first action takes control
+    click_until(
+        a,
+        a.get_by_role("button", name="Enable"),
+        lambda t: wait_until(
+            lambda: api.get("/api/control").json()["client"] is not None, t, "A in control"
+        ),
+    )
     holder = api.get("/api/control").json()["client"]
     assert holder.startswith("browser #")
     wait_text(a, r"In control: browser #\d+ \(you\)")
@@ -381,8 +389,12 @@ def test_typed_values_are_strict_and_nothing_is_sent(api, pages):
     time.sleep(0.5)
     assert api.get("/api/gains").json()["L_c"] == before
     type_into(a, "L_c (µH)", "20")
-    click(a, a.get_by_role("button", name="Apply gains"))
-    wait_text(a, r"applied; the fields show the drive's read-back")
+    click_until(
+        a,
+        a.get_by_role("button", name="Apply gains"),
+        lambda t: wait_text(a, r"applied; the fields show the drive's read-back", t),
+        timeout=30.0,
+    )
     g = api.get("/api/gains").json()
     assert g["L_c"] == pytest.approx(20e-6, rel=1e-6)
     assert float(field(a, "L_c (µH)")) == pytest.approx(g["L_c"] * 1e6, rel=1e-6)
