@@ -195,6 +195,25 @@ def test_fault_reaction_emcy_and_fault_reset(bench):
     bench.enable(-1)
 
 
+def test_a_trip_read_before_a_fault_reset_does_not_undo_it(bench):
+    """The pacing thread reads the simulator's trip with a chunk and applies it afterwards; a
+    fault reset (CiA 402 transition 15) may come in between on a busy host. That stale trip
+    must not put the drive back into FAULT (it did: the reset then seemed to fail, with the old
+    error code). The interleaving is made here in order: trip, read, reset, apply."""
+    bench.enable(-1)
+    bench.write("setpoints.i_p_ref", 10.0)
+    bench.write("sim_fault.inject", 1)  # overcurrent trip at the next sample
+    assert bench.wait(lambda: state_of(bench.read("statusword")) == "FAULT")
+    stale = bench.drive.sim.fault  # what a chunk read just before the reset
+    assert stale is not None and stale.code == 0x2310
+    bench.write("controlword", 0x80)  # fault reset
+    assert state_of(bench.read("statusword")) == "SWITCH ON DISABLED"
+    bench.drive._on_trip(stale)  # the chunk applies what it read
+    assert state_of(bench.read("statusword")) == "SWITCH ON DISABLED"
+    assert bench.read("error_code") == 0
+    bench.enable(-1)  # and it runs again
+
+
 def test_dc_link_undervoltage_trips(bench):
     bench.enable(-1)
     t0 = time.monotonic()

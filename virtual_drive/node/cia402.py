@@ -103,6 +103,9 @@ class Cia402StateMachine:
         self._can_reset = can_reset_fault
         self._on_change = on_change
         self._lock = threading.RLock()
+        #: held while a transition runs (a fault reset calls ``can_reset_fault`` inside it): the
+        #: drive holds it to apply a trip of its simulator atomically against a reset
+        self.lock = self._lock
         self.state = NOT_READY_TO_SWITCH_ON
         self._last_cw = 0
         self.controlword = 0

@@ -494,11 +494,19 @@ class VirtualDrive:
         return True
 
     def _on_trip(self, fault: Any) -> None:
-        """A new trip of the simulator: recorder mark, EMCY, CiA 402 FAULT, bridge off."""
-        self._last_fault = fault
-        self.recorder.note_fault(float(fault.t))
-        self.emcy.raise_error(int(fault.code))
-        self.cia402.fault(int(fault.code), tripped=True)
+        """A new trip of the simulator: recorder mark, EMCY, CiA 402 FAULT, bridge off.
+
+        ``fault`` was read with the chunk; a fault reset (SDO thread, under the CiA 402 lock)
+        may have cleared it since. Under that lock the trip is applied only if the simulator
+        still holds it: a stale one would put the drive back into FAULT just after the reset
+        (seen on a busy host, where the pacing thread waits between the two)."""
+        with self.cia402.lock:  # (taken before sim_lock, never inside it: as a reset does)
+            if self.sim.fault != fault:
+                return  # reset meanwhile; a new trip since is seen with the next chunk
+            self._last_fault = fault
+            self.recorder.note_fault(float(fault.t))
+            self.emcy.raise_error(int(fault.code))
+            self.cia402.fault(int(fault.code), tripped=True)
         with self.sim_lock:
             ramps.set_sim_mode(self, "off")
 
