@@ -60,7 +60,7 @@ print(f"{worst * 1e3:.2f} {late} {n}")
 
 def _time_parts(drive, bus) -> dict[str, float]:
     """CPU seconds (``time.process_time``) spent in the simulator's one call per tick and in the
-    bus's write per tick, summed from when ``parts["t0"]`` is set: the rest of a tick is
+    bus's write per tick, summed once ``parts["on"]`` is set non-zero: the rest of a tick is
     Python. Instruments this benchmark's drive only (about 2 µs per tick)."""
     parts = {"sim": 0.0, "write": 0.0, "on": 0.0}
     clock = time.process_time

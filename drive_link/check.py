@@ -744,9 +744,14 @@ def _ramp_time(d: Drive, rpm: float, name: str = "quick_stop_deceleration") -> f
     return abs(rpm) / max(int(d.read(name)), 1)
 
 
+def _ramp_bound(ramp: float) -> float:
+    """Bound (s) for a ramp of ``ramp`` s: twice its time plus 2 s (a busy host, a slow bus)."""
+    return 2.0 * ramp + 2.0
+
+
 def _stop_time(d: Drive, rpm: float, name: str = "quick_stop_deceleration") -> float:
     """Bound (s) for a ramp from ``rpm`` to 0 on deceleration object ``name`` (rpm/s)."""
-    return 2.0 * _ramp_time(d, rpm, name) + 2.0
+    return _ramp_bound(_ramp_time(d, rpm, name))
 
 
 def _wait_standstill(d: Drive, timeout: float, window: float = 15.0) -> float:
@@ -772,7 +777,7 @@ def item_nmt_reaction(d: Drive, opts: dict) -> str:
         for command, back in (("stop", "pre-operational"), ("reset communication", None)):
             v0 = _spin(d)
             ramp = _ramp_time(d, v0)
-            bound = 2.0 * ramp + 2.0
+            bound = _ramp_bound(ramp)
             t0 = time.monotonic()
             if back is None:
                 d.reset(communication_only=True, timeout=bound + 3.0)
