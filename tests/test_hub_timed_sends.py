@@ -145,6 +145,51 @@ def test_hub_puts_sendat_frames_on_the_bus_at_their_time():
             rx.shutdown()
 
 
+def test_a_late_batch_takes_the_idle_bus_of_its_time_not_the_bus_after_a_later_frame():
+    """A batch stated in the past reaches the hub after a frame another node sent later (a
+    drive's tick ends after a host's request went out). On a CAN bus idle at the batch's
+    times, its frames were on the bus then: they must not queue behind the later frame, and
+    a frame sent after the batch starts on an idle bus (an SDO reply is such a frame)."""
+    bitrate = 10_000  # an 8-byte frame is 111-135 bits: 11-14 ms, far above the host's jitter
+    with Hub(port=0, bitrate=bitrate) as hub:
+        rx = can.Bus(
+            interface="socketcand", host="127.0.0.1", port=hub.port, channel="vcan0",
+            tcp_tune=True,
+        )
+        a, b = _raw_client(hub.port), _raw_client(hub.port)
+        try:
+            time.sleep(0.2)
+            a.sendall(format_send(0x100, bytes(8)))  # A1: on the idle bus at once
+            first = rx.recv(5.0)
+            assert first is not None and first.arbitration_id == 0x100
+            frame_s = 135 / bitrate  # the longest an 8-byte frame can take
+            t_a1 = first.timestamp - _WALL - frame_s  # (monotonic) A1 was on the bus by then
+            # B: four frames stated two frame times apart, all before A1: the bus was idle then
+            stated = [t_a1 - (9 - 2 * k) * frame_s for k in range(4)]
+            b.sendall(b"".join(format_sendat(t, 0x280 + k, bytes(8)) for k, t in enumerate(stated)))
+            t_send_a2 = time.time()
+            a.sendall(format_send(0x101, bytes(8)))  # A2: sent after the batch
+            got = []
+            end = time.monotonic() + 5
+            while len(got) < 5 and time.monotonic() < end:
+                msg = rx.recv(0.5)
+                if msg is not None:
+                    got.append(msg)
+            ids = [m.arbitration_id for m in got]
+            assert sorted(ids[:4]) == [0x280, 0x281, 0x282, 0x283] and ids[4] == 0x101, ids
+            # the batch occupied no bus time after A1: delivered with A1's time (the bus never
+            # shows a frame before one it already delivered), not one frame time apart after it
+            for m in got[:4]:
+                assert m.timestamp == pytest.approx(first.timestamp, abs=1e-6), got
+            # A2 found the bus idle: one frame time after it was sent (plus the hub's read),
+            # not behind four frames of B (that would be at least 4 x 111 bits = 44 ms)
+            assert got[4].timestamp - t_send_a2 < 4 * 111 / bitrate - 5e-3, got[4]
+        finally:
+            a.close()
+            b.close()
+            rx.shutdown()
+
+
 def test_vdhub_client_uses_sendat_only_where_the_server_takes_it():
     with Hub(port=0) as hub:
         bus = HubBus(channel="vcan0", host="127.0.0.1", port=hub.port)

@@ -16,7 +16,11 @@ is delivered when the bus has finished it (plus an optional injected delay with 
 like a USB adapter: ``delay_s`` ± ``jitter_s``, never reordering frames, as CAN never does).
 Frames can be dropped with a seeded RNG for fault tests. A client that asks ``< features >`` may
 send ``< sendat <time> ... >`` (the virtual drive's batched ticks): such a frame competes for the
-bus from its stated time instead of its arrival (see :mod:`virtual_drive.hub_protocol`).
+bus from its stated time instead of its arrival (see :mod:`virtual_drive.hub_protocol`). A batch
+stated in the past may reach the hub after a frame another client sent later (a host's SDO
+request during the drive's tick): its frames then take the bus's idle time at their stated
+instants (the hub keeps the last :attr:`Hub.max_backdate_s` of bus occupancy), as they did on a
+real bus, instead of queueing after that frame and delaying the next one (an SDO reply).
 
 One background thread runs an ``epoll`` loop over all sockets; no locks are needed.
 The ``virtual-drive hub`` command is :mod:`virtual_drive.hub_cli`; the launcher that starts a hub
@@ -32,6 +36,7 @@ import select
 import socket
 import threading
 import time
+from bisect import bisect_right
 from collections import deque
 from dataclasses import dataclass
 
@@ -104,6 +109,7 @@ _WAIT_OPEN, _WAIT_MODE, _RAW, _CLOSED = range(4)
 class _Client:
     __slots__ = (
         "bus",
+        "bus_end",
         "errors",
         "events",
         "fd",
@@ -127,13 +133,23 @@ class _Client:
         self.ready_at = 0.0  # monotonic time before which frames are held back (see Hub)
         self.queue: deque = deque()  # (arrival, key, seq, frame, bits) waiting for the bus
         self.bus: _Bus | None = None
+        self.bus_end = 0.0  # monotonic time its last frame left the bus
         self.errors = 0
 
 
 class _Bus:
     """One emulated CAN bus (one socketcand channel)."""
 
-    __slots__ = ("deliveries", "free_at", "last_due", "name", "receivers", "senders")
+    __slots__ = (
+        "busy_end",
+        "busy_start",
+        "deliveries",
+        "free_at",
+        "last_due",
+        "name",
+        "receivers",
+        "senders",
+    )
 
     def __init__(self, name: str) -> None:
         self.name = name
@@ -142,6 +158,38 @@ class _Bus:
         self.free_at = 0.0  # monotonic time the bus becomes idle
         self.deliveries: deque = deque()  # (due, sender, frame), due non-decreasing
         self.last_due = 0.0
+        #: the bus's recent occupancy: frame i was on it from busy_start[i] to busy_end[i]
+        #: (monotonic s, sorted, never overlapping; the last max_backdate_s are kept), so a
+        #: frame stated in the past can take an idle gap of then (see Hub._advance)
+        self.busy_start: list[float] = []
+        self.busy_end: list[float] = []
+
+
+#: intervals a late ``sendat`` frame looks past for an idle gap before it waits for the bus
+#: (a bus full since its stated time has no gap: the search ends there, not at the backlog's end)
+_GAP_SCAN = 32
+
+
+def _idle_gap(bus: _Bus, t: float, duration: float) -> int | None:
+    """Index at which an idle stretch of ``duration`` s at or after ``t`` (monotonic s) that
+    ends before the bus's :attr:`_Bus.free_at` fits in its occupancy, with its start in
+    ``_gap_start``; None: no such stretch within :data:`_GAP_SCAN` frames."""
+    starts, ends = bus.busy_start, bus.busy_end
+    i = bisect_right(ends, t)  # the first frame still on the bus after t
+    n = len(starts)
+    limit = bus.free_at
+    for _ in range(_GAP_SCAN):
+        if t + duration > limit:
+            return None
+        if i >= n or starts[i] >= t + duration:
+            _gap_start[0] = t
+            return i
+        t = ends[i]
+        i += 1
+    return None
+
+
+_gap_start = [0.0]  # (the hub's one thread: _idle_gap's second result without a tuple)
 
 
 def _head_arrival(client: _Client) -> float:
@@ -699,6 +747,10 @@ class Hub:
         if not senders and (not deliveries or deliveries[0][0] > now):
             return  # most wakes: nothing on this bus to do
         bitrate = self._bitrate
+        old = now - self.max_backdate_s
+        if bus.busy_end and bus.busy_end[0] < old - 0.25:  # forget what no sendat reaches
+            k = bisect_right(bus.busy_end, old)  # (a quarter second at a time)
+            del bus.busy_start[:k], bus.busy_end[:k]
         while senders:
             if len(senders) == 1:  # the usual case: no arbitration to decide
                 winner = senders[0]
@@ -718,12 +770,32 @@ class Hub:
                     if arrival <= start and (best is None or (key, seq) < best):
                         best = (key, seq)
                         winner = c
-            _, _, _, can_id, data, ext, bits = winner.queue.popleft()
+            arrival, _, _, can_id, data, ext, bits = winner.queue.popleft()
             if not winner.queue:
                 senders.remove(winner)
             duration = bits / bitrate
-            end = start + duration
-            bus.free_at = end
+            if start > arrival and start > winner.bus_end and bus.busy_end:
+                # the bus was taken at its stated time by a frame that reached the hub first
+                # (a batch stated in the past arrives after frames sent meanwhile): an idle
+                # gap since then is where it was on the bus, as its sender stated; its own
+                # earlier frames stay before it
+                i = _idle_gap(bus, max(arrival, winner.bus_end), duration)
+                if i is not None:
+                    start = _gap_start[0]
+                    end = start + duration
+                    bus.busy_start.insert(i, start)
+                    bus.busy_end.insert(i, end)
+                else:
+                    end = start + duration
+                    bus.free_at = end
+                    bus.busy_start.append(start)
+                    bus.busy_end.append(end)
+            else:
+                end = start + duration
+                bus.free_at = end
+                bus.busy_start.append(start)
+                bus.busy_end.append(end)
+            winner.bus_end = end
             self._busy_s += duration
             if self._drop_rate > 0.0 and self._rng.random() < self._drop_rate:
                 self._n_dropped += 1

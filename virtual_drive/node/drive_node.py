@@ -101,17 +101,19 @@ logger = logging.getLogger(__name__)
 #: Samples per piece while a stop ramp runs (1 ms at Ts = 20 µs): see :meth:`VirtualDrive._step`.
 RAMP_CHUNK = 50
 #: Pacing period (s) on a bus that takes frames with their bus time (``timed_sends``, the
-#: loopback hub): one wake-up, one simulator call and one socket write per 5 ms, the TPDOs
+#: loopback hub): one wake-up, one simulator call and one socket write per 10 ms, the TPDOs
 #: still 1 ms apart on the bus with the values of their own instant (like a USB adapter that
 #: hands over frames in batches with hardware times). Elsewhere (SocketCAN, python-can
-#: ``virtual``): 1 ms. The price: TPDOs reach hosts up to 5 ms after their bus time, and the
-#: simulation reads new setpoints once per tick. 10 ms ticks cost about a quarter less CPU
-#: (benchmarks/bench_realtime.py: 6.6-7.6 % against 9.6-10.3 % in the same minutes, 4.3-5.6 %
-#: against 5.5-6.4 % in quieter ones) but doubled the SDO reply p99 of four drives sharing
-#: the bus (3.8 -> 7.2 ms at TPDO2/3 2 ms, bench_nodes.py): a longer batch of frames stated
-#: in the past occupies the emulated bus when it arrives, ahead of an SDO reply sent now.
+#: ``virtual``): 1 ms. The price: TPDOs reach hosts up to 10 ms after their bus time, and the
+#: simulation reads new setpoints once per tick (stop ramps still decide every 1 ms,
+#: :data:`RAMP_CHUNK`). On this kind of VM a wake-up alone costs 55-72 µs of CPU, so the
+#: period sets most of the drive's cost: 5.4 % of a core at 10 ms against 8.6 % at 5 ms in
+#: the same hour (benchmarks/bench_realtime.py, load 0.4-0.8). 10 ms once doubled the SDO
+#: reply p99 of four drives sharing the bus (3.8 -> 7.2 ms at TPDO2/3 2 ms, bench_nodes.py):
+#: a batch stated in the past queued behind a host frame that reached the hub first; the hub
+#: now puts such frames in the idle bus time of their stated instants (3.4-3.7 ms).
 #: ``--tick-ms`` chooses.
-TIMED_PERIOD = 0.005
+TIMED_PERIOD = 0.010
 
 ABORT_STORE = abort_codes.STORE  # kept for importers of the old module
 ABORT_HARDWARE = abort_codes.HARDWARE

@@ -439,7 +439,11 @@ class PdoEngine:
         for t in event:
             due = t.next_due
             while due <= until:
-                plan.setdefault(due, []).append(t)
+                # one instant to the µs: timers of different periods that meet (every 30 ms
+                # for 2, 3 and 10 ms) differ there by the rounding of their sums, and the
+                # TPDOs of one instant go in table order (lowest COB-ID first, as the bus's
+                # arbitration would take them), not in the order of those rounding errors
+                plan.setdefault(round(due, 6), []).append(t)
                 due = _next_after(t, due)
         self._plan = (tpdos, plan, event)
         return sorted(plan)
