@@ -190,6 +190,40 @@ def test_a_late_batch_takes_the_idle_bus_of_its_time_not_the_bus_after_a_later_f
             rx.shutdown()
 
 
+def test_an_sdo_read_answers_with_the_value_of_now_not_of_the_last_tick():
+    """The drive on the hub runs its simulation once per tick (10 ms), but an SDO read of a
+    measurement answers with the value of the moment it was asked: the deadbeat current loop
+    (paper eq. 15) reaches a new reference in 2 samples (40 us), so i_p read right after the
+    reference was written is the new reference, not the one of up to a tick ago."""
+    from drive_link import Drive
+
+    with Hub(port=0, bitrate=1_000_000) as hub:
+        bus = HubBus(channel="vcan0", host="127.0.0.1", port=hub.port)
+        drive = VirtualDrive(bus, node_id=1)
+        bus.rx_wanted = drive.network.subscribers
+        drive.start()
+        try:
+            assert drive.runner.period == pytest.approx(TIMED_PERIOD) and TIMED_PERIOD >= 0.005
+            with Drive.connect(
+                node_id=1, heartbeat_ms=None, interface="socketcand", host="127.0.0.1",
+                port=hub.port, channel="vcan0",
+            ) as d:
+                d.write("sim_load.J", 1e4)  # rotor held: i_p follows the reference alone
+                d.set_mode("current")
+                d.enable()
+                seen = []
+                for k in range(20):
+                    ref = 5.0 if k % 2 else 15.0
+                    d.set_current(ref)
+                    seen.append((ref, float(d.read("measurements.i_p"))))
+                d.disable()
+        finally:
+            drive.stop()
+            bus.shutdown()
+    stale = [(ref, i_p) for ref, i_p in seen if abs(i_p - ref) > 0.5]
+    assert not stale, seen
+
+
 def test_vdhub_client_uses_sendat_only_where_the_server_takes_it():
     with Hub(port=0) as hub:
         bus = HubBus(channel="vcan0", host="127.0.0.1", port=hub.port)

@@ -118,6 +118,8 @@ class Runner:
         self._max_n = 1
         self._chunk_n = 1
         self._timer_due = 0.0  #: monotonic time the timer wants to run next
+        #: held while a tick runs the simulation (the pacer's, or :meth:`catch_up`'s)
+        self._tick_lock = threading.Lock()
 
     # -- lifecycle ------------------------------------------------------------------------
     def start(self) -> None:
@@ -157,8 +159,39 @@ class Runner:
         pacer = self._pacer
         return t if pacer is None or not pacer.running else pacer.align(t)
 
+    def catch_up(self, timeout: float = 0.25) -> bool:
+        """Run the simulation up to now, on the calling thread: an SDO read of a live value
+        then answers with the value of the moment it was asked, not of the last tick (up to
+        one period old: 10 ms on the hub). The tick's TPDOs due meanwhile go out with their
+        own values, as the pacer would send them; the periodic services wait for the pacer.
+
+        Does nothing on the pacer's own thread (a TPDO's payload is read inside its tick) and
+        gives up after ``timeout`` s when a tick is running (a busy host): the value is then
+        the one the running tick leaves. Returns True when it ran."""
+        pacer = self._pacer
+        if not self._active or pacer is None or threading.get_ident() == pacer.thread_ident:
+            return False
+        if not self._tick_lock.acquire(timeout=timeout):
+            return False
+        try:
+            if self._active:
+                self._run_sim(time.monotonic())
+        except Exception as exc:  # as on the pacer: the runner stops and says why
+            self._fail(exc)
+        finally:
+            self._tick_lock.release()
+        return True
+
     # -- one tick (pacer thread) ----------------------------------------------------------
     def _tick(self, now: float) -> None:
+        with self._tick_lock:
+            self._run_sim(now)
+            self._periodic(time.monotonic())
+            self.stats.iterations += 1
+
+    def _run_sim(self, now: float) -> None:
+        """The samples that bring the simulation to ``now`` (at most one chunk), the timer's
+        TPDOs due meanwhile, and the pacing statistics."""
         stats = self.stats
         target = int((now - self._t0) * self.speed / TS)
         n = target - self._done
@@ -178,13 +211,10 @@ class Runner:
             self._done += n
             stats.samples += n
             stats.max_chunk = max(stats.max_chunk, n)
-        after = time.monotonic()
-        lag = (after - self._t0) * self.speed - self._done * TS
+        lag = (time.monotonic() - self._t0) * self.speed - self._done * TS
         stats.last_lag_s = lag
         if abs(lag) > stats.max_lag_s and stats.iterations > 0:
             stats.max_lag_s = abs(lag)
-        self._periodic(after)
-        stats.iterations += 1
 
     def _run_timed(self, n: int, now: float) -> None:
         """Run ``n`` samples in pieces that end at the due points of :attr:`timer_at` up to
