@@ -224,6 +224,26 @@ def test_an_sdo_read_answers_with_the_value_of_now_not_of_the_last_tick():
     assert not stale, seen
 
 
+def test_a_tick_that_read_the_clock_before_a_read_caught_up_runs_nothing_twice():
+    """The pacer reads the clock, then waits for the tick's lock while an SDO read runs the
+    simulation up to a later time: its tick then has nothing to run (simulated time never goes
+    back, no sample runs twice) and the drive goes on (in run B it stopped: n_samples -1)."""
+    with _drive_on_hub() as (drive, _frames):
+        time.sleep(0.1)
+        runner = drive.runner
+        stale = time.monotonic()
+        time.sleep(0.005)
+        assert runner.catch_up()
+        t_sim = drive.sim.time
+        runner._tick(stale)  # the pacer's tick with its clock read before the catch-up
+        # (the pacer's own tick may come between: simulated time may have moved on, never back)
+        assert drive.sim.time >= t_sim
+        assert drive.sim.time == pytest.approx(runner._done * 20e-6, abs=1e-9)
+        time.sleep(0.05)
+        assert runner.error is None and runner.running
+        assert drive.sim.time > t_sim
+
+
 def test_vdhub_client_uses_sendat_only_where_the_server_takes_it():
     with Hub(port=0) as hub:
         bus = HubBus(channel="vcan0", host="127.0.0.1", port=hub.port)

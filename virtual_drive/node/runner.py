@@ -203,7 +203,8 @@ class Runner:
             logger.warning(
                 "pacing loop behind: %.1f ms of simulated time dropped", skipped * TS * 1e3
             )
-        n = min(n, self._chunk_n)
+        # (a catch_up may have run past the `now` this tick read before it took the lock)
+        n = max(0, min(n, self._chunk_n))
         if self.timer_at is not None:
             self._run_timed(n, now)
         elif n > 0:
