@@ -39,6 +39,7 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from math import floor as _floor
 
 from canopen import objectdictionary as odm
 from canopen.sdo import SdoAbortedError
@@ -443,7 +444,7 @@ class PdoEngine:
                 # for 2, 3 and 10 ms) differ there by the rounding of their sums, and the
                 # TPDOs of one instant go in table order (lowest COB-ID first, as the bus's
                 # arbitration would take them), not in the order of those rounding errors
-                plan.setdefault(round(due, 6), []).append(t)
+                plan.setdefault(_floor(due * 1e6 + 0.5) * 1e-6, []).append(t)
                 due = _next_after(t, due)
         self._plan = (tpdos, plan, event)
         return sorted(plan)
