@@ -69,7 +69,7 @@ class Runner:
         whose frames carry their bus time (:meth:`PdoEngine.tick_at`). Given, the chunk of a
         tick is run in pieces that end at the timer's due points and the timer runs at each,
         with the simulation standing at that time; the thread then wakes only once per
-        ``period`` (e.g. 5 ms: a fifth of the wake-ups and socket writes of 1 ms ticks) and
+        ``period`` (e.g. 10 ms: a tenth of the wake-ups and socket writes of 1 ms ticks) and
         the frames still show their exact event-timer spacing on the bus.
     :param flush: called at the end of each timed tick (the bus writes the frames it held).
     :param step_timed: ``step_timed(n, at, at_point) -> bool``: runs a timed tick's ``n``
