@@ -92,6 +92,17 @@ def hub_drive(tmp_path_factory):
         yield bus.hub
 
 
+def recv_frames(bus, n: int, timeout: float = 10.0) -> list:
+    """Up to ``n`` frames (``can.Message``) from python-can ``bus`` within ``timeout`` s."""
+    out: list = []
+    end = time.monotonic() + timeout
+    while len(out) < n and time.monotonic() < end:
+        msg = bus.recv(0.5)
+        if msg is not None:
+            out.append(msg)
+    return out
+
+
 def min_rate(nominal_hz: float, wait: float, margin: float = 0.9) -> float:
     """Lowest acceptable rate of a ``nominal_hz`` stream from a process kept waiting ``wait``
     s/s by the kernel: ``margin × nominal × (1 − wait)`` (Hz)."""

@@ -21,7 +21,7 @@ from collections.abc import Iterator
 
 import can
 import pytest
-from conftest import RunQueueProbe, min_rate
+from conftest import RunQueueProbe, min_rate, recv_frames
 
 from virtual_drive.hub import Hub
 from virtual_drive.hub_protocol import (
@@ -99,17 +99,6 @@ def _raw_client(port: int) -> socket.socket:
     return s
 
 
-def _recv_n(rx: can.BusABC, n: int, timeout: float = 5.0) -> list[can.Message]:
-    """Up to ``n`` frames from ``rx`` within ``timeout`` s."""
-    got: list[can.Message] = []
-    end = time.monotonic() + timeout
-    while len(got) < n and time.monotonic() < end:
-        msg = rx.recv(0.5)
-        if msg is not None:
-            got.append(msg)
-    return got
-
-
 def test_hub_puts_sendat_frames_on_the_bus_at_their_time():
     with Hub(port=0, bitrate=1_000_000) as hub:
         rx = can.Bus(
@@ -129,7 +118,7 @@ def test_hub_puts_sendat_frames_on_the_bus_at_their_time():
             batch += format_sendat(now - 0.0035, 0x282, b"\x01")
             batch += format_sendat(now + 5.0, 0x283, b"\x02")
             tx.sendall(batch)
-            got = _recv_n(rx, 5)
+            got = recv_frames(rx, 5)
             arrived = time.time()
             assert [m.arbitration_id for m in got] == [0x281, 0x281, 0x281, 0x282, 0x283]
             for m, t in zip(got[:3], stated, strict=True):
@@ -141,7 +130,7 @@ def test_hub_puts_sendat_frames_on_the_bus_at_their_time():
             assert got[3].timestamp <= got[2].timestamp + 200e-6
             assert got[4].timestamp <= arrived  # never in the future
             tx.sendall(format_sendat(time.monotonic() - 10.0, 0x284, b""))
-            (old,) = _recv_n(rx, 1)
+            (old,) = recv_frames(rx, 1)
             assert old.arbitration_id == 0x284
             assert time.time() - old.timestamp <= Hub.max_backdate_s + 0.5
         finally:
@@ -173,7 +162,7 @@ def test_a_late_batch_takes_the_idle_bus_of_its_time_not_the_bus_after_a_later_f
             b.sendall(b"".join(format_sendat(t, 0x280 + k, bytes(8)) for k, t in enumerate(stated)))
             t_send_a2 = time.time()
             a.sendall(format_send(0x101, bytes(8)))  # A2: sent after the batch
-            got = _recv_n(rx, 5)
+            got = recv_frames(rx, 5)
             ids = [m.arbitration_id for m in got]
             assert sorted(ids[:4]) == [0x280, 0x281, 0x282, 0x283] and ids[4] == 0x101, ids
             # the batch occupied no bus time after A1: delivered with A1's time (the bus never

@@ -11,6 +11,7 @@ import time
 
 import can
 import pytest
+from conftest import recv_frames
 from test_node_process import HubProcess
 
 from virtual_drive.node.cli_run import parse_nodes, store_for
@@ -27,16 +28,6 @@ def hub():
     h.stop()
 
 
-def _recv_all(bus: can.BusABC, n: int, timeout: float = 10.0) -> list[can.Message]:
-    out: list[can.Message] = []
-    end = time.monotonic() + timeout
-    while len(out) < n and time.monotonic() < end:
-        msg = bus.recv(0.5)
-        if msg is not None:
-            out.append(msg)
-    return out
-
-
 def test_send_many_reaches_a_python_can_peer_in_order(hub):
     peer = can.Bus(**hub.join_kwargs())
     bus = HubBus(channel="vcan0", host="127.0.0.1", port=hub.port)
@@ -45,7 +36,7 @@ def test_send_many_reaches_a_python_can_peer_in_order(hub):
         frames = [(0x181 + k, bytes(range(0xF8, 0xF8 + k))) for k in range(9)]  # 0..8 bytes
         assert bus.send_many(frames) == 9
         bus.send(can.Message(arbitration_id=0x1ABCDEF, data=b"\x01", is_extended_id=True))
-        got = _recv_all(peer, 10)
+        got = recv_frames(peer, 10)
         assert [(m.arbitration_id, bytes(m.data)) for m in got[:9]] == frames
         assert not any(m.is_extended_id for m in got[:9])
         assert got[9].is_extended_id and got[9].arbitration_id == 0x1ABCDEF
@@ -62,7 +53,7 @@ def test_frames_nobody_wants_are_dropped_before_parsing(hub):
         bus.rx_wanted = {0x601, 0x000}
         for cob_id, data in ((0x182, b"\x01"), (0x601, b"\x40\x41\x60\x00"), (0x000, b"\x01\x00")):
             peer.send(can.Message(arbitration_id=cob_id, data=data, is_extended_id=False))
-        got = _recv_all(bus, 2)
+        got = recv_frames(bus, 2)
         assert [(m.arbitration_id, bytes(m.data)) for m in got] == [
             (0x601, b"\x40\x41\x60\x00"),
             (0x000, b"\x01\x00"),
@@ -95,18 +86,18 @@ def test_shared_connection_delivers_like_one_bus(hub):
         time.sleep(0.2)
         a.rx_wanted, b.rx_wanted = {0x601}, {0x701, 0x602}
         a.send(can.Message(arbitration_id=0x701, data=b"\x05", is_extended_id=False))
-        assert [(m.arbitration_id, bytes(m.data)) for m in _recv_all(b, 1)] == [(0x701, b"\x05")]
+        assert [(m.arbitration_id, bytes(m.data)) for m in recv_frames(b, 1)] == [(0x701, b"\x05")]
         assert a.recv(0.1) is None  # a port does not hear itself
-        assert [m.arbitration_id for m in _recv_all(peer, 1)] == [0x701]  # the hub got it
+        assert [m.arbitration_id for m in recv_frames(peer, 1)] == [0x701]  # the hub got it
         peer.send(can.Message(arbitration_id=0x601, data=b"\x40", is_extended_id=False))
         peer.send(can.Message(arbitration_id=0x602, data=b"\x41", is_extended_id=False))
-        assert [m.arbitration_id for m in _recv_all(a, 1)] == [0x601]
-        assert [m.arbitration_id for m in _recv_all(b, 1)] == [0x602]
+        assert [m.arbitration_id for m in recv_frames(a, 1)] == [0x601]
+        assert [m.arbitration_id for m in recv_frames(b, 1)] == [0x602]
         conn.batch_on(threading.get_ident())
         a.send_many([(0x181, b"\x01"), (0x281, b"\x02")])
         assert peer.recv(0.3) is None  # held
         conn.flush()
-        assert [m.arbitration_id for m in _recv_all(peer, 2)] == [0x181, 0x281]
+        assert [m.arbitration_id for m in recv_frames(peer, 2)] == [0x181, 0x281]
         assert peer.recv(0.3) is None  # each frame once
     finally:
         a.shutdown()
