@@ -527,5 +527,7 @@ def test_closed_tab_loses_the_lease_after_the_grace_time(api, pages):
         timeout=LEASE_GRACE_S + 30,
         what="lease released",
     )
+    # (B shows the Speed tab, whatever an earlier test of this module left it on)
+    click(b, b.get_by_role("tab", name="Speed"))
     click(b, b.get_by_role("button", name="+ step"))  # nobody holds it: B's action takes it
     wait_text(b, r"In control: browser #\d+ \(you\)")
