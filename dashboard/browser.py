@@ -135,6 +135,21 @@ def click(page: Any, locator: Any) -> None:
     time.sleep(0.1)  # viser batches GUI messages in 50 ms windows
 
 
+def click_until(page: Any, locator: Any, done: Any, timeout: float = 20.0) -> None:
+    """:func:`click`, then wait ``timeout`` s for ``done(timeout)`` (which raises
+    AssertionError when it did not come); click again, at most 3 clicks in all. A forced click
+    that lands while viser re-renders the panel, or under a notification sliding in, reaches
+    nothing. Only for idempotent buttons (Enable, Apply)."""
+    for attempt in range(3):
+        click(page, locator)
+        try:
+            done(timeout)
+            return
+        except AssertionError:
+            if attempt == 2:
+                raise
+
+
 def dismiss_notifications(page: Any) -> None:
     """Close viser's notifications (e.g. the "software WebGL" notice) so they hide nothing.
 

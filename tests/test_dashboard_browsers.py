@@ -42,6 +42,7 @@ from dashboard._gui_pace import AHEAD
 from dashboard.app import create_app
 from dashboard.browser import CHROMIUM, launch, open_bench, text_input
 from dashboard.browser import click as _click
+from dashboard.browser import click_until as _click_until
 from dashboard.config import BenchConfig
 
 pytestmark = [
@@ -248,6 +249,7 @@ def explained(fn):
 
 
 click = explained(_click)
+click_until = explained(_click_until)
 
 
 @pytest.fixture(scope="module")
@@ -318,20 +320,6 @@ def type_into(page, label: str, value: str) -> None:
 @explained
 def field(page, label: str) -> str:
     return text_input(page, label).input_value()
-
-
-def click_until(page, locator, done, timeout: float = 20.0) -> None:
-    """Click, then wait ``timeout`` s for ``done()``; click again (at most 3 clicks in all)
-    when it did not come: a forced click that lands while viser re-renders the panel, or under
-    a notification sliding in, reaches nothing. Only for idempotent buttons (Enable, Apply)."""
-    for attempt in range(3):
-        click(page, locator)
-        try:
-            done(timeout)
-            return
-        except AssertionError:
-            if attempt == 2:
-                raise
 
 
 @explained

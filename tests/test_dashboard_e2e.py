@@ -26,6 +26,7 @@ import pytest
 from dashboard.browser import (
     CHROMIUM,
     click,
+    click_until,
     dismiss_notifications,
     launch,
     open_bench,
@@ -83,8 +84,11 @@ def wait_text(page, pattern: str, timeout: float = 20.0) -> re.Match:
 
 
 def test_speed_step_in_the_browser(page):
-    click(page, page.get_by_role("button", name="Enable"))
-    wait_text(page, r"OPERATION ENABLED")
+    # (Enable is idempotent: a click that reached nothing while viser re-rendered is repeated)
+    click_until(
+        page, page.get_by_role("button", name="Enable"),
+        lambda t: wait_text(page, r"OPERATION ENABLED", t),
+    )
     plot = page.locator(".uplot").first
     before = plot.screenshot(timeout=60_000)
     click(page, page.get_by_role("button", name="+ step"))
