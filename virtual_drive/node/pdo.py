@@ -470,6 +470,11 @@ class PdoEngine:
             done = now if stamped else time.monotonic()
             for t, periods in due:
                 grid = t.next_due + (periods + 1) * t.event_s
+                if stamped and grid < now + t.event_s - 1e-9:
+                    # a frame stated late (a catch-up): the next one slot later on the grid,
+                    # never closer than the event period (CiA 301 restarts the event timer
+                    # with each transmission; the slot it covered had its frame)
+                    grid += t.event_s
                 t.next_due = max(grid, done + t.inhibit_s) if t.inhibit_s > 0 else grid
         earliest = now + idle
         tpdos = self.tpdos
