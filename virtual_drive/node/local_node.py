@@ -81,7 +81,8 @@ class DriveLocalNode(LocalNode):
             raise SdoAbortedError(ABORT_READ_WRITEONLY)
         live = self._drive._live_getters.get((index, subindex))
         if live is not None:
-            self._drive.runner.catch_up()  # the value of now, not of the last tick
+            if getattr(live, "live_item", None) is not None:  # a measurement (0x2040):
+                self._drive.runner.catch_up()  # the value of now, not of the last tick
             value = live()
             if isinstance(value, (bytes, bytearray)):
                 return bytes(value)
