@@ -133,9 +133,9 @@ def add_run_arguments(p: argparse.ArgumentParser) -> None:
         help="wall-clock period of the pacing loop, ms (default $VIRTUAL_DRIVE_TICK_MS, else 10 "
         "on the loopback hub, whose frames carry their bus time, and 1 elsewhere): simulation "
         "chunks and heartbeats run on this grid, TPDOs on their own event timer (on the hub "
-        "sent in batches with their exact times; elsewhere on this grid), SDO reads of live "
-        "values see the present; a longer tick costs less CPU, a shorter one delivers TPDOs "
-        "sooner (User-Mode Linux: 10)",
+        "sent in batches with their exact times; elsewhere on this grid), SDO reads of "
+        "measurements see the present; a longer tick costs less CPU, a shorter one delivers "
+        "TPDOs sooner (User-Mode Linux: 10)",
     )
     p.add_argument("--log-level", default="INFO", choices=["DEBUG", "INFO", "WARNING", "ERROR"])
 
