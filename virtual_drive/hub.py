@@ -170,10 +170,10 @@ class _Bus:
 _GAP_SCAN = 32
 
 
-def _idle_gap(bus: _Bus, t: float, duration: float) -> int | None:
-    """Index at which an idle stretch of ``duration`` s at or after ``t`` (monotonic s) that
-    ends before the bus's :attr:`_Bus.free_at` fits in its occupancy, with its start in
-    ``_gap_start``; None: no such stretch within :data:`_GAP_SCAN` frames."""
+def _idle_gap(bus: _Bus, t: float, duration: float) -> tuple[int, float] | None:
+    """``(index, start)`` of an idle stretch of ``duration`` s at or after ``t`` (monotonic s)
+    that ends before the bus's :attr:`_Bus.free_at`, in its occupancy; None: no such stretch
+    within :data:`_GAP_SCAN` frames."""
     starts, ends = bus.busy_start, bus.busy_end
     i = bisect_right(ends, t)  # the first frame still on the bus after t
     n = len(starts)
@@ -182,14 +182,10 @@ def _idle_gap(bus: _Bus, t: float, duration: float) -> int | None:
         if t + duration > limit:
             return None
         if i >= n or starts[i] >= t + duration:
-            _gap_start[0] = t
-            return i
+            return i, t
         t = ends[i]
         i += 1
     return None
-
-
-_gap_start = [0.0]  # (the hub's one thread: _idle_gap's second result without a tuple)
 
 
 def _head_arrival(client: _Client) -> float:
@@ -774,22 +770,18 @@ class Hub:
             if not winner.queue:
                 senders.remove(winner)
             duration = bits / bitrate
+            gap = None
             if start > arrival and start > winner.bus_end and bus.busy_end:
                 # the bus was taken at its stated time by a frame that reached the hub first
                 # (a batch stated in the past arrives after frames sent meanwhile): an idle
                 # gap since then is where it was on the bus, as its sender stated; its own
                 # earlier frames stay before it
-                i = _idle_gap(bus, max(arrival, winner.bus_end), duration)
-                if i is not None:
-                    start = _gap_start[0]
-                    end = start + duration
-                    bus.busy_start.insert(i, start)
-                    bus.busy_end.insert(i, end)
-                else:
-                    end = start + duration
-                    bus.free_at = end
-                    bus.busy_start.append(start)
-                    bus.busy_end.append(end)
+                gap = _idle_gap(bus, max(arrival, winner.bus_end), duration)
+            if gap is not None:
+                i, start = gap
+                end = start + duration
+                bus.busy_start.insert(i, start)
+                bus.busy_end.insert(i, end)
             else:
                 end = start + duration
                 bus.free_at = end

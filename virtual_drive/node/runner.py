@@ -160,7 +160,7 @@ class Runner:
         return t if pacer is None or not pacer.running else pacer.align(t)
 
     def catch_up(self, timeout: float = 0.005) -> bool:
-        """Run the simulation up to now, on the calling thread: an SDO read of a live value
+        """Run the simulation up to now, on the calling thread: an SDO read of a measurement
         then answers with the value of the moment it was asked, not of the last tick (up to
         one period old: 10 ms on the hub). The tick's TPDOs due meanwhile go out with their
         own values, as the pacer would send them; the periodic services wait for the pacer.
