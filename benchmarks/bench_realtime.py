@@ -15,6 +15,7 @@ idle machine (the load average is printed beside the figures).
 from __future__ import annotations
 
 import argparse
+import bisect
 import os
 import re
 import resource
@@ -47,15 +48,48 @@ end = time.monotonic() + float(sys.argv[1])
 worst = 0.0
 late = 0
 n = 0
+stalls = []
 while time.monotonic() < end:
     t = time.monotonic()
     time.sleep(0.001)
-    over = time.monotonic() - t - 0.001
+    woke = time.monotonic()
+    over = woke - t - 0.001
     worst = max(worst, over)
     late += over > 0.005
     n += 1
+    if over > 0.001:
+        stalls.append(f"{t + 0.001:.6f}:{woke:.6f}")
 print(f"{worst * 1e3:.2f} {late} {n}")
+print(" ".join(stalls))
 """
+
+#: a probe wake-up this much later than asked (s) is a host stall: the OS ran neither process
+PROBE_STALL_S = 0.001
+
+
+def _record_ticks(drive) -> list[tuple[float, float, float]]:
+    """``(start, end, lag)`` of every pacing tick of ``drive`` from now on: monotonic s when it
+    read the clock and when it ended, and |sim − wall| it left (s). Instruments this
+    benchmark's drive only (about 1 µs per tick)."""
+    ticks: list[tuple[float, float, float]] = []
+    runner = drive.runner
+    run_sim = runner._run_sim
+    stats = runner.stats
+    clock = time.monotonic
+
+    def recorded(now: float) -> None:
+        run_sim(now)
+        ticks.append((now, clock(), stats.last_lag_s))
+
+    runner._run_sim = recorded
+    return ticks
+
+
+def _during_stall(tick: tuple[float, float, float], stalls: list[tuple[float, float]]) -> bool:
+    """Whether the probe process was kept waiting while ``tick`` ran (the windows overlap)."""
+    start, end, _ = tick
+    i = bisect.bisect_left(stalls, (start - 1.0, 0.0))
+    return any(s0 < end and s1 > start for s0, s1 in stalls[i:] if s0 < end + 1.0)
 
 
 def _time_parts(drive, bus) -> dict[str, float]:
@@ -160,12 +194,12 @@ def main() -> int:
         ru0 = resource.getrusage(resource.RUSAGE_SELF)
         wall0 = time.monotonic()
         sim0 = drive.sim.time
+        ticks = _record_ticks(drive)
         # an independent process that only sleeps 1 ms at a time: how late does the OS wake it?
         probe = subprocess.Popen(
             [sys.executable, "-c", _PROBE, str(args.seconds)], stdout=subprocess.PIPE, text=True
         )
         drifts = []  # sim - wall sampled at any moment: includes the time since the last tick
-        tick_lags = []  # sim - wall where the last tick left it (the pacing drift proper)
         end = wall0 + args.seconds
         stats = drive.runner.stats
         while True:
@@ -173,13 +207,15 @@ def main() -> int:
             if now >= end:
                 break
             drifts.append((drive.sim.time - sim0) - (now - wall0))
-            tick_lags.append(stats.last_lag_s)
             time.sleep(0.05)
         worst = max(abs(d) for d in drifts)
         drift = drifts[-1]
         p99 = sorted(abs(d) for d in drifts)[int(0.99 * (len(drifts) - 1))]
-        tick_worst = max(abs(d) for d in tick_lags)
-        tick_p99 = sorted(abs(d) for d in tick_lags)[int(0.99 * (len(tick_lags) - 1))]
+        ticks = ticks[:]  # (the pacer goes on appending)
+        tick_lags = sorted(abs(t[2]) for t in ticks)
+        tick_worst = tick_lags[-1]
+        tick_p99 = tick_lags[int(0.99 * (len(tick_lags) - 1))]
+        late_ticks = [t for t in ticks if abs(t[2]) > 2e-3]
         wall = time.monotonic() - wall0
         cpu = time.process_time() - cpu0
         ru1 = resource.getrusage(resource.RUSAGE_SELF)
@@ -195,8 +231,8 @@ def main() -> int:
         )
         print(
             f"|sim - wall| drift at the end of each tick: max {tick_worst * 1e3:.2f} ms, "
-            f"99th percentile {tick_p99 * 1e3:.2f} ms ({len(tick_lags)} samples every 50 ms, "
-            f"{sum(abs(d) > 2e-3 for d in tick_lags)} above 2 ms)"
+            f"99th percentile {tick_p99 * 1e3:.2f} ms, {len(late_ticks)} of {len(ticks)} ticks "
+            "above 2 ms"
         )
         print(
             f"|sim - wall| at any moment (adds the 0..{period * 1e3:g} ms since the last tick): "
@@ -211,10 +247,24 @@ def main() -> int:
         )
         print(f"CPU (time.process_time): {100 * cpu / wall:.1f} % of one core")
         print(f"CPU (getrusage user+sys): {100 * ru_cpu / wall:.1f} % of one core")
-        p_worst, p_late, p_n = probe.communicate(timeout=args.seconds + 30)[0].split()
+        out = probe.communicate(timeout=args.seconds + 30)[0].splitlines()
+        p_worst, p_late, p_n = out[0].split()
+        stalls = sorted(
+            (float(a), float(b)) for a, b in (w.split(":") for w in (out[1:] or [""])[0].split())
+        )
         print(
             f"scheduler probe (separate process, 1 ms sleeps): worst wake-up {p_worst} ms late, "
-            f"{p_late} of {p_n} wake-ups > 5 ms late"
+            f"{p_late} of {p_n} wake-ups > 5 ms late, {len(stalls)} > "
+            f"{PROBE_STALL_S * 1e3:g} ms late"
+        )
+        unexplained = [t for t in late_ticks if not _during_stall(t, stalls)]
+        print(
+            f"ticks above 2 ms while the probe was also kept waiting (the host stalled both): "
+            f"{len(late_ticks) - len(unexplained)} of {len(late_ticks)}"
+            + "".join(
+                f"; unexplained: {t[2] * 1e3:.2f} ms (tick ran {1e3 * (t[1] - t[0]):.2f} ms)"
+                for t in unexplained[:5]
+            )
         )
         per = 1e6 * period / wall  # µs per tick for 1 s of CPU
         print(
@@ -227,8 +277,15 @@ def main() -> int:
             "the same simulator call back to back, for comparison: "
             f"{sim_back_to_back(period):.0f} µs per tick"
         )
-        ok = tick_worst <= 2e-3 and cpu / wall <= 0.06
-        print("goals (drift <= 2 ms, CPU <= 6 % idle):", "met" if ok else "NOT met")
+        cpu_ok = cpu / wall <= 0.06
+        print(
+            "goals (drift <= 2 ms, CPU <= 6 % idle):",
+            "met"
+            if cpu_ok and not late_ticks
+            else "met outside host stalls"
+            if cpu_ok and not unexplained
+            else "NOT met",
+        )
         return 0
     finally:
         drive.stop()

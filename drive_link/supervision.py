@@ -377,22 +377,30 @@ class Supervisor:
                 reason, boot = self._pending, self._pending_boot
                 self._pending, self._pending_boot = None, False
             report = self._rearm_with_retries(reason or "", boot)
+            critical = [
+                k for k in report.failed if k.startswith(("0x6007", "0x1016")) or k == "drive"
+            ]
             with self._lock:
-                if self._pending is not None:
-                    continue  # another restart meanwhile: go again, gate stays closed
-                self._unanswered = (
-                    reason if set(report.failed) == {"drive"} and not boot else None
-                )
-                if report.failed and any(
-                    k.startswith(("0x6007", "0x1016")) or k == "drive" for k in report.failed
-                ):
-                    self._error = (
-                        f"node {self.node_id} restarted ({report.reason}) and its supervision "
-                        "could not be re-armed: "
-                        + "; ".join(f"{k}: {v}" for k, v in report.failed.items())
+                again = self._pending is not None
+                if not again:
+                    self._unanswered = (
+                        reason if set(report.failed) == {"drive"} and not boot else None
                     )
-                self._ready = True
-                self._lock.notify_all()
+                    if critical:
+                        self._error = (
+                            f"node {self.node_id} restarted ({report.reason}) and its "
+                            "supervision could not be re-armed: "
+                            + "; ".join(f"{k}: {v}" for k, v in report.failed.items())
+                        )
+                    self._ready = True
+                    self._lock.notify_all()
+            if again:
+                # another restart (or a late heartbeat) meanwhile: go again, the gate stays
+                # closed. What this pass did is still reported (a boot-up's re-arm is never
+                # left unsaid); a failure is not: the next pass decides that
+                if not critical:
+                    self._emit("rearmed" if report.reboot else "verified", **report.to_dict())
+                continue
             self._emit(
                 "rearm_failed" if self._error else ("rearmed" if report.reboot else "verified"),
                 **report.to_dict(),

@@ -169,11 +169,54 @@ def test_restart_rearms_the_consumer_before_the_first_user_command(rig):
     assert st["supervision_rearmed_at"] is not None and st["supervision_rearmed_at"].endswith(
         "+00:00"
     )
-    # (a busy host may first have produced a heartbeat-gap check: "restart_suspected"/"verified")
-    names = [e["event"] for e in rig.events]
+    # (a busy host may first have produced a heartbeat-gap check, "restart_suspected" /
+    # "verified", and one during the re-arm: the boot-up's own outcome is still "rearmed")
+    assert _boot_outcome(rig.events)["event"] == "rearmed", [e["event"] for e in rig.events]
+    assert "0x1016:01" in _boot_outcome(rig.events)["written"]
+
+
+_OUTCOMES = ("rearmed", "verified", "rearm_failed")
+
+
+def _boot_outcome(events: list[dict]) -> dict:
+    """The first re-arm outcome reported after the boot-up was noticed."""
+    names = [e["event"] for e in events]
     k = names.index("reboot_detected")
-    assert names[k : k + 2] == ["reboot_detected", "rearmed"], names
-    assert "0x1016:01" in rig.events[k + 1]["written"]
+    return next(e for e in events[k + 1 :] if e["event"] in _OUTCOMES)
+
+
+def test_a_late_heartbeat_during_the_boot_rearm_does_not_hide_its_report(rig):
+    """On a starved host the restarted drive's next heartbeat can come late while the boot-up's
+    re-arm runs: the supervisor checks once more, and the boot-up's re-arm (what it wrote) is
+    still reported as "rearmed" before that check's "verified"."""
+    d = rig.drive
+    d.configure_heartbeat_consumer(CONSUMER_MS)
+    sup = d.supervisor
+    real = sup.rearm_now
+    late = threading.Event()
+
+    def rearm_now(reason: str, boot: bool):
+        report = real(reason, boot)
+        if boot and not late.is_set():  # what the heartbeat rule queues for a late heartbeat
+            late.set()
+            with sup._lock:
+                sup._pending, sup._ready = "heartbeat resumed after 900 ms", False
+                sup._lock.notify_all()
+        return report
+
+    sup.rearm_now = rearm_now
+    rig.restart()
+    assert rig.detected.wait(5.0), "boot-up not noticed"
+    assert int(d.read("consumer_heartbeat_time.consumer_1")) == _consumer_value()
+    assert late.is_set()
+    deadline = time.monotonic() + 5.0
+    while "verified" not in [e["event"] for e in rig.events] and time.monotonic() < deadline:
+        time.sleep(0.02)
+    names = [e["event"] for e in rig.events]
+    outcome = _boot_outcome(rig.events)
+    assert outcome["event"] == "rearmed" and "0x1016:01" in outcome["written"], names
+    assert names.index("rearmed") < names.index("verified"), names
+    assert d.boots_seen == 1
 
 
 def test_user_commands_in_flight_wait_for_the_rearm(rig):
