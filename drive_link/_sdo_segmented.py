@@ -73,6 +73,8 @@ class Exchange:
         client.stale_answer = None  # type: ignore[attr-defined]
         self.abort_frame = b""
         self._duplicates: tuple[bytes, int] | None = None  # of the last request's answer
+        #: frames :meth:`next` skipped as late copies during the present :meth:`request`
+        self.skipped = 0
 
     def drain(self) -> None:
         """Forget frames of earlier transfers."""
@@ -103,6 +105,7 @@ class Exchange:
             if self.stale is not None and data == self.stale[0]:
                 left_over = self.stale[1] - 1
                 self.stale = (data, left_over) if left_over > 0 else None
+                self.skipped += 1
                 continue  # a late duplicate of the previous transfer's last answer
             if data[0] == ABORT:
                 index, subindex, code = struct.unpack_from("<HBI", data, 1)
@@ -124,6 +127,7 @@ class Exchange:
         ``timeout``, 2 × ``timeout``, then every 4 × ``timeout`` s without one, at most
         ``resends`` times."""
         wait = timeout
+        self.skipped = 0
         for sent in range(1, resends + 2):
             self.send(frame)
             deadline = time.monotonic() + wait
@@ -131,17 +135,28 @@ class Exchange:
                 try:
                     resp = self.next(left)
                 except SdoAbortedError:  # ends the transfer
-                    self._duplicates = (self.abort_frame, sent - 1) if sent > 1 else None
+                    self._duplicates = self._owed(self.abort_frame, sent)
                     self.finish()
                     raise
                 if resp is None:
                     break
                 if accept(resp):
-                    self._duplicates = (resp, sent - 1) if sent > 1 else None
+                    self._duplicates = self._owed(resp, sent)
                     return resp
             wait = min(2 * wait, 4 * timeout)  # back off, but keep probing a slow node
         what = "initiate" if initial else "segment"
         raise NoAnswer(f"no answer to the {what} request", resends + 1, initial)
+
+    def _owed(self, answer: bytes, sent: int) -> tuple[bytes, int] | None:
+        """Late copies of ``answer`` the next transfer may still meet after ``sent`` requests:
+        one per unanswered request, less the frames this request already skipped as late
+        copies. Each skipped frame may have been the answer to one of this request's own
+        sends (its identical, unchanged value), so without that discount a single lost answer
+        in a poll of an unchanged object made every later read skip its real answer and wait
+        a timeout, and each further loss added one more (seen: a statusword poll at 5 % loss
+        ended in "no answer … (6 attempts)")."""
+        owed = sent - 1 - self.skipped
+        return (answer, owed) if owed > 0 else None
 
     def finish(self) -> None:
         """The transfer ended with the last request's answer: the next transfer on the client

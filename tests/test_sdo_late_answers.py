@@ -9,6 +9,7 @@ frames a real server would have put on the bus by then, in order.
 from __future__ import annotations
 
 import queue
+import random
 import struct
 
 import pytest
@@ -98,3 +99,33 @@ def test_an_answered_first_request_expects_no_duplicates():
     sdo_segmented.upload(client, IDX, SUB, timeout=0.05, resends=3)
     assert sdo_segmented.upload(client, IDX, SUB, timeout=0.05, resends=3) == old[4:]
     assert len(client.sent) == 2
+
+
+def _poll_server(lost: set[int], n: int, answer: bytes) -> _ScriptedClient:
+    """A server whose value does not change: it answers every request with ``answer``, except
+    the requests numbered in ``lost`` (0-based), whose answers the bus loses."""
+    return _ScriptedClient([[] if k in lost else [answer] for k in range(n)])
+
+
+def test_one_lost_answer_in_a_poll_costs_one_resend_not_one_per_read():
+    """A poll of an unchanged object (the statusword in a state wait): after one lost answer
+    the next read cannot tell a late copy from its own answer and may resend once; the reads
+    after it go out once each."""
+    a = _upload_answer(1.0)
+    client = _poll_server({0}, 100, a)
+    for _ in range(12):
+        assert sdo_segmented.upload(client, IDX, SUB, timeout=0.02, resends=5) == a[4:]
+    # read 1: 2 requests (its first answer lost); read 2: at most 2; reads 3-12: one each
+    assert len(client.sent) <= 14, len(client.sent)
+
+
+def test_a_long_poll_at_5_percent_loss_never_runs_out_of_resends():
+    """Seeded 5 % loss of answers over 300 reads of an unchanged value: each read needs about
+    1.05 requests, never six lost ones in a row (p = 3e-8); the client must not make
+    its own losses out of them."""
+    rng = random.Random(5)
+    a = _upload_answer(1.0)
+    client = _poll_server({k for k in range(2000) if rng.random() < 0.05}, 2000, a)
+    for _ in range(300):
+        assert sdo_segmented.upload(client, IDX, SUB, timeout=0.005, resends=5) == a[4:]
+    assert len(client.sent) <= 300 * 1.25, len(client.sent)
