@@ -18,7 +18,11 @@ e.g. the drive's abort of a refused write arriving while the same object is read
 old statusword answering a new poll. The next transfer therefore skips up to k - 1 frames
 identical to the last transfer's final answer (``client.stale_answer``, set when a transfer
 ends with a request/answer pair: expedited and segmented transfers, aborts): if a skipped frame
-was in fact the new answer, the identical late one or a resend supplies it.
+was in fact the new answer, the identical late one or a resend supplies it. Each frame skipped
+so counts against the copies that transfer in turn leaves owed: it may have been the answer to
+one of that transfer's own sends. (Without that, at 5 % loss a poll of an unchanged statusword
+ratcheted up: every lost answer made all later reads skip one more real answer, until one ran
+out of resends.)
 """
 
 from __future__ import annotations
