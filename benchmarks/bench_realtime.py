@@ -112,10 +112,10 @@ class TickLog:
     def waited(self, start: float, end: float) -> float | None:
         """Run-queue wait (s) of the pacing thread over the samples around ``start..end``
         (None: not sampled around it); it covers up to one sampling period more."""
-        t = [x[0] for x in self.sched]
-        i = bisect.bisect_right(t, start) - 1
-        j = bisect.bisect_left(t, end)
-        if i < 0 or j >= len(t):
+        sched = self.sched
+        i = bisect.bisect_right(sched, start, key=lambda x: x[0]) - 1
+        j = bisect.bisect_left(sched, end, key=lambda x: x[0])
+        if i < 0 or j >= len(sched):
             return None
         return self.sched[j][2] - self.sched[i][2]
 
