@@ -18,6 +18,7 @@ import logging
 import os
 import re
 import sys
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, NoReturn
@@ -628,7 +629,14 @@ def cmd_config(args: argparse.Namespace, d: Drive) -> int:
     from . import config_dcf
 
     if args.action == "save":
-        out = config_dcf.save(d, args.file, bitrate=args.bitrate)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", UserWarning)
+            out = config_dcf.save(d, args.file, bitrate=args.bitrate)
+        notes = [str(w.message) for w in caught]
+        if args.json:
+            out["warnings"] = notes
+        for note in [] if args.json else notes:
+            print(f"warning: {note}", file=sys.stderr)
         msg = f"saved {out['objects']} objects of node {out['node_id']} to {out['file']}"
         _emit(args, out, msg)
         return 0

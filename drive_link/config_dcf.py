@@ -29,12 +29,16 @@ import configparser
 import datetime as _dt
 import io
 import re
+import warnings
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from firmware_protocol import EDS_PATH
+from firmware_protocol.generate import render_strict_eds
 from firmware_protocol.index_ranges import MANUFACTURER
 
 from ._objects import ObjectInfo, ObjectTable, default_table
@@ -48,8 +52,10 @@ __all__ = [
     "DcfContents",
     "Difference",
     "Source",
+    "bus_bitrate",
     "config_objects",
     "dcf_text",
+    "default_bitrate",
     "diff",
     "load",
     "read_config",
@@ -84,9 +90,11 @@ def _gain_objects() -> dict[str, str]:
 
 
 def _text(obj: ObjectInfo, value: Any) -> str:
-    """ParameterValue text of ``value`` (CiA 306: integers in hex, REAL32 as decimal)."""
+    """ParameterValue text of ``value`` (CiA 306: integers in hex, REAL32 as decimal): a REAL32
+    as the shortest decimal that reads back as the same float32 (``0.0062``, not the float64
+    ``0.006200000178068876`` of the float32 the drive answered)."""
     if obj.is_float:
-        return repr(float(value))
+        return str(np.float32(float(value)))
     v = int(value)
     if v < 0:
         return str(v)
@@ -108,6 +116,20 @@ def _parse(obj: ObjectInfo, text: str, node_id: int) -> float | int:
         ) from None
 
 
+def default_bitrate() -> int:
+    """The bit rate a DCF names when the bus does not say: the highest ``BaudRate_N=1`` of the
+    EDS's ``[DeviceInfo]`` (1 Mbit/s for this drive), in bit/s."""
+    eds = configparser.RawConfigParser(strict=False, interpolation=None)
+    eds.optionxform = str  # type: ignore[assignment,method-assign]
+    eds.read(EDS_PATH, encoding="utf-8")
+    rates = [
+        int(k.split("_", 1)[1])
+        for k, v in eds.items("DeviceInfo")
+        if k.startswith("BaudRate_") and v.strip() == "1"
+    ]
+    return max(rates) * 1000
+
+
 def write_dcf(
     path: str | Path,
     values: dict[str, float | int],
@@ -119,7 +141,7 @@ def write_dcf(
 ) -> Path:
     """Write ``values`` (object name → value in its OD unit) as a DCF based on the shipped EDS.
 
-    ``bitrate`` in bit/s (written in kbit/s; 0 when unknown)."""
+    ``bitrate`` in bit/s (written in kbit/s; None: :func:`default_bitrate` with a warning)."""
     path = Path(path)
     text = dcf_text(
         values, node_id, file_name=path.name, node_name=node_name, bitrate=bitrate, table=table
@@ -137,14 +159,28 @@ def dcf_text(
     bitrate: int | None = None,
     table: ObjectTable | None = None,
 ) -> str:
-    """The DCF of :func:`write_dcf` as text (for a browser download)."""
+    """The DCF of :func:`write_dcf` as text (for a browser download).
+
+    It is the strict CiA 306 copy of the EDS (:func:`firmware_protocol.generate.render_strict_eds`,
+    which objdictgen and eds-utils open) with ``[FileInfo] LastEDS``, a ``ParameterValue=`` per
+    configured object and ``[DeviceComissioning]``. ``bitrate`` in bit/s; None writes
+    :func:`default_bitrate` and warns (:class:`UserWarning`) that the bus did not say."""
     table = table or default_table()
+    if bitrate is None:
+        bitrate = default_bitrate()
+        warnings.warn(
+            f"the bus bit rate is unknown: the DCF names the EDS default {bitrate // 1000} kbit/s"
+            " (pass --bitrate)",
+            UserWarning,
+            stacklevel=2,
+        )
     eds = configparser.RawConfigParser(strict=False, interpolation=None)
     eds.optionxform = str  # type: ignore[assignment,method-assign]
-    eds.read(EDS_PATH, encoding="utf-8")
+    eds.read_string(render_strict_eds(EDS_PATH.read_text(encoding="utf-8")))
     now = _dt.datetime.now()
     fi = "FileInfo"
     eds.set(fi, "FileName", file_name)
+    eds.set(fi, "LastEDS", EDS_PATH.name)
     eds.set(fi, "Description", f"configuration of node {node_id} saved by drive-link")
     eds.set(fi, "ModificationTime", now.strftime("%I:%M%p"))
     eds.set(fi, "ModificationDate", now.strftime("%m-%d-%Y"))
@@ -155,7 +191,7 @@ def dcf_text(
     for k, v in (
         ("NodeID", f"0x{node_id:02X}"),
         ("NodeName", node_name or f"node{node_id}"),
-        ("Baudrate", str((bitrate or 0) // 1000)),
+        ("Baudrate", str(int(bitrate) // 1000)),
         ("NetNumber", "1"),
         ("NetworkName", "drive-link"),
         ("CANopenManager", "0"),
@@ -249,12 +285,32 @@ def save(
     drive: Drive, path: str | Path, *, bitrate: int | None = None, node_name: str = ""
 ) -> dict[str, Any]:
     """Read the configuration from ``drive`` and write it to ``path`` as a DCF; returns
-    ``{"file", "objects", "node_id"}``."""
+    ``{"file", "objects", "node_id", "bitrate"}``.
+
+    ``bitrate`` (bit/s) names the bus's bit rate in ``[DeviceComissioning] Baudrate``; without
+    it, the bit rate the bus reports (python-can buses that know it), else the EDS default with
+    a :class:`UserWarning` (:func:`default_bitrate`)."""
     values = read_config(drive)
+    if bitrate is None:
+        bitrate = bus_bitrate(drive.bus)
     out = write_dcf(
         path, values, drive.node_id, node_name=node_name, bitrate=bitrate, table=drive.table
     )
-    return {"file": str(out), "objects": len(values), "node_id": drive.node_id}
+    return {
+        "file": str(out),
+        "objects": len(values),
+        "node_id": drive.node_id,
+        "bitrate": bitrate if bitrate is not None else default_bitrate(),
+    }
+
+
+def bus_bitrate(bus: Any) -> int | None:
+    """The bit rate (bit/s) a python-can bus reports about itself, or None if it does not."""
+    for attr in ("bitrate", "_bitrate"):
+        val = getattr(bus, attr, None)
+        if isinstance(val, int) and not isinstance(val, bool) and val > 0:
+            return val
+    return None
 
 
 @dataclass(frozen=True)

@@ -212,3 +212,16 @@ def test_dashboard_path_text_in_text_out(node):
         bad = re.sub(r"(\[2010sub3\]\n(?:.*\n)*?ParameterValue=).*", r"\g<1>7.5", text)
         with pytest.raises(InvalidValue, match=r"nothing written: .*R_c"):
             load(d, io.StringIO(bad))
+
+
+def test_config_save_without_bitrate_names_the_eds_default_with_a_warning(node, capsys, tmp_path):
+    """No -b and a bus that does not say its bit rate: the DCF names the EDS default (not the
+    Baudrate=0 of old, which no CANopen tool accepts) and the CLI says so in one line."""
+    f = tmp_path / "nob.dcf"
+    rc, text = dl(node, capsys, "config", "save", str(f), json_out=False)
+    assert rc == 0
+    warning = [ln for ln in text.splitlines() if ln.startswith("warning:")]
+    assert len(warning) == 1 and "1000 kbit/s" in warning[0]
+    assert canopen.import_od(str(f)).bitrate == 1_000_000  # BaudRate_1000=1 in the EDS
+    rc, out = dl(node, capsys, "config", "save", str(f))  # --json: the warning in the object
+    assert rc == 0 and len(out["warnings"]) == 1

@@ -302,7 +302,10 @@ def test_sections_follow_cia306() -> None:
         assert otype in (0x2, 0x7), sec
         assert s["AccessType"] in access_types, sec
         int(s["DataType"], 0)
-        assert s["PDOMapping"] in ("0", "1"), sec
+        if otype == 0x2:  # CiA 306: PDOMapping belongs to a VAR (a DOMAIN object has none)
+            assert "PDOMapping" not in s, sec
+        else:
+            assert s["PDOMapping"] in ("0", "1"), sec
         if "ObjFlags" in s:
             assert int(s["ObjFlags"], 0) in (0, 1, 2, 3), sec
         if "StorageLocation" in s:

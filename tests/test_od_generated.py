@@ -100,7 +100,7 @@ def test_header_compiles_and_every_macro_equals_the_eds(gcc: str, tmp_path: Path
         checks.append(f"CHECK({m}_INDEX == {row['index']}u);")
         checks.append(f"CHECK({m}_SUB == {row['sub']}u);")
         checks.append(f"CHECK({m}_TYPE == {dt}u);")
-        checks.append(f"CHECK({m}_PDO == {int(row['PDOMapping'])}u);")
+        checks.append(f"CHECK({m}_PDO == {int(row.get('PDOMapping', '0'))}u);")
         if dt in BITS:
             ref = (int(row["index"]) << 16) | (int(row["sub"]) << 8) | BITS[dt]
             checks.append(f"CHECK({m}_REF == {ref}UL);")
@@ -203,7 +203,7 @@ def test_markdown_lists_every_object_once_with_its_attributes() -> None:
         assert cells[2] == TYPE_NAMES[int(r["DataType"], 0)]
         assert cells[3] == r["AccessType"]
         assert cells[4] == r.get("Unit", "")
-        assert (cells[7] == "yes") == (r["PDOMapping"] == "1")
+        assert (cells[7] == "yes") == (r.get("PDOMapping") == "1")
         if "MinNonZero" in r:  # "0 or [min_nonzero, high]"
             assert cells[6].startswith("0 or [") and cells[6].endswith("]"), r["name"]
         elif "LowLimit" in r:
