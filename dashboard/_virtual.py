@@ -47,6 +47,7 @@ def open_bench(config: BenchConfig) -> Iterator[Bench]:
                 channel=config.channel,
                 bitrate=config.bitrate,
                 node_id=config.node_id,
+                **config.bus_options,
             )
             desc = f"{config.interface} {config.channel or ''}".strip()
         stack.callback(drive.close)

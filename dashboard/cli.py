@@ -16,7 +16,7 @@ import sys
 from collections.abc import Sequence
 
 from dashboard.config import BenchConfig
-from drive_link.cli_connect import add_bus_arguments
+from drive_link.cli_connect import add_bus_arguments, bus_extras_from_args
 
 __all__ = ["build_parser", "main"]
 
@@ -61,8 +61,9 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="PORT",
         help="join a running loopback hub on 127.0.0.1:PORT (virtual-drive run --hub)",
     )
-    # --interface/-i, --channel/-c, --bitrate/-b (default 1000000), --node (drive_link.cli_connect)
-    add_bus_arguments(p, hub=False, extras=False, defaults={"bitrate": 1_000_000})
+    # python-can's --interface/-i, --channel/-c, --bitrate/-b (default 1000000), --fd,
+    # --data-bitrate, --timing, --bus-kwargs, and --node: drive_link.cli_connect, as everywhere
+    add_bus_arguments(p, hub=False, defaults={"bitrate": 1_000_000})
     p.add_argument("--host", default="127.0.0.1", help="API bind address (default 127.0.0.1)")
     p.add_argument("--port", type=int, default=8000, help="API port (default 8000)")
     p.add_argument("--gui-port", type=int, default=8080, help="GUI port (default 8080; 0 = any)")
@@ -115,6 +116,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         interface=args.interface,
         channel=args.channel,
         bitrate=args.bitrate,
+        bus_options=bus_extras_from_args(args),
         scene_3d=not args.no_3d,
         scene_3d_shown=args.show_3d,
         node_id=args.node,

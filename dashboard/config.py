@@ -47,6 +47,8 @@ class BenchConfig:
     interface: str | None = None
     channel: str | None = None
     bitrate: int = 1_000_000
+    #: python-can's other bus options for ``interface`` (fd, data_bitrate, timing, --bus-kwargs)
+    bus_options: dict = field(default_factory=dict)
     node_id: int = 1
     speed_factor: float = 1.0
     virtual_in_process: bool = False
@@ -75,6 +77,11 @@ class BenchConfig:
             raise ValueError(f"node id {self.node_id} is outside 1..127")
         if self.speed_factor <= 0:
             raise ValueError("--speed-factor must be > 0")
+        if self.bus_options and (self.virtual or self.join_hub is not None):
+            raise ValueError(
+                f"--{next(iter(self.bus_options)).replace('_', '-')} applies to an --interface "
+                "bus, not to the loopback hub (--virtual, --join-hub)"
+            )
         if not self.virtual and self.interface is None and self.join_hub is None:
             raise ValueError(
                 "give --virtual, --join-hub PORT, or --interface (and --channel) of the CAN bus"

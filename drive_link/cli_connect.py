@@ -38,6 +38,7 @@ __all__ = [
     "Option",
     "add_bus_arguments",
     "add_hidden_aliases",
+    "bus_extras_from_args",
     "bus_options",
     "bus_settings_from_args",
     "connect_from_args",
@@ -180,6 +181,14 @@ def bus_settings_from_args(args: argparse.Namespace) -> dict[str, Any]:
     for key in ("interface", "channel", "bitrate", "host", "port"):
         out.setdefault(key, None)
     return out
+
+
+def bus_extras_from_args(args: argparse.Namespace) -> dict[str, Any]:
+    """python-can's bus options beyond interface/channel/bitrate/host/port that were given
+    (``fd``, ``data_bitrate``, ``timing`` and the ``--bus-kwargs``), for a caller that keeps
+    those three itself (e.g. ``drive-dashboard``'s :class:`~dashboard.config.BenchConfig`)."""
+    basic = ("interface", "channel", "bitrate", "host", "port")
+    return {k: v for k, v in bus_settings_from_args(args).items() if k not in basic}
 
 
 def connect_from_args(args: argparse.Namespace) -> Drive:
