@@ -12,8 +12,10 @@ from __future__ import annotations
 
 import argparse
 import collections
+import signal
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -23,7 +25,14 @@ import can
 from .bus import open_bus
 from .errors import DriveError, InvalidValue
 
-__all__ = ["RecordStats", "check_log_path", "cmd_record", "record_bus"]
+__all__ = [
+    "CANNOT_HOLD",
+    "RecordStats",
+    "check_log_path",
+    "cmd_record",
+    "frame_kind",
+    "record_bus",
+]
 
 #: Formats python-can writes, by suffix, with the tools that read them (for help and errors).
 FORMATS = {
@@ -36,16 +45,40 @@ FORMATS = {
 }
 
 
+#: What a format cannot hold, by suffix: frame kind → why (python-can 4.6's writers: the TRC
+#: writer skips remote, error and CAN FD frames with a log line; the CSV has no FD flag, so an
+#: FD frame would read back as a classical frame with up to 64 data bytes).
+CANNOT_HOLD: dict[str, dict[str, str]] = {
+    ".trc": {
+        "remote": ".trc (python-can's TRC writer) holds no remote (RTR) frames",
+        "error": ".trc (python-can's TRC writer) holds no error frames",
+        "fd": ".trc (python-can's TRC writer) holds no CAN FD frames",
+    },
+    ".csv": {"fd": ".csv has no CAN FD flag (an FD frame would read back as classical)"},
+}
+
+
+def frame_kind(msg: can.Message) -> str:
+    """``"error"``, ``"remote"``, ``"fd"`` or ``"data"`` (a classical data frame)."""
+    if msg.is_error_frame:
+        return "error"
+    if msg.is_remote_frame:
+        return "remote"
+    return "fd" if msg.is_fd else "data"
+
+
 @dataclass
 class RecordStats:
-    """What a recording holds: ``frames`` written, ``seconds`` recorded (s), frames per CAN-ID,
-    ``error_frames``, and the file ``path``."""
+    """What a recording holds: ``frames`` written (error frames included), ``seconds`` of bus
+    time recorded (s), frames per CAN-ID, ``error_frames`` written, ``dropped`` (reason → frames
+    seen on the bus that the format cannot hold, not written), and the file ``path``."""
 
     path: Path
     frames: int = 0
     error_frames: int = 0
     seconds: float = 0.0
     per_id: dict[int, int] = field(default_factory=dict)
+    dropped: dict[str, int] = field(default_factory=dict)
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready summary (CAN-IDs as ``"0x281"`` keys)."""
@@ -55,19 +88,54 @@ class RecordStats:
             "error_frames": self.error_frames,
             "seconds": round(self.seconds, 6),
             "frames_per_id": {f"0x{k:03X}": v for k, v in sorted(self.per_id.items())},
+            "dropped": dict(self.dropped),
         }
 
 
-class _Counter(can.Listener):
-    def __init__(self) -> None:
+class _Gate(can.Listener):
+    """Passes to ``logger`` the frames the format holds that fall in the bus-time window, and
+    counts them; counts the others by reason. The window is ``duration`` s of bus time from the
+    start (the bus's clock, whatever its epoch: mapped through the first frame's arrival)."""
+
+    def __init__(
+        self, logger: can.Listener, suffix: str, duration: float | None, t0: float
+    ) -> None:
+        self.logger = logger
+        self.cannot = CANNOT_HOLD.get(suffix, {})
+        self.duration = duration
+        self.t0 = t0  # wall clock (time.time) when the recording started
+        self.offset: float | None = None  # bus time - wall time, from the first frame
         self.per_id: collections.Counter[int] = collections.Counter()
         self.error_frames = 0
+        self.dropped: collections.Counter[str] = collections.Counter()
+        self.first: float | None = None
+        self.last: float | None = None
+        self.done = threading.Event()  # the window's end seen on the bus
 
     def on_message_received(self, msg: can.Message) -> None:
-        if msg.is_error_frame:
+        if self.done.is_set():
+            return
+        if self.offset is None:
+            self.offset = msg.timestamp - time.time()
+        if self.duration is not None and msg.timestamp >= self.t0 + self.offset + self.duration:
+            self.done.set()
+            return
+        kind = frame_kind(msg)
+        why = self.cannot.get(kind)
+        if why is not None:
+            self.dropped[why] += 1
+            return
+        self.logger.on_message_received(msg)
+        if self.first is None:
+            self.first = msg.timestamp
+        self.last = msg.timestamp
+        if kind == "error":
             self.error_frames += 1
         else:
             self.per_id[msg.arbitration_id] += 1
+
+    def stop(self) -> None:
+        self.logger.stop()
 
 
 def check_log_path(path: str | Path) -> Path:
@@ -108,25 +176,45 @@ def record_bus(
     cannot be opened raises :class:`~drive_link.errors.BusError` and leaves no file behind.
     """
     p = check_log_path(path)
+    suffixes = [s.lower() for s in p.suffixes if s.lower() != ".gz"]
     bus = open_bus(**bus_kwargs)  # BusError before any file is written
-    counter = _Counter()
     try:
         logger = can.Logger(p)
     except (ValueError, NotImplementedError, OSError) as exc:
         bus.shutdown()
         raise InvalidValue(f"{p}: {exc}") from None
-    t0 = time.monotonic()
-    notifier = can.Notifier(bus, [logger, counter], timeout=0.1)
+    t0 = time.time()
+    gate = _Gate(logger, suffixes[-1] if suffixes else "", duration, t0)
+    notifier = can.Notifier(bus, [gate], timeout=0.1)
     try:
-        stop_event.wait(duration)
+        if duration is None:
+            stop_event.wait()
+        else:  # the window's end on the bus; a quiet bus ends by the wall clock
+            end = t0 + duration + 1.0
+            while not (gate.done.is_set() or stop_event.is_set()):
+                left = end - time.time()
+                if left <= 0:
+                    break
+                gate.done.wait(min(0.05, left))
     finally:
-        seconds = time.monotonic() - t0
+        wall = time.time() - t0
         try:
             notifier.stop(1.0)  # also stops (flushes and closes) the logger
         finally:
             bus.shutdown()
+    if duration is not None and gate.done.is_set():
+        seconds = duration
+    elif gate.offset is not None and gate.last is not None:
+        seconds = max(gate.last - (t0 + gate.offset), 0.0)
+    else:
+        seconds = wall
     return RecordStats(
-        p, sum(counter.per_id.values()), counter.error_frames, seconds, dict(counter.per_id)
+        p,
+        sum(gate.per_id.values()) + gate.error_frames,
+        gate.error_frames,
+        seconds,
+        dict(gate.per_id),
+        dict(gate.dropped),
     )
 
 
@@ -138,7 +226,6 @@ def _bus_kwargs(args: argparse.Namespace) -> dict[str, Any]:
 
 def cmd_record(args: argparse.Namespace) -> int:
     """``drive-link record FILE [--seconds S]``: until S s have passed or Ctrl-C."""
-    from .cli import _emit
 
     if args.seconds is not None and not 0 < args.seconds < 1e7:  # also nan and inf
         raise InvalidValue(f"--seconds {args.seconds}: must be a number of seconds > 0")
@@ -156,6 +243,45 @@ def cmd_record(args: argparse.Namespace) -> int:
 
     check_log_path(args.file)
     th = threading.Thread(target=worker, name="drive-link-record", daemon=True)
+    restore = _finish_on_signals()  # SIGTERM/SIGHUP (timeout, kill, systemd) end it like Ctrl-C
+    try:
+        return _wait_and_report(args, th, stop, done, box)
+    finally:
+        restore()
+
+
+def _finish_on_signals() -> Callable[[], None]:
+    """Make SIGTERM and SIGHUP raise KeyboardInterrupt in the main thread (the recording is then
+    finished and its file closed like on Ctrl-C); returns the function that puts the old
+    handlers back. Does nothing outside the main thread (e.g. in a GUI's worker)."""
+    if threading.current_thread() is not threading.main_thread():
+        return lambda: None
+
+    def interrupt(signum: int, _frame: Any) -> None:
+        raise KeyboardInterrupt(signal.Signals(signum).name)
+
+    old = {}
+    for name in ("SIGTERM", "SIGHUP"):
+        sig = getattr(signal, name, None)
+        if sig is not None:
+            old[sig] = signal.signal(sig, interrupt)
+
+    def restore() -> None:
+        for sig, handler in old.items():
+            signal.signal(sig, handler)
+
+    return restore
+
+
+def _wait_and_report(
+    args: argparse.Namespace,
+    th: threading.Thread,
+    stop: threading.Event,
+    done: threading.Event,
+    box: dict[str, Any],
+) -> int:
+    from .cli import _emit
+
     th.start()
     if args.seconds is None and not args.json:
         import sys
@@ -185,6 +311,7 @@ def cmd_record(args: argparse.Namespace) -> int:
             f"recorded {stats.frames} frames in {stats.seconds:.2f} s to {stats.path}"
             + (f" ({stats.error_frames} error frames)" if stats.error_frames else "")
         ]
+        lines += [f"dropped {n} frames: {why}" for why, n in stats.dropped.items()]
         lines += [f"  0x{cid:03X}: {n}" for cid, n in top]
         return "\n".join(lines)
 
