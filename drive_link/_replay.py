@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import binascii
+import bisect
 import collections
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -30,7 +31,8 @@ import numpy as np
 
 from ._live import LiveStreams, TpdoConfig, mapped_fields
 from ._objects import ObjectTable, default_table
-from .errors import InvalidValue
+from ._replay_epochs import Epoch, count_drops, epochs
+from .errors import DriveError, InvalidValue
 from .trace import TRACE_DATA, TS, Trace
 
 __all__ = ["BlockUpload", "Replay", "SdoFollower", "cmd_replay", "replay_file"]
@@ -88,6 +90,10 @@ class SdoFollower:
     def __init__(self, rx: int, tx: int):
         self.rx, self.tx = rx, tx
         self.values: dict[tuple[int, int], bytes] = {}
+        #: (t, index, sub, raw) of every value seen, in time order: ``writes`` are downloads
+        #: the server confirmed, ``reads`` upload answers
+        self.writes: list[tuple[float, int, int, bytes]] = []
+        self.reads: list[tuple[float, int, int, bytes]] = []
         self.uploads: list[BlockUpload] = []
         self.aborted = 0
         self._block: _BlockState | None = None
@@ -193,16 +199,19 @@ class SdoFollower:
             self._seg[3] = toggle ^ 1
             if b0 & 0x01:  # the last one
                 self.values[(index, sub)] = bytes(data)
+                self.reads.append((t, index, sub, bytes(data)))
                 self.uploads.append(BlockUpload(index, sub, bytes(data), t, size, None,
                                                 "segmented"))
                 self._seg = []
         elif scs == 2 and len(d) >= 8 and b0 & 0x02:  # expedited upload answer
             n = 4 - ((b0 >> 2) & 0x03) if b0 & 0x01 else 4
             self.values[(d[1] | d[2] << 8, d[3])] = bytes(d[4 : 4 + n])
+            self.reads.append((t, d[1] | d[2] << 8, d[3], bytes(d[4 : 4 + n])))
         elif scs == 3 and len(d) >= 4 and self._download is not None:  # download confirmed
             idx, sub, raw = self._download
             if (d[1] | d[2] << 8, d[3]) == (idx, sub):
                 self.values[(idx, sub)] = raw
+                self.writes.append((t, idx, sub, raw))
             self._download = None
 
 
@@ -212,28 +221,56 @@ def _default_int(table: ObjectTable, name: str, node: int) -> int:
 
 
 class _Known:
-    """Values of node N's objects: what the recording showed, else the EDS default."""
+    """Values of node N's objects: what the recording showed, else the EDS default; with
+    ``at`` set (s from the first frame), the value in force then: the last value written or
+    read by then, else the first one read later (unless a write came first: the EDS default)."""
 
     def __init__(self, table: ObjectTable, node: int, followers: list[SdoFollower]):
         self.table, self.node, self.followers = table, node, followers
+        self.at: float | None = None
+        self._events: dict[tuple[int, int], list[tuple[float, bool, bytes]]] = {}
+        for f in followers:
+            for tt, index, sub, raw in f.writes:
+                self._events.setdefault((index, sub), []).append((tt, True, raw))
+            for tt, index, sub, raw in f.reads:
+                self._events.setdefault((index, sub), []).append((tt, False, raw))
+        for ev in self._events.values():
+            ev.sort(key=lambda e: e[0])
+
+    def _seen(self, index: int, sub: int) -> bytes | None:
+        ev = self._events.get((index, sub), [])
+        if self.at is None:
+            return ev[-1][2] if ev else None
+        before = [e for e in ev if e[0] <= self.at]
+        if before:
+            return before[-1][2]
+        later = [e for e in ev if e[0] > self.at]
+        return later[0][2] if later and not later[0][1] else None
 
     def raw(self, name: str) -> Any:
         obj = self.table[name]
-        for f in self.followers:
-            raw = f.values.get((obj.index, obj.subindex))
-            if raw is not None:
-                try:
-                    return obj.decode(raw)
-                except Exception:
-                    break
+        raw = self._seen(obj.index, obj.subindex)
+        if raw is not None:
+            try:
+                return obj.decode(raw)
+            except Exception:
+                pass
         return _default_int(self.table, name, self.node)
 
     def int(self, name: str) -> int:
         return int(self.raw(name))
 
 
-def tpdo_configs(known: _Known) -> list[TpdoConfig]:
-    """The node's TPDOs as the recording (or the EDS) has them."""
+def tpdo_configs(known: _Known, at: float | None = None) -> list[TpdoConfig]:
+    """The node's TPDOs as the recording (or the EDS) has them (at ``at`` s, or at the end)."""
+    known.at = at
+    try:
+        return _tpdo_configs(known)
+    finally:
+        known.at = None
+
+
+def _tpdo_configs(known: _Known) -> list[TpdoConfig]:
     table = known.table
     out = []
     for k in range(1, 513):
@@ -274,6 +311,10 @@ class Replay:
     per_id: dict[int, int]
     uploads: list[BlockUpload] = field(default_factory=list)
     traces: list[Trace] = field(default_factory=list)
+    #: per TPDO ("TPDO2"): dropped and expected rates judged per configuration epoch
+    judged: dict[str, dict[str, Any]] = field(default_factory=dict)
+    #: configuration epochs (1 = the TPDO configuration never changed in the recording)
+    epochs: int = 1
 
     def table(self) -> dict[str, np.ndarray]:
         """Every TPDO signal on one time base (``t`` in s from the first frame of the file)."""
@@ -293,6 +334,7 @@ class Replay:
                 "dropped": v["dropped"],
                 "rate_hz": v["frames"] / dur,
                 "expected_hz": v["expected_hz"],
+                **self.judged.get(k, {}),
             }
             for k, v in st["tpdo"].items()
         }
@@ -313,6 +355,7 @@ class Replay:
             "frames": self.frames,
             "error_frames": self.error_frames,
             "seconds": self.duration,
+            "tpdo_configurations": self.epochs,
             "frames_per_id": {f"0x{k:03X}": v for k, v in sorted(self.per_id.items())},
             "tpdo": tpdo,
             "signals": sig,
@@ -409,10 +452,16 @@ def replay_file(path: str | Path, node: int = 1, table: ObjectTable | None = Non
         raise InvalidValue(f"{p}: no CAN frames in the file")
     duration = float(end - start)
     known = _Known(table, node, followers)
+    writes = sorted((w for f in followers for w in f.writes), key=lambda w: w[0])
+    eps = epochs(writes, lambda at: tpdo_configs(known, at))
+    chosen, judged = _judge(eps, pdo_frames)
     net = canopen.Network()  # no bus: frames are handed to its subscribers by notify()
-    live = LiveStreams(net, tpdo_configs(known), seconds=duration + 2.0)
-    for cid, data, t in pdo_frames:  # the live view's own decoder
-        net.notify(cid, bytearray(data), t + _T0)
+    live = LiveStreams(net, chosen, seconds=duration + 2.0)
+    starts = [e.t0 for e in eps]
+    for cid, data, t in pdo_frames:  # the live view's own decoder, each frame in its mapping
+        ep = eps[bisect.bisect_right(starts, t) - 1]
+        if any(c.cob_id == cid and c in chosen for c in ep.configs):
+            net.notify(cid, bytearray(data), t + _T0)
     uploads = [u for f in followers for u in f.uploads]
     uploads.sort(key=lambda u: u.t)
     traces = []
@@ -422,7 +471,36 @@ def replay_file(path: str | Path, node: int = 1, table: ObjectTable | None = Non
             if tr is not None:
                 traces.append(tr)
     return Replay(p, node, live, sum(per_id.values()), errors, duration, start, dict(per_id),
-                  uploads, traces)
+                  uploads, traces, judged, len(eps))
+
+
+def _judge(
+    eps: list[Epoch], pdo_frames: list[tuple[int, bytes, float]]
+) -> tuple[list[TpdoConfig], dict[str, dict[str, Any]]]:
+    """Per TPDO: the configuration its signals are decoded with (the one in force for most of
+    its frames) and, over every epoch, the drops against that epoch's event timer."""
+    starts = [e.t0 for e in eps]
+    stamps: dict[tuple[int, int], list[float]] = collections.defaultdict(list)  # (epoch, cob)
+    for cid, _data, t in pdo_frames:
+        stamps[(bisect.bisect_right(starts, t) - 1, cid)].append(t)
+    best: dict[int, tuple[int, TpdoConfig]] = {}
+    judged: dict[str, dict[str, Any]] = {}
+    for i, ep in enumerate(eps):
+        for c in ep.configs:
+            if not (c.valid and c.fields):
+                continue
+            got = stamps.get((i, c.cob_id), [])
+            j = judged.setdefault(f"TPDO{c.number}", {"dropped": 0, "expected_hz": []})
+            j["dropped"] += count_drops(got, c.event_timer_ms)
+            hz = 1000.0 / c.event_timer_ms if c.event_timer_ms else None
+            if got and hz not in j["expected_hz"]:
+                j["expected_hz"].append(hz)
+            if len(got) > best.get(c.number, (-1, c))[0]:
+                best[c.number] = (len(got), c)
+    for j in judged.values():  # one rate: a number, as before; several: the list in order
+        rates = j["expected_hz"]
+        j["expected_hz"] = rates[0] if len(rates) == 1 else (rates or None)
+    return [c for _n, c in sorted(best.values(), key=lambda nc: nc[1].number)], judged
 
 
 def _write_csv(path: Path, cols: dict[str, np.ndarray], units: dict[str, str]) -> Path:
@@ -443,6 +521,12 @@ def cmd_replay(args: argparse.Namespace) -> int:
     from .cli import _emit
 
     rep = replay_file(args.file, node=args.node)
+    wanted = [f"--{k.replace('_', '-')}" for k in ("trace_csv", "trace_png") if getattr(args, k)]
+    if wanted and not rep.traces:  # before anything is written: nothing half-made
+        raise DriveError(
+            f"{rep.path}: {' and '.join(wanted)} cannot be made: the recording holds no complete"
+            f" trace upload (0x2102) of node {rep.node}"
+        )
     out = rep.summary()
     if args.csv:
         out["csv"] = str(_write_csv(Path(args.csv), rep.table(), rep.live.units))
