@@ -1085,6 +1085,9 @@ def build_parser() -> argparse.ArgumentParser:
     from ._cli_tools import register_tools
 
     register_tools(sub, bus)
+    from ._cli_lss import register_lss
+
+    register_lss(sub, bus)
     from ._cli_design import add_parsers as add_design_parsers
 
     add_design_parsers(sub)

@@ -138,6 +138,9 @@ def add_run_arguments(p: argparse.ArgumentParser) -> None:
         "TPDOs sooner (User-Mode Linux: 10)",
     )
     p.add_argument("--log-level", default="INFO", choices=["DEBUG", "INFO", "WARNING", "ERROR"])
+    from virtual_drive.node.cli_lss import add_lss_arguments
+
+    add_lss_arguments(p)  # --unconfigured N, --serial-base S: LSS slaves (CiA 305)
 
 
 def bus_kwargs(args: argparse.Namespace) -> dict:
@@ -293,6 +296,15 @@ def run_command(args: argparse.Namespace) -> int:
             return _fail(
                 f"cannot open the CAN bus ({shown}): {getattr(exc, 'strerror', None) or exc}"
             )
+    if getattr(args, "unconfigured", None) is not None:
+        from virtual_drive.node.cli_lss import run_unconfigured
+
+        with StopSignal() as stop_lss:
+            try:
+                return run_unconfigured(args, cfg, open_bus, stop_lss)
+            finally:
+                if hub is not None:
+                    hub.stop()
     buses: list[can.BusABC] = []
     conn = None
     try:
