@@ -1088,6 +1088,9 @@ def build_parser() -> argparse.ArgumentParser:
     from ._cli_lss import register_lss
 
     register_lss(sub, bus)
+    from .monitor import add_parser as add_monitor_parser
+
+    add_monitor_parser(sub, bus)
     from ._cli_design import add_parsers as add_design_parsers
 
     add_design_parsers(sub)
