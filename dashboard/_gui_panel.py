@@ -29,6 +29,7 @@ from dashboard._fields import FieldError
 from dashboard._gui_field import CURRENT_COLORS, SPEED_COLORS, Field, fmt
 from dashboard._gui_pace import PagePace
 from dashboard._gui_tabs import (
+    BusTab,
     CapturesTab,
     ConfigTab,
     CurrentTab,
@@ -48,7 +49,9 @@ _fmt = fmt  # older name
 __all__ = ["CURRENT_COLORS", "SPEED_COLORS", "Field", "Panel", "parse_sequence"]
 
 
-class Panel(PlotArea, SpeedTab, CurrentTab, TuningTab, IdentifyTab, CapturesTab, ConfigTab):
+class Panel(
+    PlotArea, SpeedTab, CurrentTab, TuningTab, IdentifyTab, CapturesTab, ConfigTab, BusTab
+):
     """The GUI of one connected browser."""
 
     def __init__(self, owner: BenchGui, client: viser.ClientHandle) -> None:
@@ -167,6 +170,8 @@ class Panel(PlotArea, SpeedTab, CurrentTab, TuningTab, IdentifyTab, CapturesTab,
             self._build_captures_tab()
         with tabs.add_tab("Config"):
             self._build_config_tab()
+        with tabs.add_tab("Bus"):
+            self._build_bus_tab()
         self._build_plot_area()
         self.show_captures()
 

@@ -28,7 +28,12 @@ def bus_kwargs(config: Any, hub_port: int | None) -> dict[str, Any]:
         return {"host": "127.0.0.1", "port": hub_port, "bitrate": config.bitrate}
     if config.join_hub is not None:
         return {"host": "127.0.0.1", "port": config.join_hub, "bitrate": config.bitrate}
-    return {"interface": config.interface, "channel": config.channel, "bitrate": config.bitrate}
+    return {
+        "interface": config.interface,
+        "channel": config.channel,
+        "bitrate": config.bitrate,
+        **getattr(config, "bus_options", {}),
+    }
 
 
 class ConfigTab:
@@ -62,7 +67,7 @@ class ConfigTab:
         with tempfile.TemporaryDirectory() as d:
             path = Path(d) / f"drive_node{self.bench.node_id}.dcf"
             with self.bench.lock:
-                res = config_dcf.save(self.bench.drive, path)
+                res = config_dcf.save(self.bench.drive, path, bitrate=self.config.bitrate)
             data = path.read_bytes()
         stamp = time.strftime("%Y%m%d_%H%M%S")
         self.client.send_file_download(
