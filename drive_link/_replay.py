@@ -497,9 +497,12 @@ def _judge(
                 j["expected_hz"].append(hz)
             if len(got) > best.get(c.number, (-1, c))[0]:
                 best[c.number] = (len(got), c)
-    for j in judged.values():  # one rate: a number, as before; several: the list in order
+    for k, j in judged.items():  # one rate: a number, as before; several: the list in order
         rates = j["expected_hz"]
-        j["expected_hz"] = rates[0] if len(rates) == 1 else (rates or None)
+        if not rates:  # no frame at all: the rate configured at the end
+            last = [c for c in eps[-1].configs if f"TPDO{c.number}" == k]
+            rates = [1000.0 / last[0].event_timer_ms if last and last[0].event_timer_ms else None]
+        j["expected_hz"] = rates[0] if len(rates) == 1 else rates
     return [c for _n, c in sorted(best.values(), key=lambda nc: nc[1].number)], judged
 
 
@@ -526,6 +529,12 @@ def cmd_replay(args: argparse.Namespace) -> int:
         raise DriveError(
             f"{rep.path}: {' and '.join(wanted)} cannot be made: the recording holds no complete"
             f" trace upload (0x2102) of node {rep.node}"
+        )
+    wanted = [f"--{k}" for k in ("csv", "plot") if getattr(args, k)]
+    if wanted and not rep.live.stats["frames"]:
+        raise DriveError(
+            f"{rep.path}: {' and '.join(wanted)} cannot be made: the recording holds no TPDO of"
+            f" node {rep.node} (TPDOs flow in OPERATIONAL only; another node: --node)"
         )
     out = rep.summary()
     if args.csv:

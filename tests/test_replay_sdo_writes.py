@@ -81,3 +81,9 @@ def test_replay_trace_output_without_a_trace_is_one_line_and_nothing_written(hub
     assert rc == 1 and out.getvalue() == ""
     assert err.getvalue().count("\n") == 1 and "--trace-csv cannot be made" in err.getvalue()
     assert not csv_out.exists() and not trace_out.exists()
+    # no TPDO in it (the drive is PRE-OPERATIONAL): --csv cannot be made either
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        rc = cli.main(["replay", str(path), "--csv", str(csv_out)])
+    assert rc == 1 and err.getvalue().count("\n") == 1 and "no TPDO of node 1" in err.getvalue()
+    assert not csv_out.exists()
