@@ -67,7 +67,7 @@ def _virtual_bus(config: BenchConfig) -> Iterator[int]:
     from virtual_drive.launch import virtual_bench
 
     with virtual_bench(
-        nodes=(config.node_id,),
+        nodes=tuple(getattr(config, "nodes", ())) or (config.node_id,),
         hub_port=config.hub_port,
         bitrate=config.bitrate,
         speed=config.speed_factor,

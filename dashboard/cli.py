@@ -50,6 +50,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="virtual drive: simulated seconds per wall-clock second (default 1)",
     )
     p.add_argument(
+        "--nodes",
+        metavar="IDS",
+        help="with --virtual: start drives with these node-IDs on the hub (1,2 or 1-4); the "
+        "dashboard controls --node (default the first), the Bus tab and drive-link see them all",
+    )
+    p.add_argument(
         "--hub-port",
         type=int,
         default=0,
@@ -104,6 +110,18 @@ def _no_startup_traceback(record: logging.LogRecord) -> bool:
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    nodes: tuple[int, ...] = ()
+    if args.nodes is not None:
+        from virtual_drive.node.cli_run import parse_nodes
+
+        try:
+            nodes = tuple(parse_nodes(args.nodes))
+        except ValueError as exc:
+            print(f"drive-dashboard: error: {exc}", file=sys.stderr)
+            return 2
+        given = argv if argv is not None else sys.argv[1:]
+        if not any(a.split("=")[0] in ("--node", "-n", "--node-id") for a in given):
+            args.node = nodes[0]  # no --node: the first of --nodes
     config = BenchConfig(
         host=args.host,
         api_port=args.port,
@@ -120,6 +138,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         scene_3d=not args.no_3d,
         scene_3d_shown=args.show_3d,
         node_id=args.node,
+        nodes=nodes,
         allow_remote=args.allow_remote,
         token=args.token,
     )

@@ -50,6 +50,8 @@ class BenchConfig:
     #: python-can's other bus options for ``interface`` (fd, data_bitrate, timing, --bus-kwargs)
     bus_options: dict = field(default_factory=dict)
     node_id: int = 1
+    #: with ``virtual``: node-IDs of the drives started on the hub (empty: ``node_id`` alone)
+    nodes: tuple[int, ...] = ()
     speed_factor: float = 1.0
     virtual_in_process: bool = False
     hub_port: int = 0
@@ -77,6 +79,10 @@ class BenchConfig:
             raise ValueError(f"node id {self.node_id} is outside 1..127")
         if self.speed_factor <= 0:
             raise ValueError("--speed-factor must be > 0")
+        if self.nodes and not self.virtual:
+            raise ValueError("--nodes starts virtual drives: it needs --virtual")
+        if self.nodes and self.node_id not in self.nodes:
+            raise ValueError(f"--node {self.node_id} is not one of --nodes {self.nodes}")
         if self.bus_options and (self.virtual or self.join_hub is not None):
             raise ValueError(
                 f"--{next(iter(self.bus_options)).replace('_', '-')} applies to an --interface "
