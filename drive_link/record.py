@@ -110,13 +110,15 @@ class _Gate(can.Listener):
         self.dropped: collections.Counter[str] = collections.Counter()
         self.first: float | None = None
         self.last: float | None = None
+        self.arrived = t0  # wall clock of the latest frame's arrival
         self.done = threading.Event()  # the window's end seen on the bus
 
     def on_message_received(self, msg: can.Message) -> None:
         if self.done.is_set():
             return
+        self.arrived = time.time()
         if self.offset is None:
-            self.offset = msg.timestamp - time.time()
+            self.offset = msg.timestamp - self.arrived
         if self.duration is not None and msg.timestamp >= self.t0 + self.offset + self.duration:
             self.done.set()
             return
@@ -189,13 +191,13 @@ def record_bus(
     try:
         if duration is None:
             stop_event.wait()
-        else:  # the window's end on the bus; a quiet bus ends by the wall clock
-            end = t0 + duration + 1.0
+        else:  # the window's end on the bus; a bus gone quiet ends by the wall clock
+            end = t0 + duration
             while not (gate.done.is_set() or stop_event.is_set()):
-                left = end - time.time()
-                if left <= 0:
+                now = time.time()
+                if (now > end + 0.5 and now - gate.arrived > 0.5) or now > end + 10.0:
                     break
-                gate.done.wait(min(0.05, left))
+                gate.done.wait(0.05)
     finally:
         wall = time.time() - t0
         try:
