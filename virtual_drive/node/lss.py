@@ -32,6 +32,7 @@ import json
 import logging
 import struct
 import threading
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -49,6 +50,12 @@ UNCONFIGURED = 0xFF
 BIT_TIMING_TABLE = {0: 1_000_000, 2: 500_000, 3: 250_000, 4: 125_000}
 
 WAITING, CONFIGURATION = 0, 1
+
+#: On a CAN bus, identical frames that several slaves send at once are one frame (they win the
+#: arbitration together). Slaves in one process share this: (request, answer) → when sent.
+_MERGE_S = 0.005
+_answered: dict[tuple[bytes, bytes], float] = {}
+_answered_lock = threading.Lock()
 
 
 class LssSlave:
@@ -85,6 +92,7 @@ class LssSlave:
         self._selective: list[int] = []  # switch state selective: parts matched so far
         self._remote: list[int] = []  # identify remote slave: ranges received so far
         self._scan_pos: int | None = None  # fast scan: the LSS sub being checked (LSSPos)
+        self._request = b""  # the request being answered
 
     # -- lifecycle ----------------------------------------------------------------------
     def start(self) -> LssSlave:
@@ -162,6 +170,15 @@ class LssSlave:
         data[0 : len(payload)] = bytes(payload)
         if u32 is not None:
             data[1:5] = struct.pack("<I", u32)
+        key = (self._request, bytes(data))
+        now = time.monotonic()
+        with _answered_lock:  # the same answer to the same request from a slave here: merged
+            if now - _answered.get(key, -1.0) < _MERGE_S:
+                return
+            _answered[key] = now
+            if len(_answered) > 256:
+                for k in [k for k, v in _answered.items() if now - v > _MERGE_S]:
+                    del _answered[k]
         msg = can.Message(arbitration_id=LSS_TX, data=data, is_extended_id=False)
         try:
             self.bus.send(msg)
@@ -173,7 +190,8 @@ class LssSlave:
         if len(data) < 1:
             return
         with self._lock:
-            self._handle(bytes(data).ljust(8, b"\0"))
+            self._request = bytes(data).ljust(8, b"\0")
+            self._handle(self._request)
 
     def _handle(self, d: bytes) -> None:
         cs = d[0]
