@@ -15,6 +15,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from firmware_protocol.index_ranges import PDO_PARAMETERS, TPDO_COMM
+
 from ._live import _PAUSE_S, TpdoConfig
 
 __all__ = ["Epoch", "count_drops", "epochs", "is_tpdo_object"]
@@ -22,7 +24,7 @@ __all__ = ["Epoch", "count_drops", "epochs", "is_tpdo_object"]
 
 def is_tpdo_object(index: int) -> bool:
     """0x1800-0x19FF (TPDO communication) or 0x1A00-0x1BFF (TPDO mapping)."""
-    return 0x1800 <= index <= 0x1BFF
+    return TPDO_COMM <= index < PDO_PARAMETERS.stop
 
 
 @dataclass
