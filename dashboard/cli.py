@@ -17,11 +17,18 @@ from collections.abc import Sequence
 
 from dashboard.config import BenchConfig
 from drive_link.cli_connect import add_bus_arguments
+from drive_link.closed_pipe import run_quietly, silence_output
 
 __all__ = ["build_parser", "main"]
 
 
 class _Parser(argparse.ArgumentParser):
+    """One-line usage errors (exit 2); an option is spelled in full (no abbreviations)."""
+
+    def __init__(self, *a: object, **kw: object) -> None:
+        kw.setdefault("allow_abbrev", False)
+        super().__init__(*a, **kw)  # type: ignore[arg-type]
+
     def error(self, message: str) -> None:  # type: ignore[override]
         self.exit(2, f"{self.prog}: error: {message}\n")
 
@@ -102,6 +109,11 @@ def _no_startup_traceback(record: logging.LogRecord) -> bool:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``drive-dashboard``; a closed output pipe ends it quietly (status 141)."""
+    return run_quietly(lambda: _main(argv))
+
+
+def _main(argv: Sequence[str] | None) -> int:
     args = build_parser().parse_args(argv)
     config = BenchConfig(
         host=args.host,
@@ -155,12 +167,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     def ready(app) -> None:
         gui = app.state.gui
         api = f"http://{_url_host(config.host)}:{config.api_port}"
-        print(f"open http://127.0.0.1:{gui.port}/", flush=True)
-        print(
-            f"  (REST API {api}/api/state, docs {api}/docs; bus: {app.state.bench.description}; "
-            "Ctrl-C stops)",
-            flush=True,
-        )
+        try:
+            print(f"open http://127.0.0.1:{gui.port}/", flush=True)
+            print(
+                f"  (REST API {api}/api/state, docs {api}/docs; bus: "
+                f"{app.state.bench.description}; Ctrl-C stops)",
+                flush=True,
+            )
+        except BrokenPipeError:  # `drive-dashboard | head -1`: the bench serves on, silently
+            silence_output()
 
     class _Server(uvicorn.Server):
         """Prints the URLs once the REST port listens: the lifespan's startup runs before

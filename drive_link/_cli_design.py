@@ -400,6 +400,7 @@ def add_parsers(subparsers: argparse._SubParsersAction) -> None:  # type: ignore
     """Register the ``design`` and ``identify`` sub-commands; each sets ``func``."""
     d = subparsers.add_parser(
         "design",
+        allow_abbrev=False,
         help="current-loop stability/margins/step prediction, PI or IP gain design",
         description=(
             "Analyse a current loop (deadbeat eq. 15, PI eq. 22, predictive eq. 23) for motor "
@@ -430,6 +431,7 @@ def add_parsers(subparsers: argparse._SubParsersAction) -> None:  # type: ignore
 
     i = subparsers.add_parser(
         "identify",
+        allow_abbrev=False,
         help="least-squares speed model b/(z - a) from a current-step trace CSV",
         description=(
             "Fit w[k+1] = a w[k] + b i_p[k] (+ offset) to a CSV with columns t, i_p, speed "
@@ -451,7 +453,7 @@ def add_parsers(subparsers: argparse._SubParsersAction) -> None:  # type: ignore
 
 def run_cli(argv: Sequence[str] | None = None) -> int:
     """Run ``design``/``identify`` as ``drive-link`` would; returns the exit status."""
-    parser = argparse.ArgumentParser(prog="drive-link")
+    parser = argparse.ArgumentParser(prog="drive-link", allow_abbrev=False)
     sub = parser.add_subparsers(dest="command", required=True)
     add_parsers(sub)
     try:

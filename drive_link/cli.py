@@ -34,6 +34,7 @@ from .cli_connect import (
     bus_settings_from_args,
     connect_from_args,
 )
+from .closed_pipe import run_quietly
 from .drive import GAIN_FIELDS, Drive
 from .errors import (
     BusError,
@@ -694,6 +695,7 @@ class _Parser(argparse.ArgumentParser):
     negative numbers (``-1e30``, ``-5A``, ``-inf``) taken as values, never as options."""
 
     def __init__(self, *a: Any, **kw: Any) -> None:
+        kw.setdefault("allow_abbrev", False)  # an option is spelled in full (sub-parsers too)
         super().__init__(*a, **kw)
         self._negative_number_matcher = re.compile(r"^-(\.?\d|inf|nan)", re.IGNORECASE)
 
@@ -765,11 +767,14 @@ def _timeout(args: argparse.Namespace, default: float) -> float:
 _TOP = "top_"  # dest prefix of the options given before the sub-command
 
 
-def _add_bus_options(p: argparse.ArgumentParser, prefix: str = "") -> None:
+def _add_bus_options(p: argparse.ArgumentParser, prefix: str = "", omit: tuple = ()) -> None:
     """The bus options on ``p`` with ``SUPPRESS`` defaults (an option not given leaves no
-    attribute, so the sub-command level cannot overwrite what was given before it)."""
+    attribute, so the sub-command level cannot overwrite what was given before it); ``omit``:
+    attribute names left out (see :func:`_bus_option_before_only`)."""
     g = p.add_argument_group("bus (unset = python-can config / CAN_* environment)")
     for flags, kw, _default in _bus_options():
+        if flags[0].lstrip("-").replace("-", "_") in omit:
+            continue
         dest = prefix + flags[0].lstrip("-").replace("-", "_")
         if kw.get("action") != "store_true":
             kw = {**kw, "metavar": flags[0].lstrip("-").replace("-", "_").upper()}
@@ -777,10 +782,26 @@ def _add_bus_options(p: argparse.ArgumentParser, prefix: str = "") -> None:
     add_hidden_aliases(g, prefix + "node")  # -n/--node-id
 
 
-def _bus_parent() -> argparse.ArgumentParser:
+def _bus_parent(omit: tuple = ()) -> argparse.ArgumentParser:
     p = _Parser(add_help=False)
-    _add_bus_options(p)
+    _add_bus_options(p, omit=omit)
     return p
+
+
+def _bus_option_before_only(p: argparse.ArgumentParser, name: str, own: str) -> None:
+    """Refuse bus option ``name`` after a sub-command whose own option ``own`` starts with its
+    spelling (``trace --channel i_p``, a typo of ``--channels``, must not pick a bus channel):
+    there it is a usage error naming both; before the sub-command it is the bus option."""
+    flags = next(f for f, _kw, _d in _bus_options() if f[0] == f"--{name}")
+
+    class _BeforeOnly(argparse.Action):
+        def __call__(self, parser: Any, namespace: Any, values: Any, option_string: Any = None):
+            parser.error(
+                f"{option_string} is a bus option: give it before the sub-command "
+                f"(drive-link {flags[0]} VALUE {parser.prog.split()[-1]} ...); did you mean {own}?"
+            )
+
+    p.add_argument(*flags, action=_BeforeOnly, default=argparse.SUPPRESS, help=argparse.SUPPRESS)
 
 
 def _merge_bus(args: argparse.Namespace) -> None:
@@ -835,10 +856,12 @@ def build_parser() -> argparse.ArgumentParser:
     sub = ap.add_subparsers(dest="cmd", metavar="COMMAND", required=True)
 
     def add(
-        name: str, fn: Callable, help: str, needs_drive: bool = True
+        name: str, fn: Callable, help: str, needs_drive: bool = True, omit_bus: tuple = ()
     ) -> argparse.ArgumentParser:
-        p = sub.add_parser(name, parents=[bus], help=help, description=help, epilog=_EPILOG,
-                           formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
+        parent = _bus_parent(omit_bus) if omit_bus else bus
+        p = sub.add_parser(name, parents=[parent], help=help, description=help, epilog=_EPILOG,
+                           formatter_class=argparse.RawDescriptionHelpFormatter,
+                           allow_abbrev=False)  # fmt: skip
         p.set_defaults(func=fn, needs_drive=needs_drive)
         return p
 
@@ -943,8 +966,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--seconds", type=quantity("s"), default=1.0, help="how long to listen, s (default 1)"
     )
-    p = add("trace", cmd_trace, "capture a trace with the drive's recorder")
+    p = add("trace", cmd_trace, "capture a trace with the drive's recorder", omit_bus=("channel",))
     p.add_argument("--channels", default="i_p,i_p_ref", help="comma-separated (measurements names)")
+    _bus_option_before_only(p, "channel", "--channels")
     p.add_argument(
         "--divider", type=int, default=1, help="loop samples (20 µs each) per trace sample"
     )
@@ -1135,7 +1159,7 @@ def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     _JSON_ERRORS = "--json" in argv
     try:
-        return _main(argv)
+        return run_quietly(lambda: _main(argv))  # `drive-link objects | head -1`: quiet end
     finally:
         _JSON_ERRORS = False
 
@@ -1170,6 +1194,8 @@ def _main(argv: list[str]) -> int:
         return _fail(args, msg, 1)
     except KeyboardInterrupt:
         return _fail(args, "interrupted", 130, prefix="")
+    except BrokenPipeError:  # the reader of our output is gone: main() ends quietly
+        raise
     except (ValueError, OSError) as exc:
         return _fail(args, str(exc), 1)
     finally:
