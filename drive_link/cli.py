@@ -6,8 +6,9 @@ loopback hub; unset = python-can config/env), --node and --json. Values take uni
 that unit. Every failure is one line on stderr (with --json: {"error": ..., "exit_code": N} on
 stdout) and a non-zero exit code:
 
-1 drive refused / failed check, 2 usage, 3 bus error, 4 node not found, 5 timeout,
-6 SDO abort, 7 invalid value, 8 unsafe gains refused (use --force), 130 interrupted.
+1 drive refused / failed check, 2 usage, 3 bus error, 4 node not found (``scan``: none), 5 timeout,
+6 SDO abort, 7 invalid value (an option's too), 8 unsafe gains refused (use --force), 130
+interrupted, 141 the reader closed the output pipe (quietly, as other Unix tools).
 """
 
 from __future__ import annotations
@@ -44,6 +45,7 @@ from .errors import (
     NodeNotFound,
     SdoAbort,
     StateError,
+    UnknownObject,
 )
 from .restore import leave_as_found
 
@@ -63,8 +65,10 @@ EXIT_CODES: list[tuple[type[BaseException], int]] = [
     (DriveTimeout, 5),
     (SdoAbort, 6),
     (InvalidValue, 7),
+    (UnknownObject, 7),  # an object name or index the dictionary does not have
     (DriveError, 1),
 ]
+EXIT_INVALID = 7
 EXIT_UNSAFE = 8
 
 
@@ -146,10 +150,15 @@ def cmd_scan(args: argparse.Namespace) -> int:
     from ._scan import scan
 
     conn = _connection.acquire(**bus_settings_from_args(args))  # --fd, --bus-kwargs ... too
+    listen = _timeout(args, 1.0)
     try:
-        nodes = scan(conn.bus, timeout=_timeout(args, 1.0))
+        nodes = scan(conn.bus, timeout=listen)
     finally:
         _connection.release(conn)
+    if not nodes:  # exit 4 "no node", as for a command whose node does not answer
+        raise NodeNotFound(
+            f"no node answered on the bus (SDO probe of 1..127, heartbeats for {listen:g} s)"
+        )
     data = [
         {
             "node_id": n.node_id,
@@ -161,8 +170,6 @@ def cmd_scan(args: argparse.Namespace) -> int:
     ]
 
     def text() -> str:
-        if not nodes:
-            return "no nodes found"
         lines = []
         for n in nodes:
             dt = (
@@ -706,12 +713,23 @@ class _Parser(argparse.ArgumentParser):
             return None
         return super()._parse_optional(arg_string)
 
+    def _get_value(self, action: argparse.Action, arg_string: str) -> Any:
+        # a value its type refuses (wrong unit, not a number, nan, not whole) is an invalid
+        # value (exit 7, as the same value given to `write`), not a usage error (2)
+        try:
+            return super()._get_value(action, arg_string)
+        except argparse.ArgumentError:
+            self._invalid_value = True
+            raise
+
     def error(self, message: str) -> NoReturn:
+        code = EXIT_INVALID if getattr(self, "_invalid_value", False) else 2
+        self._invalid_value = False  # the shell parses again with the same parser
         text = f"{message} (see {self.prog} --help)"
         if _JSON_ERRORS:
-            print(json.dumps({"error": text, "exit_code": 2}))
-            self.exit(2)
-        self.exit(2, f"{self.prog}: error: {text}\n")
+            print(json.dumps({"error": text, "exit_code": code}))
+            self.exit(code)
+        self.exit(code, f"{self.prog}: error: {text}\n")
 
 
 def quantity(unit: str, integer: bool = False) -> Callable[[str], float | int]:
@@ -837,8 +855,9 @@ _EPILOG = """\
 values take units (20uH, 50A, 1000rpm, '-5 A'); a bare number is in the object's unit
 (drive-link objects PATTERN lists names, index:sub, type, unit, limits, access).
 
-exit codes: 1 drive refused / failed check, 2 usage, 3 bus error, 4 node not found,
-5 timeout, 6 SDO abort, 7 invalid value, 8 unsafe gains refused (use --force), 130 interrupted.
+exit codes: 1 drive refused / failed check, 2 usage, 3 bus error, 4 node not found (scan:
+none), 5 timeout, 6 SDO abort, 7 invalid value (wrong unit, not a number, out of limits, unknown
+object), 8 unsafe gains refused (use --force), 130 interrupted, 141 output pipe closed.
 """
 
 
