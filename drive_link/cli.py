@@ -819,7 +819,10 @@ def _bus_option_before_only(p: argparse.ArgumentParser, name: str, own: str) -> 
                 f"(drive-link {flags[0]} VALUE {parser.prog.split()[-1]} ...); did you mean {own}?"
             )
 
-    p.add_argument(*flags, action=_BeforeOnly, default=argparse.SUPPRESS, help=argparse.SUPPRESS)
+    p.add_argument(
+        *flags, action=_BeforeOnly, dest=argparse.SUPPRESS, default=argparse.SUPPRESS,
+        help=argparse.SUPPRESS,
+    )  # fmt: skip
 
 
 def _merge_bus(args: argparse.Namespace) -> None:
