@@ -80,7 +80,8 @@ def _all_parsers(monkeypatch) -> list[tuple[str, argparse.ArgumentParser]]:
 
 def test_no_parser_or_sub_parser_accepts_an_abbreviation(monkeypatch):
     # the installed console scripts, as the README names them, are all walked
-    assert [e.name for e in _console_scripts()] == ["drive-dashboard", "drive-link", "virtual-drive"]
+    scripts = [e.name for e in _console_scripts()]
+    assert scripts == ["drive-dashboard", "drive-link", "virtual-drive"]
     parsers = _all_parsers(monkeypatch)
     names = [n for n, _ in parsers]
     # the walk reached the sub-commands (drive-link's design/trace, virtual-drive's run/hub)
