@@ -220,6 +220,12 @@ def test_every_command_takes_bus_options_before_and_after():
             assert before["json"] is True, name
             continue
         assert before == _WANT, name
+        if name == "trace":  # its --channels extends --channel: the bus channel goes before it
+            after = [o for o in _BUS if o not in ("--channel", "vcan7")]
+            assert _parsed(["--channel", "vcan7", name, *pos, *after]) == _WANT, name
+            with pytest.raises(SystemExit):
+                _parsed([name, *pos, *_BUS])
+            continue
         assert _parsed([name, *pos, *_BUS]) == _WANT, name
         defaults = _parsed([name, *pos])
         assert defaults["node"] == 1 and defaults["json"] is False and defaults["timeout"] is None
