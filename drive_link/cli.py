@@ -604,9 +604,11 @@ def cmd_check(args: argparse.Namespace, d: Drive) -> int:
     only = args.only.split(",") if args.only else None
     skip = args.skip.split(",") if args.skip else None
 
+    label = {"pass": "PASS", "fail": "FAIL", "not applicable": "N/A "}
+
     def show(r: Any) -> None:
         if not args.json:
-            print(f"{'PASS' if r.ok else 'FAIL'}  {r.name:<20} {r.detail}", flush=True)
+            print(f"{label[r.verdict]}  {r.name:<20} {r.detail}", flush=True)
 
     try:
         results = run_checks(
@@ -615,18 +617,26 @@ def cmd_check(args: argparse.Namespace, d: Drive) -> int:
     except ValueError as exc:
         raise InvalidValue(str(exc)) from None
     failed = [r.name for r in results if not r.ok]
+    na = [r.name for r in results if r.verdict == "not applicable"]
     if args.json:
         print(
             json.dumps(
                 [
-                    {"name": r.name, "ok": r.ok, "detail": r.detail, "seconds": r.seconds}
+                    {
+                        "name": r.name,
+                        "ok": r.ok,
+                        "verdict": r.verdict,
+                        "detail": r.detail,
+                        "seconds": r.seconds,
+                    }
                     for r in results
                 ]
             )
         )
     else:
         print(
-            f"{len(results) - len(failed)}/{len(results)} passed"
+            f"{len(results) - len(failed) - len(na)}/{len(results) - len(na)} passed"
+            + (f"; not applicable: {', '.join(na)}" if na else "")
             + (f"; failed: {', '.join(failed)}" if failed else "")
         )
     return 1 if failed else 0

@@ -106,3 +106,50 @@ def test_check_passes_on_the_readme_drive_and_leaves_it_as_found(readme_drive):
     after = _snapshot(readme_drive)
     changed = {k: (before[k], after.get(k)) for k in before if after.get(k) != before[k]}
     assert not changed, (changed, f"check took {took:.1f} s")
+
+
+# --------------------------------------------------------------------------- a real failure fails
+@pytest.fixture
+def stored_drive(tmp_path):
+    """An in-process virtual drive (python-can virtual bus) started on a parameter file that
+    holds a stored set (0x2060 store_status "ok"); yields its channel."""
+    from drive_link import Drive
+    from virtual_drive.node import VirtualDrive
+
+    path = tmp_path / "store.json"
+    ch = f"store-{os.getpid()}-{time.monotonic_ns()}"
+    for first in (True, False):
+        bus = can.Bus(interface="virtual", channel=ch)
+        vd = VirtualDrive(bus, node_id=NODE, store_path=path).start()
+        if not first:
+            break
+        with Drive.connect(interface="virtual", channel=ch, node_id=NODE, heartbeat_ms=None) as d:
+            d.store()
+        vd.stop()
+        bus.shutdown()
+    try:
+        yield ch
+    finally:
+        vd.stop()
+        bus.shutdown()
+
+
+@pytest.mark.parametrize("code", [0x08000020, 0x08000000])
+def test_store_restore_fails_on_a_drive_with_a_store_that_refuses_to_save(
+    stored_drive, monkeypatch, capsys, code
+):
+    """A drive that has stored parameters (store_status ok) and refuses "save" fails the item,
+    whatever the abort code: only a drive without a store is "not applicable"."""
+    from canopen.sdo.exceptions import SdoAbortedError
+
+    from drive_link import cli
+    from virtual_drive.node import parameters
+
+    def refuse(d):
+        raise SdoAbortedError(code)
+
+    monkeypatch.setattr(parameters, "save_parameters", refuse)  # the defect
+    rc = cli.main(["check", "--interface", "virtual", "--channel", stored_drive,
+                   "--only", "store_restore", "--json"])  # fmt: skip
+    (r,) = json.loads(capsys.readouterr().out)
+    assert rc == 1 and r["verdict"] == "fail" and f"0x{code:08X}" in r["detail"], r
