@@ -92,9 +92,13 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _port_free(host: str, port: int) -> bool:
+    """Whether nothing listens on ``host:port``: the probe binds with SO_REUSEADDR, as uvicorn
+    and viser bind (asyncio's default on Unix), so the closed connections of the last run still
+    in TIME_WAIT (a browser was connected when Ctrl-C stopped it) do not count as busy."""
     if port == 0:
         return True
     with socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET) as s:
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         try:
             s.bind((host, port))
         except OSError:
