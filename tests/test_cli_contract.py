@@ -56,10 +56,7 @@ def _run_all(cmds: list[list[str]], timeout: float = 90.0) -> list[tuple[int, st
 HELP = [
     [str(BIN / "drive-link"), "--help"],
     [str(BIN / "drive-link"), "design", "--help"],
-    [str(BIN / "drive-link"), "trace", "--help"],
     [str(BIN / "virtual-drive"), "--help"],
-    [str(BIN / "virtual-drive"), "run", "--help"],
-    [str(BIN / "virtual-drive"), "hub", "--help"],
     [str(BIN / "drive-dashboard"), "--help"],
     [PY, "-m", "virtual_drive.bench", "--help"],
     [PY, "-m", "firmware_protocol.generate", "--help"],
