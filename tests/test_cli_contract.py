@@ -212,3 +212,11 @@ def test_the_readme_design_line_prints_the_ip_gains():
     assert got["kp"] == pytest.approx(k_p, rel=1e-6)
     assert got["ki"] == pytest.approx(k_i, rel=1e-6)
     assert 0.21 < k_p < 0.2125 and 2.9e-5 < k_i < 3.1e-5  # the README comment: 0.2112, 3.0e-5
+
+
+def test_a_closed_pipe_ends_virtual_drive_quietly():
+    """`virtual-drive --hub | true`: its ready line meets a closed pipe; it ends at once,
+    quietly (once a traceback and exit 1)."""
+    argv = [str(BIN / "virtual-drive"), "--hub", "--hub-port", "0", "--log-level", "ERROR"]
+    rc, _, err = _closed_pipe_status(argv, False)
+    assert (rc, err) == (141, "")
