@@ -93,8 +93,6 @@ CODE = _readme_exit_codes()
 OFFLINE = [
     (["set-speed", "5A"], "invalid value"),  # the same value `write` refuses with 7
     (["live", "--seconds", "5A"], "invalid value"),
-    (["step", "current", "--from", "5rpm"], "invalid value"),
-    (["trace", "--length", "abc"], "invalid value"),
     (["--node", "x", "status"], "invalid value"),
     (["design", "--a", "abc", "--b", "3e-4"], "invalid value"),
     (["identify", "--csv", "/nonexistent/trace.csv"], "invalid value"),
