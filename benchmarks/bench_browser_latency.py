@@ -110,7 +110,7 @@ def measure_traffic(page, api: str, token: str, window: float) -> tuple[float, f
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=10)
     ap.add_argument("--window", type=float, default=10.0, help="traffic window, s")
     ap.add_argument("--stress", type=int, default=0, help="stress-ng --cpu N meanwhile")

@@ -100,7 +100,7 @@ def measure(cond: Condition, uploads: int, reads: int) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.split("\n\n")[0])
     ap.add_argument("--uploads", type=int, default=10, help="64 KiB uploads per condition")
     ap.add_argument("--reads", type=int, default=300, help="SDO reads per condition")
     ap.add_argument("--only", default="", help="comma-separated conditions")

@@ -308,7 +308,7 @@ def rotor_cost(window: float) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=6, help="speed steps for the latency figure")
     ap.add_argument("--window", type=float, default=10.0, help="CPU / refresh window, s")
     ap.add_argument(

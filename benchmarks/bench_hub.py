@@ -194,7 +194,7 @@ def forwarding(seconds: float) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.splitlines()[0])
     parser.add_argument("--frames", type=int, default=20_000, help="frames per throughput run")
     parser.add_argument("--round-trips", type=int, default=1000, help="exchanges per RTT run")
     parser.add_argument("--forward-seconds", type=float, default=15.0, help="forwarding window")

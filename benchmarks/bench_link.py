@@ -95,7 +95,7 @@ def run(d: Drive, n_reads: int = 300) -> dict[str, float]:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``python benchmarks/bench_link.py``."""
-    ap = argparse.ArgumentParser(prog="bench_link.py", description=__doc__)
+    ap = argparse.ArgumentParser(allow_abbrev=False, prog="bench_link.py", description=__doc__)
     add_bus_arguments(ap)  # python-can's bus options, --host/--port, --node (as drive-link)
     ap.add_argument("--reads", type=int, default=300)
     ap.add_argument(

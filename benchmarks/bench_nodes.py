@@ -138,7 +138,7 @@ def run(
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.splitlines()[0])
     ap.add_argument("--nodes", default="1-4", help="node-IDs, e.g. 1-4")
     ap.add_argument("--seconds", type=float, default=20.0, help="measuring window, s")
     ap.add_argument("--bitrate", type=int, default=1_000_000, help="emulated bit rate, bit/s")

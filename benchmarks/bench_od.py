@@ -8,6 +8,7 @@ load average (/proc/loadavg) is printed beside them.
 
 from __future__ import annotations
 
+import argparse
 import os
 import time
 import timeit
@@ -24,8 +25,11 @@ def _best(fn: Callable[[], object], number: int, repeat: int = 5) -> float:
     return min(timeit.repeat(fn, number=number, repeat=repeat)) / number
 
 
-def main() -> None:
-    """Run the benchmarks and print one line per figure."""
+def main(argv: list[str] | None = None) -> None:
+    """Run the benchmarks and print one line per figure (``--help``: only the usage)."""
+    argparse.ArgumentParser(
+        prog="bench_od.py", description=__doc__.splitlines()[0], allow_abbrev=False
+    ).parse_args(argv)
     stat = EDS_PATH.stat()
     parse = _best(
         lambda: _load_cached.__wrapped__(EDS_PATH.resolve(), 1, stat.st_mtime_ns, stat.st_size),

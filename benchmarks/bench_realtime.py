@@ -174,7 +174,7 @@ def sim_back_to_back(period: float, ticks: int = 400) -> float:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.splitlines()[0])
     ap.add_argument("--seconds", type=float, default=60.0, help="measurement time (s)")
     ap.add_argument(
         "--mode",

@@ -76,7 +76,7 @@ def inside(uploads: int) -> int:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.split("\n\n")[0])
     ap.add_argument("--uploads", type=int, default=10)
     ap.add_argument("--timeout", type=float, default=900.0, help="wall-time limit of UML, s")
     ap.add_argument("--inside", action="store_true", help=argparse.SUPPRESS)

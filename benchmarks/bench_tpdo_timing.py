@@ -38,7 +38,7 @@ class _Stamps(can.Listener):
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.splitlines()[0])
     ap.add_argument("--seconds", type=float, default=5.0)
     ap.add_argument("--inhibit", type=int, default=20, help="TPDO2 inhibit time, 100 us units")
     args = ap.parse_args()

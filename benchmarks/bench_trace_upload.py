@@ -241,7 +241,7 @@ def reliability(args: argparse.Namespace) -> int:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3, help="block uploads to time")
     ap.add_argument("--bitrate", type=int, default=1_000_000, help="emulated bit rate (bit/s)")
     ap.add_argument("--no-segmented", action="store_true", help="skip the slow segmented run")

@@ -17,11 +17,18 @@ from collections.abc import Sequence
 
 from dashboard.config import BenchConfig
 from drive_link.cli_connect import add_bus_arguments, bus_extras_from_args
+from drive_link.closed_pipe import run_quietly, silence_output
 
 __all__ = ["build_parser", "main"]
 
 
 class _Parser(argparse.ArgumentParser):
+    """One-line usage errors (exit 2); an option is spelled in full (no abbreviations)."""
+
+    def __init__(self, *a: object, **kw: object) -> None:
+        kw.setdefault("allow_abbrev", False)
+        super().__init__(*a, **kw)  # type: ignore[arg-type]
+
     def error(self, message: str) -> None:  # type: ignore[override]
         self.exit(2, f"{self.prog}: error: {message}\n")
 
@@ -92,9 +99,13 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _port_free(host: str, port: int) -> bool:
+    """Whether nothing listens on ``host:port``: the probe binds with SO_REUSEADDR, as uvicorn
+    and viser bind (asyncio's default on Unix), so the closed connections of the last run still
+    in TIME_WAIT (a browser was connected when Ctrl-C stopped it) do not count as busy."""
     if port == 0:
         return True
     with socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET) as s:
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         try:
             s.bind((host, port))
         except OSError:
@@ -109,6 +120,11 @@ def _no_startup_traceback(record: logging.LogRecord) -> bool:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``drive-dashboard``; a closed output pipe ends it quietly (status 141)."""
+    return run_quietly(lambda: _main(argv))
+
+
+def _main(argv: Sequence[str] | None) -> int:
     args = build_parser().parse_args(argv)
     nodes: tuple[int, ...] = ()
     if args.nodes is not None:
@@ -176,12 +192,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     def ready(app) -> None:
         gui = app.state.gui
         api = f"http://{_url_host(config.host)}:{config.api_port}"
-        print(f"open http://127.0.0.1:{gui.port}/", flush=True)
-        print(
-            f"  (REST API {api}/api/state, docs {api}/docs; bus: {app.state.bench.description}; "
-            "Ctrl-C stops)",
-            flush=True,
-        )
+        try:
+            print(f"open http://127.0.0.1:{gui.port}/", flush=True)
+            print(
+                f"  (REST API {api}/api/state, docs {api}/docs; bus: "
+                f"{app.state.bench.description}; Ctrl-C stops)",
+                flush=True,
+            )
+        except BrokenPipeError:  # `drive-dashboard | head -1`: the bench serves on, silently
+            silence_output()
 
     class _Server(uvicorn.Server):
         """Prints the URLs once the REST port listens: the lifespan's startup runs before

@@ -67,7 +67,9 @@ def take(out: Path, scene_3d: bool = True, settle_s: float = 0.2) -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m dashboard.screenshot", description=__doc__)
+    ap = argparse.ArgumentParser(
+        prog="python -m dashboard.screenshot", description=__doc__, allow_abbrev=False
+    )
     ap.add_argument("out", type=Path, help="PNG file to write (e.g. docs/bench.png)")
     ap.add_argument("--no-3d", action="store_true", help="without the 3D rotor view")
     args = ap.parse_args(argv)

@@ -35,13 +35,23 @@ from drive_link.metrics import step_metrics
 
 
 class UsageError(ValueError):
-    """Bad command-line input (reported as one line, exit status 2)."""
+    """Bad command-line input, reported as one line; ``code`` is its exit status from the
+    README's table: 7 for a value the command refuses (not a number, out of range, a design
+    that cannot be met, an unreadable file), 2 (:class:`_FormError`) for the command line's form."""
+
+    code = 7
+
+
+class _FormError(UsageError):
+    """A missing option or options that do not go together (exit status 2)."""
+
+    code = 2
 
 
 # --------------------------------------------------------------------------- helpers
 def _num(name: str, text: str | None, *, positive: bool = False, nonneg: bool = False) -> float:
     if text is None:
-        raise UsageError(f"{name} is required")
+        raise _FormError(f"{name} is required")
     try:
         v = float(text)
     except (TypeError, ValueError):
@@ -194,7 +204,7 @@ def _cmd_design(args: argparse.Namespace) -> int:
         k_i = _num("--ki", args.ki)
         if args.crossover_hz is not None or args.pm is not None:
             if args.controller != "pi":
-                raise UsageError("--crossover-hz/--pm design PI gains: use --controller pi")
+                raise _FormError("--crossover-hz/--pm design PI gains: use --controller pi")
             fc = _num("--crossover-hz", args.crossover_hz, positive=True)
             pm = _num("--pm", args.pm, positive=True)
             try:
@@ -219,7 +229,7 @@ def _cmd_design(args: argparse.Namespace) -> int:
             raise UsageError(str(exc)) from None
     except UsageError as exc:
         print(f"drive-link design: error: {exc}", file=sys.stderr)
-        return 2
+        return exc.code
     if args.json:
         print(json.dumps(_clean(result), indent=2))
         return 0
@@ -353,7 +363,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
             result.update({"xi": xi, "wn": wn, "kp": k_p, "ki": k_i})
     except UsageError as exc:
         print(f"drive-link identify: error: {exc}", file=sys.stderr)
-        return 2
+        return exc.code
     if args.json:
         print(json.dumps(_clean(result), indent=2))
         return 0
@@ -400,6 +410,7 @@ def add_parsers(subparsers: argparse._SubParsersAction) -> None:  # type: ignore
     """Register the ``design`` and ``identify`` sub-commands; each sets ``func``."""
     d = subparsers.add_parser(
         "design",
+        allow_abbrev=False,
         help="current-loop stability/margins/step prediction, PI or IP gain design",
         description=(
             "Analyse a current loop (deadbeat eq. 15, PI eq. 22, predictive eq. 23) for motor "
@@ -430,6 +441,7 @@ def add_parsers(subparsers: argparse._SubParsersAction) -> None:  # type: ignore
 
     i = subparsers.add_parser(
         "identify",
+        allow_abbrev=False,
         help="least-squares speed model b/(z - a) from a current-step trace CSV",
         description=(
             "Fit w[k+1] = a w[k] + b i_p[k] (+ offset) to a CSV with columns t, i_p, speed "
@@ -451,7 +463,7 @@ def add_parsers(subparsers: argparse._SubParsersAction) -> None:  # type: ignore
 
 def run_cli(argv: Sequence[str] | None = None) -> int:
     """Run ``design``/``identify`` as ``drive-link`` would; returns the exit status."""
-    parser = argparse.ArgumentParser(prog="drive-link")
+    parser = argparse.ArgumentParser(prog="drive-link", allow_abbrev=False)
     sub = parser.add_subparsers(dest="command", required=True)
     add_parsers(sub)
     try:

@@ -56,7 +56,9 @@ def register_tools(sub: argparse._SubParsersAction, bus: argparse.ArgumentParser
     """
 
     def add(name: str, fn: Any, help: str, needs_drive: bool = True) -> argparse.ArgumentParser:
-        p = sub.add_parser(name, parents=[bus], help=help, description=help)
+        p = sub.add_parser(
+            name, parents=[bus], help=help, description=help, allow_abbrev=False
+        )
         p.set_defaults(func=fn, needs_drive=needs_drive)
         return p
 

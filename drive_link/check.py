@@ -1,9 +1,12 @@
 """``drive-link check``: a conformance run against any node (DSP or virtual drive).
 
 Each item exercises what the object dictionary (docs/contracts.md §1), CiA 301 and CiA 402
-promise and reports pass/fail with a one-line detail. Items leave the drive disabled, in
-OPERATIONAL, with the parameters they touched restored; "store_restore" rewrites the drive's
-stored parameters (skip it with ``--skip store_restore`` on a tuned drive).
+promise and reports pass/fail with a one-line detail, or "not applicable" where the drive lacks
+what it tests (``store_restore`` on a drive without a parameter store; it does not fail the
+run). Items leave the drive disabled, in OPERATIONAL, with the parameters they touched restored;
+"store_restore" rewrites the drive's stored parameters (skip it with ``--skip store_restore`` on
+a tuned drive). The last item, ``as_found``, checks that the run left the error code, error
+register, error history and communication objects as it found them (``_check_found``).
 
 Items that reset the node's communication (:data:`RESETS`: NMT reset communication or reset
 node) put the communication objects back as the run found them, while the node is still
@@ -29,13 +32,13 @@ from firmware_protocol import abort_codes, emcy_codes
 from firmware_protocol.enums import StoreStatus
 from firmware_protocol.index_ranges import COMMUNICATION, SIMULATION
 
-from . import cia402
+from . import _check_found, cia402
 from ._nmt import HeartbeatProducer
 from .drive import Drive
 from .errors import DriveError, DriveTimeout, SdoAbort
 from .trace import TS as TRACE_TS
 
-__all__ = ["ITEMS", "CheckFailed", "CheckResult", "run_checks"]
+__all__ = ["ITEMS", "CheckFailed", "CheckResult", "NotApplicable", "run_checks"]
 
 DEVICE_TYPE_402_SERVO = 0x00020192
 
@@ -57,14 +60,25 @@ class CheckFailed(Exception):  # noqa: N818
     """An item's expectation was not met (message = the one-line reason)."""
 
 
+class NotApplicable(Exception):  # noqa: N818
+    """The drive lacks what an item tests, by its own account (message = why and the fix): a
+    verdict of its own that does not fail the run."""
+
+
+#: :attr:`CheckResult.verdict` values.
+PASS, FAIL, NOT_APPLICABLE = "pass", "fail", "not applicable"
+
+
 @dataclass
 class CheckResult:
-    """``name``, ``ok``, ``detail`` (one line), ``seconds`` taken."""
+    """``name``, ``ok`` (false only for a failure), ``detail`` (one line), ``seconds`` taken,
+    ``verdict`` ("pass", "fail" or "not applicable")."""
 
     name: str
     ok: bool
     detail: str
     seconds: float
+    verdict: str = PASS
 
 
 def _expect(cond: bool, msg: str) -> None:
@@ -483,16 +497,44 @@ def _put_back_comm(d: Drive, opts: dict) -> int:
     return differ
 
 
+#: Why store_restore does not apply (the item's verdict "not applicable").
+NO_STORE = (
+    "not applicable: the drive has no parameter store (start `virtual-drive` with `--store FILE`)"
+)
+#: SDO aborts of a "save" command by a drive that cannot store (CiA 301 0x08000020/21).
+ABORT_NO_STORE = (abort_codes.STORE, abort_codes.LOCAL_CONTROL)
+
+
+def _has_store(d: Drive) -> None:
+    """:class:`NotApplicable` when the drive says it has no parameter store: 0x1010:1 bit 0
+    clear (CiA 301: does not save on command), or a "save" of the present values refused with
+    abort 0x08000020/0x08000021 while no stored set exists (0x2060 not "ok"). A drive that has
+    stored parameters and refuses to save fails the item; any other abort fails it too."""
+    if not int(d.read("store_parameters.save_all")) & 1:
+        raise NotApplicable(f"{NO_STORE}; 0x1010:1 bit 0 = 0 (does not save on command)")
+    try:
+        d.store()  # the present values: what the item stores again at its end
+    except SdoAbort as exc:
+        status = d.store_status()
+        if exc.code in ABORT_NO_STORE and status != "ok":
+            raise NotApplicable(
+                f"{NO_STORE}; save refused with 0x{exc.code:08X}, store_status {status}"
+            ) from None
+        raise
+
+
 def item_store_restore(d: Drive, opts: dict) -> str:
     """0x1010 save survives reset node; 0x1011 restore applies defaults after reset node.
     The drive is then put back as found (every stored object rewritten as it was, stored
-    again), so a tuned drive keeps its gains and PDO settings."""
+    again), so a tuned drive keeps its gains and PDO settings. Not applicable (a verdict of
+    its own, see :func:`_has_store`) on a drive without a parameter store."""
     name = "current_controller.R_c"
     orig = float(d.read(name))
     default = float(d.table[name].default or 0)
     v2 = _f32(orig * 0.9 + 1e-4)
     v3 = _f32(orig * 0.8 + 2e-4)
     _to_switch_on_disabled(d)
+    _has_store(d)  # before anything is changed
     snapshot = _persistent_snapshot(d)
     failed: list[str] = []
     try:
@@ -697,11 +739,28 @@ def item_heartbeat_consumer(d: Drive, opts: dict) -> str:
             state != cia402.OPERATION_ENABLED, "drive still OPERATION ENABLED after heartbeat loss"
         )
     finally:
-        if not stopped:
-            prod.stop()
+        if stopped:  # the heartbeat comes back, so the drive clears its 0x8130 error itself
+            prod = HeartbeatProducer(d.bus, 0x7E, period)
+            _wait_error_cleared(d, HEARTBEAT_LOSS, CONSUMER_MS / 1000 + 2.0)
+        prod.stop()
         d.write("consumer_heartbeat_time.consumer_1", 0)
         _to_switch_on_disabled(d)
     return f"EMCY 0x{HEARTBEAT_LOSS:04X} and reaction to {state} after heartbeat loss"
+
+
+def _wait_error_cleared(d: Drive, code: int, timeout: float) -> None:
+    """Wait up to ``timeout`` s until the drive's error code (0x603F) is no longer ``code``
+    (a fault it caused is reset as well); the "as_found" item reports what is left."""
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        try:
+            if int(d.read("error_code")) != code:
+                return
+            if d.state in (cia402.FAULT, cia402.FAULT_REACTION_ACTIVE):
+                d.fault_reset()
+        except DriveError:
+            pass
+        time.sleep(0.05)
 
 
 # --------------------------------------------------------------------------- issue 10 items
@@ -1066,6 +1125,7 @@ ITEMS: dict[str, Callable[[Drive, dict], str]] = {
     "cob_id_validation": item_cob_id_validation,
     "config_only": item_config_only,
     "store_status": item_store_status,
+    "as_found": _check_found.item_as_found,  # last: what the others left behind
 }
 
 
@@ -1083,26 +1143,37 @@ def run_checks(
         raise ValueError(f"unknown check item(s) {', '.join(unknown)}; items: {', '.join(ITEMS)}")
     results = []
     opts = dict(opts)
-    if any(n in RESETS for n in names):
+    if any(n in RESETS for n in names) or "as_found" in names:
         try:  # what a reset of the communication reverts, as found (see the module doc)
             opts[FOUND] = _persistent_snapshot(drive, COMM_AREA)
         except DriveError:
             opts[FOUND] = {}  # the items report the drive's silence themselves
+    try:  # the error state, left as found at the end (drive_link._check_found)
+        opts[_check_found.ERRORS] = _check_found.take(drive)
+    except DriveError:
+        pass
     for n in names:
         t0 = time.monotonic()
+        verdict = PASS
         try:
             detail = ITEMS[n](drive, opts)
             ok = True
+        except NotApplicable as exc:
+            ok, detail, verdict = True, str(exc), NOT_APPLICABLE
         except (CheckFailed, DriveError) as exc:
             ok, detail = False, str(exc)
         except Exception as exc:  # an item must not stop the run
             ok, detail = False, f"{type(exc).__name__}: {exc}"
-        r = CheckResult(n, ok, detail, time.monotonic() - t0)
+        if not ok:
+            verdict = FAIL
+        r = CheckResult(n, ok, detail, time.monotonic() - t0, verdict)
         results.append(r)
         if on_result:
             on_result(r)
     try:
         drive.write("controlword", cia402.CW_DISABLE_VOLTAGE)
+        if "as_found" not in names:
+            _check_found.settle(drive, opts.get(_check_found.ERRORS))
     except DriveError:
         pass
     return results

@@ -6,8 +6,9 @@ loopback hub; unset = python-can config/env), --node and --json. Values take uni
 that unit. Every failure is one line on stderr (with --json: {"error": ..., "exit_code": N} on
 stdout) and a non-zero exit code:
 
-1 drive refused / failed check, 2 usage, 3 bus error, 4 node not found, 5 timeout,
-6 SDO abort, 7 invalid value, 8 unsafe gains refused (use --force), 130 interrupted.
+1 drive refused / failed check, 2 usage, 3 bus error, 4 node not found (``scan``: none), 5 timeout,
+6 SDO abort, 7 invalid value (an option's too), 8 unsafe gains refused (use --force), 130
+interrupted, 141 the reader closed the output pipe (quietly, as other Unix tools).
 """
 
 from __future__ import annotations
@@ -35,6 +36,7 @@ from .cli_connect import (
     bus_settings_from_args,
     connect_from_args,
 )
+from .closed_pipe import run_quietly
 from .drive import GAIN_FIELDS, Drive
 from .errors import (
     BusError,
@@ -44,6 +46,7 @@ from .errors import (
     NodeNotFound,
     SdoAbort,
     StateError,
+    UnknownObject,
 )
 from .restore import leave_as_found
 
@@ -63,8 +66,10 @@ EXIT_CODES: list[tuple[type[BaseException], int]] = [
     (DriveTimeout, 5),
     (SdoAbort, 6),
     (InvalidValue, 7),
+    (UnknownObject, 7),  # an object name or index the dictionary does not have
     (DriveError, 1),
 ]
+EXIT_INVALID = 7
 EXIT_UNSAFE = 8
 
 
@@ -146,10 +151,15 @@ def cmd_scan(args: argparse.Namespace) -> int:
     from ._scan import scan
 
     conn = _connection.acquire(**bus_settings_from_args(args))  # --fd, --bus-kwargs ... too
+    listen = _timeout(args, 1.0)
     try:
-        nodes = scan(conn.bus, timeout=_timeout(args, 1.0))
+        nodes = scan(conn.bus, timeout=listen)
     finally:
         _connection.release(conn)
+    if not nodes:  # exit 4 "no node", as for a command whose node does not answer
+        raise NodeNotFound(
+            f"no node answered on the bus (SDO probe of 1..127, heartbeats for {listen:g} s)"
+        )
     data = [
         {
             "node_id": n.node_id,
@@ -161,8 +171,6 @@ def cmd_scan(args: argparse.Namespace) -> int:
     ]
 
     def text() -> str:
-        if not nodes:
-            return "no nodes found"
         lines = []
         for n in nodes:
             dt = (
@@ -597,9 +605,11 @@ def cmd_check(args: argparse.Namespace, d: Drive) -> int:
     only = args.only.split(",") if args.only else None
     skip = args.skip.split(",") if args.skip else None
 
+    label = {"pass": "PASS", "fail": "FAIL", "not applicable": "N/A "}
+
     def show(r: Any) -> None:
         if not args.json:
-            print(f"{'PASS' if r.ok else 'FAIL'}  {r.name:<20} {r.detail}", flush=True)
+            print(f"{label[r.verdict]}  {r.name:<20} {r.detail}", flush=True)
 
     try:
         results = run_checks(
@@ -608,18 +618,26 @@ def cmd_check(args: argparse.Namespace, d: Drive) -> int:
     except ValueError as exc:
         raise InvalidValue(str(exc)) from None
     failed = [r.name for r in results if not r.ok]
+    na = [r.name for r in results if r.verdict == "not applicable"]
     if args.json:
         print(
             json.dumps(
                 [
-                    {"name": r.name, "ok": r.ok, "detail": r.detail, "seconds": r.seconds}
+                    {
+                        "name": r.name,
+                        "ok": r.ok,
+                        "verdict": r.verdict,
+                        "detail": r.detail,
+                        "seconds": r.seconds,
+                    }
                     for r in results
                 ]
             )
         )
     else:
         print(
-            f"{len(results) - len(failed)}/{len(results)} passed"
+            f"{len(results) - len(failed) - len(na)}/{len(results) - len(na)} passed"
+            + (f"; not applicable: {', '.join(na)}" if na else "")
             + (f"; failed: {', '.join(failed)}" if failed else "")
         )
     return 1 if failed else 0
@@ -702,6 +720,7 @@ class _Parser(argparse.ArgumentParser):
     negative numbers (``-1e30``, ``-5A``, ``-inf``) taken as values, never as options."""
 
     def __init__(self, *a: Any, **kw: Any) -> None:
+        kw.setdefault("allow_abbrev", False)  # an option is spelled in full (sub-parsers too)
         super().__init__(*a, **kw)
         self._negative_number_matcher = re.compile(r"^-(\.?\d|inf|nan)", re.IGNORECASE)
 
@@ -712,12 +731,23 @@ class _Parser(argparse.ArgumentParser):
             return None
         return super()._parse_optional(arg_string)
 
+    def _get_value(self, action: argparse.Action, arg_string: str) -> Any:
+        # a value its type refuses (wrong unit, not a number, nan, not whole) is an invalid
+        # value (exit 7, as the same value given to `write`), not a usage error (2)
+        try:
+            return super()._get_value(action, arg_string)
+        except argparse.ArgumentError:
+            self._invalid_value = True
+            raise
+
     def error(self, message: str) -> NoReturn:
+        code = EXIT_INVALID if getattr(self, "_invalid_value", False) else 2
+        self._invalid_value = False  # the shell parses again with the same parser
         text = f"{message} (see {self.prog} --help)"
         if _JSON_ERRORS:
-            print(json.dumps({"error": text, "exit_code": 2}))
-            self.exit(2)
-        self.exit(2, f"{self.prog}: error: {text}\n")
+            print(json.dumps({"error": text, "exit_code": code}))
+            self.exit(code)
+        self.exit(code, f"{self.prog}: error: {text}\n")
 
 
 def quantity(unit: str, integer: bool = False) -> Callable[[str], float | int]:
@@ -773,11 +803,14 @@ def _timeout(args: argparse.Namespace, default: float) -> float:
 _TOP = "top_"  # dest prefix of the options given before the sub-command
 
 
-def _add_bus_options(p: argparse.ArgumentParser, prefix: str = "") -> None:
+def _add_bus_options(p: argparse.ArgumentParser, prefix: str = "", omit: tuple = ()) -> None:
     """The bus options on ``p`` with ``SUPPRESS`` defaults (an option not given leaves no
-    attribute, so the sub-command level cannot overwrite what was given before it)."""
+    attribute, so the sub-command level cannot overwrite what was given before it); ``omit``:
+    attribute names left out (see :func:`_bus_option_before_only`)."""
     g = p.add_argument_group("bus (unset = python-can config / CAN_* environment)")
     for flags, kw, _default in _bus_options():
+        if flags[0].lstrip("-").replace("-", "_") in omit:
+            continue
         dest = prefix + flags[0].lstrip("-").replace("-", "_")
         if kw.get("action") != "store_true":
             kw = {**kw, "metavar": flags[0].lstrip("-").replace("-", "_").upper()}
@@ -785,10 +818,29 @@ def _add_bus_options(p: argparse.ArgumentParser, prefix: str = "") -> None:
     add_hidden_aliases(g, prefix + "node")  # -n/--node-id
 
 
-def _bus_parent() -> argparse.ArgumentParser:
+def _bus_parent(omit: tuple = ()) -> argparse.ArgumentParser:
     p = _Parser(add_help=False)
-    _add_bus_options(p)
+    _add_bus_options(p, omit=omit)
     return p
+
+
+def _bus_option_before_only(p: argparse.ArgumentParser, name: str, own: str) -> None:
+    """Refuse bus option ``name`` after a sub-command whose own option ``own`` starts with its
+    spelling (``trace --channel i_p``, a typo of ``--channels``, must not pick a bus channel):
+    there it is a usage error naming both; before the sub-command it is the bus option."""
+    flags = next(f for f, _kw, _d in _bus_options() if f[0] == f"--{name}")
+
+    class _BeforeOnly(argparse.Action):
+        def __call__(self, parser: Any, namespace: Any, values: Any, option_string: Any = None):
+            parser.error(
+                f"{option_string} is a bus option: give it before the sub-command "
+                f"(drive-link {flags[0]} VALUE {parser.prog.split()[-1]} ...); did you mean {own}?"
+            )
+
+    p.add_argument(
+        *flags, action=_BeforeOnly, dest=argparse.SUPPRESS, default=argparse.SUPPRESS,
+        help=argparse.SUPPRESS,
+    )  # fmt: skip
 
 
 def _merge_bus(args: argparse.Namespace) -> None:
@@ -824,8 +876,9 @@ _EPILOG = """\
 values take units (20uH, 50A, 1000rpm, '-5 A'); a bare number is in the object's unit
 (drive-link objects PATTERN lists names, index:sub, type, unit, limits, access).
 
-exit codes: 1 drive refused / failed check, 2 usage, 3 bus error, 4 node not found,
-5 timeout, 6 SDO abort, 7 invalid value, 8 unsafe gains refused (use --force), 130 interrupted.
+exit codes: 1 drive refused / failed check, 2 usage, 3 bus error, 4 node not found (scan:
+none), 5 timeout, 6 SDO abort, 7 invalid value (wrong unit, not a number, out of limits, unknown
+object), 8 unsafe gains refused (use --force), 130 interrupted, 141 output pipe closed.
 """
 
 
@@ -843,10 +896,12 @@ def build_parser() -> argparse.ArgumentParser:
     sub = ap.add_subparsers(dest="cmd", metavar="COMMAND", required=True)
 
     def add(
-        name: str, fn: Callable, help: str, needs_drive: bool = True
+        name: str, fn: Callable, help: str, needs_drive: bool = True, omit_bus: tuple = ()
     ) -> argparse.ArgumentParser:
-        p = sub.add_parser(name, parents=[bus], help=help, description=help, epilog=_EPILOG,
-                           formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
+        parent = _bus_parent(omit_bus) if omit_bus else bus
+        p = sub.add_parser(name, parents=[parent], help=help, description=help, epilog=_EPILOG,
+                           formatter_class=argparse.RawDescriptionHelpFormatter,
+                           allow_abbrev=False)  # fmt: skip
         p.set_defaults(func=fn, needs_drive=needs_drive)
         return p
 
@@ -951,8 +1006,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--seconds", type=quantity("s"), default=1.0, help="how long to listen, s (default 1)"
     )
-    p = add("trace", cmd_trace, "capture a trace with the drive's recorder")
+    p = add("trace", cmd_trace, "capture a trace with the drive's recorder", omit_bus=("channel",))
     p.add_argument("--channels", default="i_p,i_p_ref", help="comma-separated (measurements names)")
+    _bus_option_before_only(p, "channel", "--channels")
     p.add_argument(
         "--divider", type=int, default=1, help="loop samples (20 µs each) per trace sample"
     )
@@ -1149,7 +1205,7 @@ def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     _JSON_ERRORS = "--json" in argv
     try:
-        return _main(argv)
+        return run_quietly(lambda: _main(argv))  # `drive-link objects | head -1`: quiet end
     finally:
         _JSON_ERRORS = False
 
@@ -1184,6 +1240,8 @@ def _main(argv: list[str]) -> int:
         return _fail(args, msg, 1)
     except KeyboardInterrupt:
         return _fail(args, "interrupted", 130, prefix="")
+    except BrokenPipeError:  # the reader of our output is gone: main() ends quietly
+        raise
     except (ValueError, OSError) as exc:
         return _fail(args, str(exc), 1)
     finally:

@@ -75,7 +75,7 @@ _SHORT_HELP = {
 
 def _python_can_options() -> list[Option]:
     """python-can's bus options as :func:`can.cli.add_bus_arguments` defines them."""
-    scratch = argparse.ArgumentParser(add_help=False)
+    scratch = argparse.ArgumentParser(add_help=False, allow_abbrev=False)  # only read, never parses
     can.cli.add_bus_arguments(scratch)
     out: list[Option] = []
     for a in scratch._actions:

@@ -226,6 +226,31 @@ def _bus_kwargs(args: argparse.Namespace) -> dict[str, Any]:
     return bus_settings(args)
 
 
+def _wait_for_ctrl_c(done: threading.Event, stop: threading.Event) -> bool:
+    """Wait until the recorder is ``done``; Ctrl-C sets ``stop`` (then it has 15 s to close the
+    file). Returns whether Ctrl-C was pressed.
+
+    The main thread only sleeps and reads ``done.is_set()`` (no lock) while a Ctrl-C may come:
+    a KeyboardInterrupt raised inside ``Event.wait`` right after its ``with`` took the
+    condition's lock leaves that lock held (CPython bpo-29988), and the next wait, or the
+    recorder's ``done.set()``, then blocks for ever (a test that interrupted the recording hung
+    until its 180 s timeout on a loaded host). A Ctrl-C anywhere in the loop is caught."""
+    interrupted = False
+    deadline = None  # after the stop: how long the recorder may take to close the file
+    while True:
+        try:
+            while not done.is_set():
+                if interrupted and deadline is None:
+                    stop.set()
+                    deadline = time.monotonic() + 15.0
+                if deadline is not None and time.monotonic() > deadline:
+                    raise DriveError("the recorder did not close the file within 15 s")
+                time.sleep(0.05)
+            return interrupted
+        except KeyboardInterrupt:  # Ctrl-C ends the recording, not the command
+            interrupted = True
+
+
 def cmd_record(args: argparse.Namespace) -> int:
     """``drive-link record FILE [--seconds S]``: until S s have passed or Ctrl-C."""
 
@@ -289,18 +314,7 @@ def _wait_and_report(
         import sys
 
         print(f"recording to {args.file} … Ctrl-C to stop", file=sys.stderr, flush=True)
-    interrupted = False
-    deadline = None  # after the stop: how long the recorder may take to close the file
-    while not done.is_set():
-        try:
-            done.wait(0.2)
-        except KeyboardInterrupt:  # Ctrl-C ends the recording, not the command
-            interrupted = True
-        if interrupted and deadline is None:
-            stop.set()
-            deadline = time.monotonic() + 15.0
-        if deadline is not None and time.monotonic() > deadline:
-            raise DriveError("the recorder did not close the file within 15 s")
+    interrupted = _wait_for_ctrl_c(done, stop)
     if "error" in box:
         raise box["error"]
     stats = box["stats"]

@@ -44,6 +44,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``python -m firmware_protocol.generate``; returns the exit status."""
     parser = argparse.ArgumentParser(
         prog="python -m firmware_protocol.generate",
+        allow_abbrev=False,
         description="Regenerate bldc_drive_od.h and OD.md from the EDS.",
     )
     parser.add_argument("--check", action="store_true", help="exit 1 if a file drifted")

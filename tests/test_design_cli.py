@@ -110,26 +110,26 @@ def test_design_text_output(capsys):
 
 
 @pytest.mark.parametrize(
-    "argv",
+    ("argv", "code"),  # README exit-code table: 7 a value refused, 2 the command line's form
     [
-        ["design", "--L", "-1e-6"],
-        ["design", "--L", "nan"],
-        ["design", "--fs", "0"],
-        ["design", "--R", "abc"],
-        ["design", "--Lc", "-2e-6"],
-        ["design", "--controller", "pi", "--crossover-hz", "20000", "--pm", "80"],
-        ["design", "--a", "1.2", "--b", "3e-4"],
-        ["design", "--a", "0.99998"],
-        ["design", "--a", "0.99998", "--b", "3e-4", "--wn", "-1"],
-        ["design", "--step-from", "5", "--step-to", "5"],
-        ["design", "--L", "-1"],
-        ["design", "--controller", "bang-bang"],
-        ["design", "--L"],
-        ["design", "--samples", "3"],
+        (["design", "--L", "-1e-6"], 7),
+        (["design", "--L", "nan"], 7),
+        (["design", "--fs", "0"], 7),
+        (["design", "--R", "abc"], 7),
+        (["design", "--Lc", "-2e-6"], 7),
+        (["design", "--controller", "pi", "--crossover-hz", "20000", "--pm", "80"], 7),
+        (["design", "--a", "1.2", "--b", "3e-4"], 7),
+        (["design", "--a", "0.99998"], 2),
+        (["design", "--a", "0.99998", "--b", "3e-4", "--wn", "-1"], 7),
+        (["design", "--step-from", "5", "--step-to", "5"], 7),
+        (["design", "--L", "-1"], 7),
+        (["design", "--controller", "bang-bang"], 2),
+        (["design", "--L"], 2),
+        (["design", "--samples", "3"], 7),
     ],
 )
-def test_design_bad_input_one_line_exit_2(capsys, argv):
-    assert run_cli(argv) == 2
+def test_design_bad_input_one_line_exit_code(capsys, argv, code):
+    assert run_cli(argv) == code
     out, err = capsys.readouterr()
     assert out == ""
     assert len(err.strip().splitlines()) == 1
@@ -193,10 +193,10 @@ def test_identify_trace_capture_format_with_ip_gains(tmp_path, capsys):
         ("t,i_p,speed\n0,1,2\n0,1,2\n0,1,2\n0,1,2\n0,1,2\n", "increasing"),
     ],
 )
-def test_identify_bad_csv_one_line_exit_2(tmp_path, capsys, content, match):
+def test_identify_bad_csv_one_line_exit_7(tmp_path, capsys, content, match):
     f = tmp_path / "bad.csv"
     f.write_text(content)
-    assert run_cli(["identify", "--csv", str(f)]) == 2
+    assert run_cli(["identify", "--csv", str(f)]) == 7  # invalid value
     out, err = capsys.readouterr()
     assert out == ""
     assert len(err.strip().splitlines()) == 1
@@ -204,7 +204,7 @@ def test_identify_bad_csv_one_line_exit_2(tmp_path, capsys, content, match):
 
 
 def test_identify_missing_file(tmp_path, capsys):
-    assert run_cli(["identify", "--csv", str(tmp_path / "nope.csv")]) == 2
+    assert run_cli(["identify", "--csv", str(tmp_path / "nope.csv")]) == 7
     assert "cannot read" in capsys.readouterr().err
 
 
@@ -230,7 +230,7 @@ def test_console_script(tmp_path):
         timeout=60,
         check=False,
     )
-    assert bad.returncode == 2
+    assert bad.returncode == 7  # invalid value (README's exit-code table)
     assert len(bad.stderr.strip().splitlines()) == 1
     f = tmp_path / "trace.csv"
     _write_trace(f, D=50, n=1200)

@@ -54,7 +54,7 @@ def test_issue_case_xi_half_wn_one_is_refused(capsys):
         design.ip_gains(A, B, 0.5, 1.0)
     rc = run_cli(["design", "--a", str(A), "--b", str(B), "--xi", "0.5", "--wn", "1"])
     out, err = capsys.readouterr()
-    assert rc == 2 and out == ""
+    assert rc == 7 and out == ""  # an invalid value (README's exit-code table)
     assert err.count("\n") == 1 and "xi * omega_n > 0.5375" in err
 
 

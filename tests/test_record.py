@@ -205,7 +205,7 @@ def test_bad_input_one_line_nothing_written(hub_drive, tmp_path):
         assert rc == 7 and "asammdf" in err and err.count("\n") == 1
         assert not (tmp_path / "x.mf4").exists()
     rc, out, err = run_here(hub_drive, "record", str(tmp_path / "z.asc"), "--seconds", "inf")
-    assert rc == 2 and err.count("\n") == 1 and not (tmp_path / "z.asc").exists()  # usage
+    assert rc == 7 and err.count("\n") == 1 and not (tmp_path / "z.asc").exists()  # value
     # no hub there: bus error (3), no file
     rc = cli.main(["record", str(tmp_path / "y.asc"), "--host", "127.0.0.1", "--port", "1"])
     assert rc == 3 and not (tmp_path / "y.asc").exists()

@@ -141,7 +141,7 @@ def measure(repeats: int = 5, rpm: float = 1500.0) -> dict[str, Timing]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(allow_abbrev=False, description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=7, help="1-s chunks per kernel (best is kept)")
     args = ap.parse_args(argv)
     if args.repeats < 1:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 from collections.abc import Sequence
 
@@ -19,7 +20,12 @@ _SUBCOMMANDS: tuple[str, ...] = ("virtual_drive.node.cli_run", "virtual_drive.hu
 
 
 class _OneLineErrorParser(argparse.ArgumentParser):
-    """Reports bad arguments as one line on stderr and exit status 2."""
+    """Reports bad arguments as one line on stderr and exit status 2; no abbreviated options
+    (the sub-parsers are of this class too)."""
+
+    def __init__(self, *a: object, **kw: object) -> None:
+        kw.setdefault("allow_abbrev", False)
+        super().__init__(*a, **kw)  # type: ignore[arg-type]
 
     def error(self, message: str) -> None:  # type: ignore[override]
         self.exit(2, f"{self.prog}: error: {message}\n")
@@ -37,8 +43,27 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: Exit status after the reader closed the output pipe (128 + SIGPIPE, as for other tools).
+EXIT_CLOSED_PIPE = 141
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of ``virtual-drive``; returns the process exit status."""
+    """Entry point of ``virtual-drive``; returns the process exit status. A reader that closes
+    the output pipe (``virtual-drive --hub | head -1``) ends it quietly: no traceback, stdout and
+    stderr pointed at /dev/null, status 141 (drive_link.closed_pipe does the same for
+    ``drive-link``; this package does not import it)."""
+    try:
+        rc = _main(argv)
+        sys.stdout.flush()
+        return rc
+    except BrokenPipeError:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        for stream in (sys.stdout, sys.stderr):
+            os.dup2(devnull, stream.fileno())
+        return EXIT_CLOSED_PIPE
+
+
+def _main(argv: Sequence[str] | None) -> int:
     parser = build_parser()
     argv = list(sys.argv[1:] if argv is None else argv)
     if not argv or (argv[0].startswith("-") and argv[0] not in ("-h", "--help")):

@@ -21,6 +21,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     """Register the ``hub`` sub-command on a ``virtual-drive`` argparse sub-parser set."""
     p = subparsers.add_parser(
         "hub",
+        allow_abbrev=False,
         help="run the loopback CAN hub (socketcand rawmode on 127.0.0.1)",
         description="Loopback CAN hub: processes join it with python-can's socketcand "
         "interface. Binds 127.0.0.1 only. Stop with Ctrl-C or SIGTERM.",

@@ -220,7 +220,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     UML, print its output, exit with its status (or 3 and one line if UML could not run it)."""
     import argparse
 
-    ap = argparse.ArgumentParser(prog="tests/uml/runner.py", description=__doc__.split("\n\n")[0])
+    ap = argparse.ArgumentParser(
+        prog="tests/uml/runner.py", description=__doc__.split("\n\n")[0], allow_abbrev=False
+    )
     ap.add_argument("--timeout", type=float, default=300.0, help="wall-time limit, s")
     ap.add_argument("-e", "--env", action="append", default=[], help="NAME=VALUE for the job")
     ap.add_argument("--result", help="also write the result as JSON to this file")

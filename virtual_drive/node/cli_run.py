@@ -56,6 +56,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     """Register the ``run`` sub-command."""
     p = subparsers.add_parser(
         "run",
+        allow_abbrev=False,
         help="run the virtual drive as a CANopen CiA 402 node (default command)",
         description="Run the simulated drive paced to wall-clock time as a CANopen node on a "
         "python-can bus. Bus options not given come from python-can's config/environment.",
