@@ -173,7 +173,7 @@ class _Feed(can.Listener):
 
 
 def cmd_monitor(args: argparse.Namespace) -> int:
-    """``drive-link monitor [--nodes 1,2] [--ids 0x181,0x700-0x77F] [--seconds S]``."""
+    """``drive-link monitor [--show-nodes 1,2] [--ids 0x181,0x700-0x77F] [--seconds S]``."""
     from ._cli_tools import bus_settings
     from .bus import open_bus
     from .cli import _emit
@@ -185,7 +185,7 @@ def cmd_monitor(args: argparse.Namespace) -> int:
             try:
                 nodes.add(int(part, 0))
             except ValueError:
-                raise InvalidValue(f"--nodes {args.nodes!r}: node-IDs like 1,2") from None
+                raise InvalidValue(f"--show-nodes {args.nodes!r}: node-IDs like 1,2") from None
     keep = IdFilter(nodes, parse_ids(args.ids) if args.ids else None)
     if args.seconds is not None and not 0 < args.seconds < 1e7:
         raise InvalidValue(f"--seconds {args.seconds}: must be a number of seconds > 0")
@@ -252,7 +252,9 @@ def add_parser(sub: argparse._SubParsersAction, bus: argparse.ArgumentParser) ->
     )
     p = sub.add_parser("monitor", parents=[bus], help=text, description=text)
     p.set_defaults(func=cmd_monitor, needs_drive=False)
-    p.add_argument("--nodes", default=None, metavar="IDS", help="only these nodes, e.g. 1,2")
+    p.add_argument(
+        "--show-nodes", dest="nodes", default=None, metavar="IDS", help="only these nodes, e.g. 1,2"
+    )
     p.add_argument(
         "--ids", default=None, metavar="IDS", help="only these CAN-IDs, e.g. 0x181,0x700-0x77F"
     )

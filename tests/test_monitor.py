@@ -91,9 +91,9 @@ def test_monitor_decodes_raw_frames_as_the_eds_says(hub):
         time.sleep(0.05)
         tx.send(_msg(0x280 + N, struct.pack("<ff", -7.25, 1000.0)))
 
-    res = _run_monitor(hub.port, send, "--nodes", str(N))
+    res = _run_monitor(hub.port, send, "--show-nodes", str(N))
     rows = {r["id"]: r for r in res["rows"]}
-    assert f"0x{0x704:03X}" not in rows  # --nodes 3
+    assert f"0x{0x704:03X}" not in rows  # --show-nodes 3
     assert rows["0x000"]["text"] == f"start node {N}"
     hb = rows[f"0x{0x700 + N:03X}"]
     assert hb["text"] == "PRE-OPERATIONAL" and hb["count"] == 10 and hb["kind"] == "heartbeat"
