@@ -9,8 +9,14 @@ started by tests/conftest.py right after collection); this test is ordered last 
 ``SOCKETCAN_LANE=quick`` runs only :data:`QUICK` inside UML; ``SOCKETCAN_LANE=off`` leaves the
 lane out on purpose (reported as skipped).
 
+The kernel is the system's UML, or Debian sid's where that does not boot (tests/uml/kernels.py;
+``SOCKETCAN_LANE_KERNEL=system|sid`` forces one); the run's summary names it in one line
+(``SocketCAN lane in UML 6.1.176 (system, /usr/bin/linux.uml): 14 passed ...``, printed by
+tests/conftest.py from this test's ``socketcan_lane`` property).
+
 Where UML cannot run (package missing, boot or set-up failure, time limit) the test fails with one
-line saying so: a lane that cannot run must not pass quietly.
+line saying so (a kernel that does not boot: the cause from its console): a lane that cannot run
+must not pass quietly.
 """
 
 from __future__ import annotations
