@@ -75,7 +75,8 @@ class UmlResult:
     the end), ``output`` (its stdout + stderr), ``problem`` (one line, None when the job ran),
     ``console`` (the kernel console: boot messages), ``setup`` (init.sh's log), ``seconds``
     (wall time of the whole boot-run-poweroff), ``kernel`` (the kernel that ran: version and
-    where it came from, see :class:`kernels.Kernel`; empty when none was found)."""
+    where it came from, see :class:`kernels.Kernel`; empty when none was found), ``booted``
+    (False when the kernel stopped before PID 1 ran: the sign for trying Debian sid's)."""
 
     rc: int | None
     output: str
