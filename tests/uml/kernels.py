@@ -177,7 +177,8 @@ def _cached(root: Path) -> Kernel | None:
         return None
     _, k, binary, d = max(found, key=lambda f: f[0])
     libc = k.get("packages", {}).get("libc6", "?")
-    origin = f"Debian sid user-mode-linux {k['package']} with libc6 {libc}, fetched to {d}"
+    when = str(k.get("fetched", ""))[:10]
+    origin = f"Debian sid user-mode-linux {k['package']} with libc6 {libc}, fetched {when} to {d}"
     return Kernel(str(binary), d / k["modules"], k["version"], origin)
 
 
