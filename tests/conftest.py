@@ -180,3 +180,13 @@ def pytest_collection_finish(session):
             mod = importlib.util.module_from_spec(spec)
             spec.loader.exec_module(mod)
         mod.start_lane()
+
+
+def pytest_terminal_summary(terminalreporter):
+    """The SocketCAN lane's own line (kernel, result, time, load: tests/test_socketcan_lane.py)
+    in the run's summary, so a CI log shows which kernel the lane ran, also when it passed."""
+    for reports in list(terminalreporter.stats.values()):
+        for rep in reports:
+            for name, value in getattr(rep, "user_properties", None) or ():
+                if name == "socketcan_lane" and getattr(rep, "when", "") == "call":
+                    terminalreporter.write_line(str(value))

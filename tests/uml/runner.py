@@ -15,13 +15,21 @@ Use::
     res.rc, res.output, res.problem
 
 ``problem`` is one line when UML could not run the job (package missing, boot or setup
-failure, timeout); then ``rc`` is None.
+failure, timeout); then ``rc`` is None. ``kernel`` names the kernel that ran (version and origin).
+
+Which kernel (``tests/uml/kernels.py``): the system's ``user-mode-linux``; where that does not boot
+(hosts whose CPU has AMX: ``userspace - ptrace set fp regs failed, errno = 14`` at the first user
+process), Debian sid's, fetched once into the user's cache without changing the system.
+``SOCKETCAN_LANE_KERNEL=system|sid`` forces one. A kernel that does not boot is told by the
+console (:func:`boot_failure`): the cause, never a stack frame.
 """
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import os
+import re
 import shlex
 import shutil
 import signal
@@ -36,9 +44,19 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent.parent
 INIT = HERE / "init.sh"
-#: UML kernel binary (Debian package ``user-mode-linux``; ``linux`` is a symlink to it).
-KERNELS = ("linux.uml", "linux")
-MODULES = Path("/usr/lib/uml/modules")
+
+
+def _load(name: str, path: Path):
+    if name not in sys.modules:  # loaded by path: this file also runs as a script
+        spec = importlib.util.spec_from_file_location(name, path)
+        assert spec and spec.loader
+        mod = importlib.util.module_from_spec(spec)
+        sys.modules[name] = mod
+        spec.loader.exec_module(mod)
+    return sys.modules[name]
+
+
+kernels = _load("uml_kernels", HERE / "kernels.py")
 #: TPDO1..4 event timers (ms) for drives inside UML (defaults 10, 1, 1, 10 ms): UML spends about
 #: 38 µs per system call and moves about 800 frames/s, the default streams are 2,200 frames/s.
 #: Given to the job as BENCH_TPDO_EVENT_TIMERS_MS (the scenario bench and vcan_checks apply it).
@@ -56,7 +74,9 @@ class UmlResult:
     """What a run inside UML gave: ``rc`` (the job's exit status, None if it did not run to
     the end), ``output`` (its stdout + stderr), ``problem`` (one line, None when the job ran),
     ``console`` (the kernel console: boot messages), ``setup`` (init.sh's log), ``seconds``
-    (wall time of the whole boot-run-poweroff)."""
+    (wall time of the whole boot-run-poweroff), ``kernel`` (the kernel that ran: version and
+    where it came from, see :class:`kernels.Kernel`; empty when none was found), ``booted``
+    (False when the kernel stopped before PID 1 ran: the sign for trying Debian sid's)."""
 
     rc: int | None
     output: str
@@ -64,24 +84,48 @@ class UmlResult:
     console: str
     setup: str
     seconds: float
+    kernel: str = ""
+    booted: bool = True
 
 
-def find_kernel() -> str | None:
-    """Path of the UML kernel, or None."""
-    for name in KERNELS:
-        path = shutil.which(name)
-        if path:
-            return path
-    return None
+#: A call-trace line of a kernel stack dump (``[<6069304e>] ? panic+0x0/0x376``): never a cause.
+_FRAME = re.compile(r"^\s*\[<[0-9a-fA-F]+>\]")
+#: The kernel's ``Run /path/init.sh as init process`` (what follows is what PID 1 met).
+_INIT = re.compile(r"^Run \S+ as init process")
+#: A host system call that failed, as UML reports it (``..., errno = 14``).
+_ERRNO = re.compile(r"\berrno\s*=\s*-?\d+")
+_PANIC = "Kernel panic"
+#: Bound of :func:`boot_failure`'s line.
+CAUSE_CHARS = 300
+
+
+def boot_failure(console: str) -> str:
+    """One line naming why the kernel stopped, from its console: the failure it reported (the
+    line with ``errno =``, else the last line after ``Run ... as init process``) and the panic
+    line, e.g. ``userspace - ptrace set fp regs failed, errno = 14; Kernel panic - not syncing:
+    Attempted to kill init! exitcode=0x0000000b``. Stack dumps and the argument/environment
+    listing of init (indented lines) are never the cause."""
+    lines = [ln.rstrip() for ln in console.splitlines() if ln.strip() and not _FRAME.match(ln)]
+    panic = next((i for i, ln in enumerate(lines) if _PANIC in ln), None)
+    before = lines if panic is None else lines[:panic]
+    init = max((i for i, ln in enumerate(before) if _INIT.match(ln)), default=None)
+    after_init = [] if init is None else [ln for ln in before[init + 1 :] if ln[:1] != " "]
+    errnos = [ln for ln in (after_init or before) if _ERRNO.search(ln)]
+    cause = (errnos or after_init)[-1:]
+    if panic is not None:
+        cause.append(lines[panic][lines[panic].index(_PANIC) :])
+    if not cause:
+        cause = lines[-1:] or ["no console output"]
+    text = "; ".join(ln.strip() for ln in cause)
+    return text if len(text) <= CAUSE_CHARS else text[: CAUSE_CHARS - 3] + "..."
 
 
 def unavailable() -> str | None:
-    """Why UML cannot run here (one line), or None if it should."""
-    kernel = find_kernel()
-    if kernel is None:
-        return "no User-Mode Linux kernel (linux.uml): apt-get install user-mode-linux"
-    if not MODULES.is_dir() or not any(MODULES.iterdir()):
-        return f"no UML kernel modules under {MODULES}: apt-get install user-mode-linux"
+    """Why UML cannot run here (one line) before any kernel is chosen, or None."""
+    try:
+        kernels.choice()
+    except kernels.KernelError as exc:
+        return str(exc)
     missing = [t for t in ("insmod", "ip", "tc") if shutil.which(t) is None]
     if missing:
         return f"missing {', '.join(missing)} (apt-get install kmod iproute2)"
@@ -105,13 +149,49 @@ def run_in_uml(
 ) -> UmlResult:
     """Boot UML, run ``argv`` (in ``cwd``, with ``env`` added to a small clean environment),
     power off; at most ``timeout`` s of wall time (then UML is killed). With ``watch_pid``, UML
-    is also killed as soon as that process is gone (the test run that wanted the result)."""
+    is also killed as soon as that process is gone (the test run that wanted the result).
+
+    The kernel: ``SOCKETCAN_LANE_KERNEL`` (see the module docstring). With ``auto``, a system
+    kernel that does not boot (PID 1 never ran) is followed by Debian sid's."""
     t0 = time.monotonic()
     why = unavailable()
     if why:
         return UmlResult(None, "", why, "", "", 0.0)
-    kernel = find_kernel()
-    assert kernel is not None
+    which = kernels.choice()
+    try:
+        k = kernels.sid_kernel() if which == "sid" else kernels.system_kernel()
+    except kernels.KernelError as exc:
+        return UmlResult(None, "", str(exc), "", "", time.monotonic() - t0)
+    res = _boot(k, argv, timeout, Path(cwd), env or {}, watch_pid)
+    if res.booted or which != "auto":
+        res.seconds = time.monotonic() - t0
+        return res
+    first = f"{k.label} did not boot: {boot_failure(res.console)}"
+    try:
+        sid = kernels.sid_kernel()
+    except kernels.KernelError as exc:
+        res.problem = f"{first}; Debian sid's UML cannot be had: {exc}"
+        res.seconds = time.monotonic() - t0
+        return res
+    left = timeout - (time.monotonic() - t0)
+    res = _boot(sid, argv, left, Path(cwd), env or {}, watch_pid)
+    res.kernel = f"{sid.label}; the system's {first}"
+    if not res.booted:
+        res.problem = f"no User-Mode Linux boots here: {first}; {res.problem}"
+    res.seconds = time.monotonic() - t0
+    return res
+
+
+def _boot(
+    k,
+    argv: Sequence[str],
+    timeout: float,
+    cwd: Path,
+    env: Mapping[str, str],
+    watch_pid: int | None,
+) -> UmlResult:
+    """One boot of kernel ``k`` (a :class:`kernels.Kernel`) running ``argv``."""
+    t0 = time.monotonic()
     base = {
         "PYTHONUNBUFFERED": "1",
         "PYTHONDONTWRITEBYTECODE": "1",
@@ -122,9 +202,9 @@ def run_in_uml(
     }
     with tempfile.TemporaryDirectory(prefix="uml-job-") as tmp:
         job = Path(tmp)
-        (job / "job.sh").write_text(_job_script(argv, Path(cwd), {**base, **(env or {})}))
+        (job / "job.sh").write_text(_job_script(argv, cwd, {**base, **env}))
         cmd = [
-            kernel,
+            k.path,
             f"mem={MEM}",
             "root=/dev/root",
             "rootfstype=hostfs",
@@ -134,7 +214,11 @@ def run_in_uml(
             "con=null",
             "con0=fd:0,fd:1",
             f"UML_JOB={job}",
+            f"UML_MODULES={k.modules}",
         ]
+        if any(" " in a for a in cmd):
+            problem = f"a path on UML's command line has a space: {' '.join(cmd)}"
+            return UmlResult(None, "", problem, "", "", 0.0, k.label)
         console_path = job / "console.txt"
         with open(console_path, "wb") as console:
             try:
@@ -148,7 +232,7 @@ def run_in_uml(
                     env={"PATH": os.environ.get("PATH", "/bin"), "HOME": tmp, "TMPDIR": tmp},
                 )
             except OSError as exc:
-                return UmlResult(None, "", f"cannot start {kernel}: {exc}", "", "", 0.0)
+                return UmlResult(None, "", f"cannot start {k.path}: {exc}", "", "", 0.0, k.label)
             timed_out = orphaned = False
             try:
                 deadline = time.monotonic() + timeout
@@ -174,6 +258,7 @@ def run_in_uml(
         console_text, setup, output = read("console.txt"), read("setup.log"), read("output.txt")
         rc_text = read("rc").strip()
     rc = int(rc_text) if rc_text.lstrip("-").isdigit() else None
+    booted = setup.startswith("uml-init: started")
     problem = None
     if orphaned:
         problem = f"the test run (pid {watch_pid}) ended before the lane; UML was killed"
@@ -186,11 +271,11 @@ def run_in_uml(
         problem = (lines[-1] if lines else "SocketCAN setup inside UML failed") + " (UML)"
         rc = None
     elif rc is None:
-        lines = [ln for ln in console_text.splitlines() if ln.strip()]
-        panic = [ln for ln in lines if "panic" in ln.lower()]
-        last = (panic or lines or ["no console output"])[-1]
-        problem = f"User-Mode Linux did not run the job (exit {proc.returncode}): {last[:200]}"
-    return UmlResult(rc, output, problem, console_text, setup, seconds)
+        what = "stopped before the job ended" if booted else "did not boot"
+        cause = boot_failure(console_text)
+        problem = f"{k.label} {what} (exit {proc.returncode}): {cause}"
+    booted = booted or timed_out or orphaned  # a boot still under way is not a boot failure
+    return UmlResult(rc, output, problem, console_text, setup, seconds, k.label, booted)
 
 
 def _alive(pid: int) -> bool:
@@ -237,14 +322,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.result:
         out = Path(args.result)
         tmp = out.with_suffix(".part")
-        fields = ("rc", "output", "problem", "seconds", "setup")
+        fields = ("rc", "output", "problem", "seconds", "setup", "kernel")
         tmp.write_text(json.dumps({k: getattr(res, k) for k in fields}))
         tmp.replace(out)  # atomic: a reader never sees half a file
     sys.stdout.write(res.output)
     if res.problem:
         print(f"socketcan-lane: {res.problem}", file=sys.stderr)
         return 3
-    print(f"socketcan-lane: exit {res.rc} after {res.seconds:.1f} s in UML", file=sys.stderr)
+    print(f"socketcan-lane: exit {res.rc} after {res.seconds:.1f} s", file=sys.stderr)
+    print(f"socketcan-lane: kernel {res.kernel}", file=sys.stderr)
     return int(res.rc or 0)
 
 
