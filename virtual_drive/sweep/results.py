@@ -92,7 +92,7 @@ class ResultStore:
                 csv.writer(fh).writerow(COLUMNS)
             return
         if tuple(header) != COLUMNS:
-            raise SpecError(f"{self.csv_path}: columns differ from this version's; use another --out")
+            raise SpecError(f"{self.csv_path}: columns of another version; use --out")
         for rec in reader:
             if len(rec) != len(COLUMNS):
                 continue
