@@ -55,7 +55,7 @@ def iter_dask(
         client.submit(run_batch, b, key=f"sweep-{tag}-{b[0].run}", pure=False) for b in batches
     ]
     try:
-        for fut in as_completed(futs):
+        for fut in as_completed(futs, loop=client.loop):
             yield fut.result()
     finally:
         client.cancel([f for f in futs if not f.done()])
