@@ -61,7 +61,7 @@ from virtual_drive.sweep.dcf import read_gain_set
 from virtual_drive.sweep.inputs import INPUTS, RATIOS, derived_k_e, k_rpm_of, nominal_inputs
 from virtual_drive.sweep.limits import resolve_limits
 from virtual_drive.sweep.scenarios import Scenario, parse_scenario
-from virtual_drive.sweep.units import SpecError, scale_to, to_si
+from virtual_drive.sweep.units import SpecError, clean, scale_to, to_si
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -337,7 +337,7 @@ def _param(name: str, v: Any) -> Param:
             return to_si(x, si, f"{where}.{what}")
         if isinstance(x, bool) or not isinstance(x, int | float) or not math.isfinite(x):
             raise SpecError(f"{where}.{what}: expected a number, got {x!r}")
-        return float(x) * factor
+        return clean(float(x) * factor)
 
     if "dist" in v:
         dist = v["dist"]

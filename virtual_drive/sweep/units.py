@@ -11,7 +11,12 @@ import math
 from functools import lru_cache
 from typing import Any
 
-__all__ = ["SpecError", "scale_to", "to_si"]
+__all__ = ["SpecError", "clean", "scale_to", "to_si"]
+
+
+def clean(v: float) -> float:
+    """``v`` to 15 significant digits: 10 uH is 1e-05 H, not 9.999999999999999e-06."""
+    return float(f"{v:.15g}")
 
 
 class SpecError(ValueError):
@@ -54,7 +59,7 @@ def to_si(value: Any, si: str, where: str) -> float:
             v = float(q)
         else:
             try:
-                v = float(q.to(si).magnitude)
+                v = clean(float(q.to(si).magnitude))
             except Exception as exc:
                 raise SpecError(f"{where}: {value!r} is not convertible to {si} ({exc})") from None
     else:
