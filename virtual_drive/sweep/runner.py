@@ -60,7 +60,7 @@ def build_simulator(inputs: dict[str, Any], model: str = "pwm") -> Simulator:
 
 def run_trace(job: RunJob) -> Trace:
     """The recorded response of ``job`` (for a plot of one run)."""
-    return simulate(build_simulator(job.inputs, job.model), job.scenario)
+    return simulate(build_simulator(job.inputs, job.model), job.scenario, job.inputs)
 
 
 def run_one(job: RunJob) -> dict[str, Any]:
@@ -84,9 +84,8 @@ def run_one(job: RunJob) -> dict[str, Any]:
         metrics["emcy"] = 0
         fails = [f"error: {error}"]
     else:
-        metrics = compute_metrics(
-            simulate(sim, job.scenario), job.scenario, job.band, job.inputs["current_limit"]
-        )
+        trace = simulate(sim, job.scenario, job.inputs)
+        metrics = compute_metrics(trace, job.scenario, job.band, job.inputs["current_limit"])
         fails = verdict(metrics, job.limits)
     row.update(metrics)
     row["passed"] = not fails

@@ -140,10 +140,11 @@ class Trace:
         return int(self.y.shape[0])
 
 
-def _steady_current(sim: Simulator, rpm: float, T_load: float) -> float:
-    """i_p (A) that holds ``rpm`` against the run's load: (B_tot w + T_load) / K_t."""
-    ld, m = sim.load, sim.motor
-    return (ld.B_tot * rpm / RPM_PER_RAD_S + T_load) / m.K_t
+def _steady_current(inputs: dict[str, Any], rpm: float, T_load: float) -> float:
+    """i_p (A) that holds ``rpm`` against the run's load: (B_tot w + T_load) / K_t, with
+    B_tot = B + k_gen (60 / 2 pi) (N m s/rad) and K_t = K_rpm (60 / 2 pi) (N m/A)."""
+    B_tot = inputs["B"] + inputs["k_gen"] * RPM_PER_RAD_S
+    return (B_tot * rpm / RPM_PER_RAD_S + T_load) / (inputs["K_rpm"] * RPM_PER_RAD_S)
 
 
 def _reference(sc: Scenario, n: int) -> np.ndarray:
@@ -173,16 +174,18 @@ def _events(sc: Scenario, r: np.ndarray) -> list[int]:
     return [k_at] if 0 <= k_at < n else []
 
 
-def simulate(sim: Simulator, sc: Scenario) -> Trace:
-    """Run ``sc`` on ``sim`` (fresh, parameters set) and return the :class:`Trace`."""
+def simulate(sim: Simulator, sc: Scenario, inputs: dict[str, Any]) -> Trace:
+    """Run ``sc`` on ``sim`` (fresh, built from ``inputs``: the run's B, k_gen, K_rpm,
+    T_load are read from there) and return the :class:`Trace`."""
     n = max(1, round(sc.duration / Ts))
     k_event = min(round(sc.at / Ts), n - 1)
     r = _reference(sc, n)
-    T0 = sc.initial if sc.kind == "load_step" else sim.load.T_load
+    T0 = sc.initial if sc.kind == "load_step" else inputs["T_load"]
     sim.set_speed(sc.speed)
-    sim.set_load(T_load=T0)
+    if T0 != inputs["T_load"]:
+        sim.set_load(T_load=T0)
     speed_mode = sc.kind != "current_step"
-    i0 = sc.initial if sc.kind == "current_step" else _steady_current(sim, sc.speed, T0)
+    i0 = sc.initial if sc.kind == "current_step" else _steady_current(inputs, sc.speed, T0)
     sim.set_mode("current")
     sim.set_current_ref(max(-1000.0, min(1000.0, i0)))
     n_settle = round(sc.settle / Ts)
@@ -192,7 +195,7 @@ def simulate(sim: Simulator, sc: Scenario) -> Trace:
         sim.set_mode("speed")
         sim.set_speed_ref(r[0])
     names = ("i_p", "i_a", "i_b", "i_c", "speed", "i_p_ref")
-    rec = {name: np.zeros(n, dtype=np.float32) for name in names}
+    rec = {name: np.empty(n, dtype=np.float32) for name in names}  # written up to `done`
     done = 0
     fault = sim.fault
     stops = [*_events(sc, r), n]
@@ -216,11 +219,11 @@ def simulate(sim: Simulator, sc: Scenario) -> Trace:
                        np.abs(rec["i_c"][:keep]))  # fmt: skip
     y = rec["i_p"][:keep] if sc.kind == "current_step" else rec["speed"][:keep]
     return Trace(
-        y=y.astype(np.float64),
+        y=y,
         r=r[:keep],
         i_peak=i_abs,
         speed=rec["speed"][:keep],
-        e_i=(rec["i_p_ref"][:keep] - rec["i_p"][:keep]).astype(np.float64),
+        e_i=rec["i_p_ref"][:keep] - rec["i_p"][:keep],
         k_event=k_event,
         n_planned=n,
         fault=0 if fault is None else int(fault.code),
