@@ -12,7 +12,7 @@ the paper's gains) it prints, each with the load average beside it:
    folder), both over 50,000 samples in alternating chunks, best of each: ``ratio=``
    (issue 28's goal: within 2x);
 4. throughput of the same batch of runs on a local process pool of 1 and of all cores, and on
-   a Dask LocalCluster of two worker processes on 127.0.0.1 (dashboard off), workers warmed
+   a Dask LocalCluster of two worker processes on 127.0.0.1 (dashboards on free ports), warmed
    first so that start-up is not counted (it is printed separately).
 
 The host is shared: read each figure with its load average.
@@ -125,8 +125,10 @@ def dask_throughput(batches: list) -> tuple[float, float]:
     from distributed import Client, LocalCluster
 
     t0 = time.perf_counter()
+    # every listener on 127.0.0.1 and a free port (dashboard_address=None still binds :8787)
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                      dashboard_address=None) as cluster, Client(cluster) as client:  # fmt: skip
+                      dashboard_address="127.0.0.1:0", worker_dashboard_address="127.0.0.1:0",
+                      ) as cluster, Client(cluster) as client:  # fmt: skip
         client.run(lambda: __import__("virtual_drive.sweep.runner") and None)
         client.gather(client.map(run_batch, [b[:1] for b in batches[:2]], pure=False))
         start = time.perf_counter() - t0

@@ -85,7 +85,8 @@ def test_local_and_dask_give_identical_rows_and_survive_a_killed_worker(tmp_path
     try:
         sched_file = tmp_path / "scheduler.json"
         procs.append(_start([_DASK, "scheduler", "--host", "127.0.0.1", "--port", "0",
-                             "--no-dashboard", "--scheduler-file", str(sched_file)],
+                             "--dashboard-address", "127.0.0.1:0",
+                             "--scheduler-file", str(sched_file)],
                             tmp_path / "scheduler.log"))  # fmt: skip
         # the local pool meanwhile (2 processes)
         local = run_sweep(spec, tmp_path / "local", workers=2, progress=False, plots=False)
@@ -98,12 +99,18 @@ def test_local_and_dask_give_identical_rows_and_survive_a_killed_worker(tmp_path
         workers = {}
         for name in ("wa", "wb"):
             workers[name] = _start([_DASK, "worker", address, "--host", "127.0.0.1",
-                                    "--nthreads", "1", "--no-nanny", "--no-dashboard",
+                                    "--nthreads", "1", "--no-nanny",
+                                    "--dashboard-address", "127.0.0.1:0",
                                     "--memory-limit", "0", "--name", name],
                                    tmp_path / f"{name}.log")  # fmt: skip
             procs.append(workers[name])
         with Client(address, set_as_default=False, timeout=60) as watch:
             watch.wait_for_workers(2, timeout=90)
+            # every listener of the scheduler and the workers is on 127.0.0.1
+            # (--no-dashboard alone still binds the dashboard on 0.0.0.0)
+            listen = subprocess.run(["ss", "-ltnpH"], capture_output=True, text=True).stdout
+            mine = [ln for ln in listen.splitlines() if any(f"pid={p.pid}," in ln for p in procs)]
+            assert len(mine) >= 6 and all(" 127.0.0.1:" in ln for ln in mine), mine
             # warm both workers (import of the simulator) so the kill falls mid-sweep
             watch.run(lambda: __import__("virtual_drive.sweep.runner") and None)
             names = {a: w["name"] for a, w in watch.scheduler_info()["workers"].items()}

@@ -7,10 +7,12 @@ client, which alone writes them. When a worker dies, the scheduler runs its unfi
 again on another worker; each future completes once, and the client keeps only the first row
 of a run, so no run is lost or counted twice.
 
-Start a cluster on one machine (127.0.0.1 only, dashboard off)::
+Start a cluster on one machine, every listener on 127.0.0.1 (``--no-dashboard`` alone still
+binds a dashboard on 0.0.0.0, so give the dashboards 127.0.0.1 and a free port)::
 
-    dask scheduler --host 127.0.0.1 --port 8786 --no-dashboard
-    dask worker tcp://127.0.0.1:8786 --host 127.0.0.1 --nthreads 1 --nworkers 2 --no-dashboard
+    dask scheduler --host 127.0.0.1 --port 8786 --dashboard-address 127.0.0.1:0
+    dask worker tcp://127.0.0.1:8786 --host 127.0.0.1 --nworkers 2 --nthreads 1 \
+        --dashboard-address 127.0.0.1:0
 """
 
 from __future__ import annotations
