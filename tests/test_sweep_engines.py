@@ -1,6 +1,7 @@
-"""Issue 28: a seeded Monte-Carlo sweep (500 short runs) gives identical rows on the local
-process pool and on a Dask scheduler with two workers started as separate processes on
-127.0.0.1 -- one of which is killed (SIGKILL) mid-sweep: every run is present exactly once.
+"""Issue 28: a seeded Monte-Carlo sweep (500 short runs) gives identical rows run in this
+process, on the local process pool with one worker process killed (SIGKILL) mid-sweep, and on
+a Dask scheduler with two workers started as separate processes on 127.0.0.1, one of which is
+killed mid-sweep: every run is present exactly once.
 
 The truth is the other engine and the sweep's own contract (per-run seeds from the spec seed and
 the run index, never from scheduling): the rows are compared as the CSV text each client wrote.
@@ -74,6 +75,17 @@ def _stop(p: subprocess.Popen) -> None:
             p.wait(5)
 
 
+def _kill_a_pool_worker(killed: dict) -> None:
+    """SIGKILL one process of the local pool (forked by the forkserver: a grandchild)."""
+    import psutil
+
+    me = os.getpid()
+    pool = [p for p in psutil.Process(me).children(recursive=True) if p.ppid() != me]
+    assert pool, "no pool worker found"
+    os.kill(pool[0].pid, signal.SIGKILL)
+    killed["pid"] = pool[0].pid
+
+
 def test_local_and_dask_give_identical_rows_and_survive_a_killed_worker(tmp_path):
     from distributed import Client
 
@@ -81,6 +93,21 @@ def test_local_and_dask_give_identical_rows_and_survive_a_killed_worker(tmp_path
     spec_path.write_text(SPEC)
     spec = load_spec(spec_path)
     assert spec.n_runs == 500
+    one = run_sweep(spec, tmp_path / "one", workers=1, progress=False, plots=False)
+    assert one.executed == 500
+    # the local pool (2 processes), one of them killed mid-sweep
+    pool_killed: dict = {}
+
+    def pool_hook(done: int, total: int, failures: int) -> None:
+        if not pool_killed and done >= 100:
+            pool_killed["done"] = done
+            _kill_a_pool_worker(pool_killed)
+
+    local = run_sweep(spec, tmp_path / "local", workers=2, progress=False, plots=False,
+                      on_progress=pool_hook)  # fmt: skip
+    assert pool_killed and pool_killed["done"] < 500
+    assert local.executed == 500
+    assert _lines(tmp_path / "local") == _lines(tmp_path / "one")
     procs: list[subprocess.Popen] = []
     try:
         sched_file = tmp_path / "scheduler.json"
@@ -88,9 +115,6 @@ def test_local_and_dask_give_identical_rows_and_survive_a_killed_worker(tmp_path
                              "--dashboard-address", "127.0.0.1:0",
                              "--scheduler-file", str(sched_file)],
                             tmp_path / "scheduler.log"))  # fmt: skip
-        # the local pool meanwhile (2 processes)
-        local = run_sweep(spec, tmp_path / "local", workers=2, progress=False, plots=False)
-        assert local.executed == 500
         deadline = time.monotonic() + 60
         while not sched_file.exists() and time.monotonic() < deadline:
             time.sleep(0.1)

@@ -77,7 +77,9 @@ def run_sweep(
     ``scheduler``: a Dask scheduler address (``tcp://127.0.0.1:8786``), else a local process
     pool of ``workers`` processes (default: all cores; 1 runs in this process). Raises
     :class:`~.units.SpecError` for a bad spec / results folder / scheduler; an exception in
-    ``on_progress`` (or Ctrl-C) stops the sweep with the rows so far written."""
+    ``on_progress`` (or Ctrl-C) stops the sweep with the rows so far written. The local pool
+    starts its processes with ``forkserver``, which imports the calling script's main module
+    in each: call this from a script under ``if __name__ == "__main__":``."""
     store = ResultStore(out, spec)
     done = store.done()
     todo = [r for r in range(spec.n_runs) if r not in done]
