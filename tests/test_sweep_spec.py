@@ -5,20 +5,19 @@ from __future__ import annotations
 
 import json
 import math
-import subprocess
-import sys
 
 import control as ct
 import numpy as np
 import pytest
 
 from drive_link.config_dcf import dcf_text
+from virtual_drive.cli import main as cli_main
 from virtual_drive.sim.params import Ts
 from virtual_drive.sweep import SpecError, load_spec, run_sweep
 from virtual_drive.sweep.metrics import compute_metrics
 from virtual_drive.sweep.scenarios import Scenario, Trace
 
-pytestmark = [pytest.mark.unit, pytest.mark.timeout(120)]
+pytestmark = pytest.mark.timeout(120)
 
 STEP = """
 [[scenarios]]
@@ -37,7 +36,8 @@ def _spec(tmp_path, text, name="s.toml"):
     return load_spec(p)
 
 
-def test_gain_set_from_a_dcf_saved_by_drive_link(tmp_path):
+@pytest.mark.unit
+def test_gain_set_from_a_dcf_saved_by_drive_link(tmp_path, capsys):
     values = {
         "motor.L": 18e-6, "motor.R": 7e-3, "current_controller.type": 1,
         "current_controller.L_c": 21e-6, "current_controller.k_p": 0.5,
@@ -52,12 +52,12 @@ def test_gain_set_from_a_dcf_saved_by_drive_link(tmp_path):
     assert (nom["k_p"], nom["k_i"], nom["speed_k_p"]) == (0.5, 0.06, 0.25)
     assert nom["current_limit"] == 80.0 and nom["overcurrent_trip"] == 250.0
     assert nom["R_c"] == pytest.approx(5e-3)  # inline overrides the DCF
-    cmd = [sys.executable, "-m", "virtual_drive.cli", "sweep", str(tmp_path / "s.toml"),
-           "--run", "0", "--json"]  # fmt: skip
-    row = json.loads(subprocess.run(cmd, capture_output=True, text=True, timeout=60).stdout)
+    assert cli_main(["sweep", str(tmp_path / "s.toml"), "--run", "0", "--json"]) == 0
+    row = json.loads(capsys.readouterr().out)
     assert row["controller"] == "pi" and row["L_c/L"] == pytest.approx(21 / 18)
 
 
+@pytest.mark.unit
 def test_units_relative_spread_and_seeded_draws(tmp_path):
     spec = _spec(tmp_path, """
 [sweep]
@@ -87,6 +87,7 @@ controller = { dist = "choice", values = ["deadbeat", "pi"] }
     assert other.job(0).inputs["R"] != jobs[0].inputs["R"]
 
 
+@pytest.mark.unit
 def test_stop_and_resume_skips_done_runs_and_repairs_a_cut_line(tmp_path):
     spec = _spec(tmp_path, """
 [sweep]
@@ -128,6 +129,7 @@ samples = 60
     assert csv_path.read_text().splitlines() == lines
 
 
+@pytest.mark.unit
 @pytest.mark.parametrize("zeta", [0.3, 0.6, 1.2])
 def test_overshoot_and_settling_against_step_info(zeta):
     wn = 2 * math.pi * 400.0
@@ -148,6 +150,7 @@ def test_overshoot_and_settling_against_step_info(zeta):
     assert m["stable"] and m["peak_phase_current"] == pytest.approx(y.max())
 
 
+@pytest.mark.unit
 @pytest.mark.parametrize(
     ("text", "message"),
     [
@@ -158,16 +161,14 @@ def test_overshoot_and_settling_against_step_info(zeta):
         ('[gains]\ndcf = "missing.dcf"\n' + STEP, "cannot read"),
         ("[parameters]\n", "no scenario"),
     ],
+    ids=["name", "unit", "dist", "limit-unit", "dcf", "no-scenario"],
 )
-def test_bad_spec_is_one_line_and_exit_2_with_nothing_written(tmp_path, text, message):
+def test_bad_spec_is_one_line_and_exit_2_with_nothing_written(tmp_path, capsys, text, message):
     (tmp_path / "bad.toml").write_text(text)
     with pytest.raises(SpecError, match=message):
         load_spec(tmp_path / "bad.toml")
     out = tmp_path / "out"
-    p = subprocess.run(
-        [sys.executable, "-m", "virtual_drive.cli", "sweep", str(tmp_path / "bad.toml"),
-         "--out", str(out)], capture_output=True, text=True, timeout=60,
-    )  # fmt: skip
-    assert p.returncode == 2
-    assert len(p.stderr.strip().splitlines()) == 1 and message.split()[0] in p.stderr
+    assert cli_main(["sweep", str(tmp_path / "bad.toml"), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and message.split()[0] in err
     assert not out.exists()

@@ -96,7 +96,9 @@ def run_sweep_command(args: argparse.Namespace) -> int:
     try:
         spec = load_spec(args.spec)
         if args.map:
-            known = {*spec.swept, "L_c/L", "R_c/R"}
+            from virtual_drive.sweep.runner import INPUT_COLUMNS
+
+            known = {*spec.swept, *INPUT_COLUMNS}
             bad = [m for m in args.map if m not in known]
             if bad:
                 return _error(f"--map: {bad[0]!r} is not a swept parameter ({sorted(known)})")
@@ -116,6 +118,9 @@ def run_sweep_command(args: argparse.Namespace) -> int:
     except KeyboardInterrupt:
         print("virtual-drive sweep: interrupted; the same command resumes", file=sys.stderr)
         return 130
+    except Exception as exc:  # an engine gave up (workers kept dying); rows so far are kept
+        msg = " ".join(str(exc).split()) or type(exc).__name__
+        return _error(f"sweep stopped: {msg[:300]}; the same command resumes", 1)
     if args.json:
         print(json.dumps(_jsonable(res.summary)))
     else:

@@ -80,18 +80,23 @@ def run_sweep(
     ``on_progress`` (or Ctrl-C) stops the sweep with the rows so far written. The local pool
     starts its processes with ``forkserver``, which imports the calling script's main module
     in each: call this from a script under ``if __name__ == "__main__":``."""
-    store = ResultStore(out, spec)
-    done = store.done()
-    todo = [r for r in range(spec.n_runs) if r not in done]
-    jobs = [spec.job(r) for r in todo]
     client = None
-    if scheduler:
+    if scheduler:  # first: an unreachable scheduler leaves nothing written
         from virtual_drive.sweep.engine_dask import cluster_threads, connect, iter_dask
 
         client = connect(scheduler)
         slots = cluster_threads(client)
     else:
         slots = workers or default_workers()
+    try:
+        store = ResultStore(out, spec)
+    except BaseException:
+        if client is not None:
+            client.close()
+        raise
+    done = store.done()
+    todo = [r for r in range(spec.n_runs) if r not in done]
+    jobs = [spec.job(r) for r in todo]
     size = spec.batch or auto_batch(jobs, slots)
     batches = [jobs[i : i + size] for i in range(0, len(jobs), size)]
     fails = sum(1 for r in store.rows() if not r["passed"])

@@ -27,7 +27,7 @@ from virtual_drive.sweep.units import SpecError
 __all__ = ["connect", "iter_dask"]
 
 
-def connect(address: str, timeout: float = 20.0) -> Any:
+def connect(address: str, timeout: float = 10.0) -> Any:
     """A ``distributed.Client`` on ``address`` (SpecError if dask is missing or unreachable)."""
     try:
         from distributed import Client
