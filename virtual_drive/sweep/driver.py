@@ -85,7 +85,7 @@ def run_sweep(
         from virtual_drive.sweep.engine_dask import cluster_threads, connect, iter_dask
 
         client = connect(scheduler)
-        slots = cluster_threads(client)
+        slots = max(cluster_threads(client), 4)  # workers may still be joining
     else:
         slots = workers or default_workers()
     try:

@@ -84,7 +84,7 @@ def run_one(job: RunJob) -> dict[str, Any]:
         metrics["emcy"] = 0
         fails = [f"error: {error}"]
     else:
-        trace = simulate(sim, job.scenario, job.inputs)
+        trace = simulate(sim, job.scenario, job.inputs, reuse=True)
         metrics = compute_metrics(trace, job.scenario, job.band, job.inputs["current_limit"])
         fails = verdict(metrics, job.limits)
     row.update(metrics)

@@ -164,6 +164,18 @@ def _reference(sc: Scenario, n: int) -> np.ndarray:
     return np.repeat(vals, step)[:n].astype(np.float64)
 
 
+_RECORDED = ("i_p", "i_a", "i_b", "i_c", "speed", "i_p_ref")
+_BUF: dict[str, np.ndarray] = {}
+
+
+def _buffers(n: int) -> dict[str, np.ndarray]:
+    """This process's record buffers, grown to at least ``n`` samples (views of length n)."""
+    if not _BUF or _BUF["i_p"].shape[0] < n:
+        for k in _RECORDED:
+            _BUF[k] = np.empty(n, dtype=np.float32)
+    return {k: v[:n] for k, v in _BUF.items()}
+
+
 def _events(sc: Scenario, r: np.ndarray) -> list[int]:
     """Sample indices where the loop stops to change a setpoint (sorted, < len(r))."""
     n = r.shape[0]
@@ -174,9 +186,13 @@ def _events(sc: Scenario, r: np.ndarray) -> list[int]:
     return [k_at] if 0 <= k_at < n else []
 
 
-def simulate(sim: Simulator, sc: Scenario, inputs: dict[str, Any]) -> Trace:
+def simulate(
+    sim: Simulator, sc: Scenario, inputs: dict[str, Any], reuse: bool = False
+) -> Trace:
     """Run ``sc`` on ``sim`` (fresh, built from ``inputs``: the run's B, k_gen, K_rpm,
-    T_load are read from there) and return the :class:`Trace`."""
+    T_load are read from there) and return the :class:`Trace`. With ``reuse`` the record
+    lives in this process's buffers (no page faults of fresh memory per run) and the trace's
+    arrays are overwritten by the next ``simulate(..., reuse=True)``."""
     n = max(1, round(sc.duration / Ts))
     k_event = min(round(sc.at / Ts), n - 1)
     r = _reference(sc, n)
@@ -194,8 +210,7 @@ def simulate(sim: Simulator, sc: Scenario, inputs: dict[str, Any]) -> Trace:
     if speed_mode and sim.fault is None:
         sim.set_mode("speed")
         sim.set_speed_ref(r[0])
-    names = ("i_p", "i_a", "i_b", "i_c", "speed", "i_p_ref")
-    rec = {name: np.empty(n, dtype=np.float32) for name in names}  # written up to `done`
+    rec = _buffers(n) if reuse else {k: np.empty(n, dtype=np.float32) for k in _RECORDED}
     done = 0
     fault = sim.fault
     stops = [*_events(sc, r), n]
