@@ -41,15 +41,20 @@ settle = "1 ms"
 """
 
 
-def _oracle_radius(L: float, R: float, L_c: float, R_c: float) -> float:
-    """Largest |pole| of the closed deadbeat current loop (python-control)."""
+def _oracle_loop(L: float, R: float, L_c: float, R_c: float) -> ct.TransferFunction:
+    """The closed deadbeat current loop C P / (1 + C P) (python-control)."""
     Phi = math.exp(-R * Ts / L)
     Gamma = (1.0 - Phi) / (2.0 * R)
     Phi_c = math.exp(-R_c * Ts / L_c)
     Gamma_c = (1.0 - Phi_c) / (2.0 * R_c)
     P = ct.tf([Gamma], [1.0, -Phi, 0.0], dt=Ts)
     C = ct.tf([1.0, -Phi_c, 0.0], [Gamma_c, 0.0, -Gamma_c], dt=Ts)
-    return float(np.max(np.abs(ct.feedback(C * P, 1).poles())))
+    return ct.feedback(C * P, 1)
+
+
+def _oracle_radius(L: float, R: float, L_c: float, R_c: float) -> float:
+    """Largest |pole| of the closed deadbeat current loop."""
+    return float(np.max(np.abs(_oracle_loop(L, R, L_c, R_c).poles())))
 
 
 def test_table1_sweep_finds_the_eq17_boundary(tmp_path):
@@ -82,6 +87,14 @@ def test_table1_sweep_finds_the_eq17_boundary(tmp_path):
     r_c1 = {round(r["L_c/L"], 3): r for r in rows if abs(r["R_c/R"] - 1.0) < 0.09}
     ov = [r_c1[k]["overshoot"] for k in sorted(r_c1) if 0.9 < k < 1.95]
     assert ov == sorted(ov)
+    # and it is the overshoot of the oracle's step response (within 1.5 % of the step)
+    t = np.arange(375) * Ts
+    for k, r in r_c1.items():
+        if 1.0 < k < 1.85:
+            loop = _oracle_loop(r["L"], r["R"], r["L_c"], r["R_c"])
+            y = np.squeeze(ct.step_response(loop, t).outputs)
+            info = ct.step_info(y, t, yfinal=1.0)
+            assert r["overshoot"] == pytest.approx(info["Overshoot"], abs=1.5), k
     summary = (tmp_path / "out" / "summary.md").read_text()
     assert "virtual-drive sweep" in summary and "--run" in summary
     for name in ("map_pass.png", "map_overshoot.png", "histograms.png"):
