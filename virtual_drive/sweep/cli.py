@@ -32,7 +32,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument(
         "--scheduler", metavar="ADDR", help="Dask scheduler, e.g. tcp://127.0.0.1:8786"
     )
-    p.add_argument("--workers", type=int, help="local worker processes (default: all cores)")
+    p.add_argument(
+        "--workers", type=int, metavar="N", help="local worker processes (default: all cores)"
+    )
     p.add_argument("--map", nargs=2, metavar=("X", "Y"), help="parameters of the map plots")
     p.add_argument("--no-plots", action="store_true", help="write no PNG")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
