@@ -77,14 +77,14 @@ def run_one(job: RunJob) -> dict[str, Any]:
     error = ""
     try:
         sim = build_simulator(job.inputs, job.model)
-    except ValueError as exc:
+        trace = simulate(sim, job.scenario, job.inputs, reuse=True)
+    except ValueError as exc:  # a value the drive refuses: the row says which
         error = str(exc).splitlines()[0]
         metrics: dict[str, Any] = {m: math.nan for m in METRICS}
         metrics["stable"] = False
         metrics["emcy"] = 0
         fails = [f"error: {error}"]
     else:
-        trace = simulate(sim, job.scenario, job.inputs, reuse=True)
         metrics = compute_metrics(trace, job.scenario, job.band, job.inputs["current_limit"])
         fails = verdict(metrics, job.limits)
     row.update(metrics)

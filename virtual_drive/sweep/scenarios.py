@@ -108,7 +108,10 @@ def parse_scenario(d: dict[str, Any], index: int) -> Scenario:
             raise SpecError(f"{where}.duration must cover the profile ({pp[-1][0]} s)")
     if kw["duration"] <= 0.0 or kw["settle"] < 0.0:
         raise SpecError(f"{where}: duration must be > 0 and settle >= 0")
-    if abs(kw["speed"]) > 20000.0:
+    bound = {"current_step": 1000.0, "speed_step": 20000.0, "load_step": 50.0}.get(kind)
+    if bound is not None and max(abs(kw["initial"]), abs(kw["final"])) > bound:
+        raise SpecError(f"{where}: from / to must be within +-{bound:g} {unit}")
+    if max([abs(kw["speed"]), *(abs(p[1]) for p in kw.get("points", ()))]) > 20000.0:
         raise SpecError(f"{where}: speeds must be within +-20000 rpm")
     lim = d.get("limits", {})
     if not isinstance(lim, dict):
