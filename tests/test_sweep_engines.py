@@ -132,9 +132,11 @@ def test_local_and_dask_give_identical_rows_and_survive_a_killed_worker(tmp_path
             watch.wait_for_workers(2, timeout=90)
             # every listener of the scheduler and the workers is on 127.0.0.1
             # (--no-dashboard alone still binds the dashboard on 0.0.0.0)
-            listen = subprocess.run(["ss", "-ltnpH"], capture_output=True, text=True).stdout
-            mine = [ln for ln in listen.splitlines() if any(f"pid={p.pid}," in ln for p in procs)]
-            assert len(mine) >= 6 and all(" 127.0.0.1:" in ln for ln in mine), mine
+            import psutil
+
+            mine = [c.laddr for p in procs for c in psutil.Process(p.pid).net_connections("tcp")
+                    if c.status == psutil.CONN_LISTEN]  # fmt: skip
+            assert len(mine) >= 6 and all(a.ip == "127.0.0.1" for a in mine), mine
             # warm both workers (import of the simulator) so the kill falls mid-sweep
             watch.run(lambda: __import__("virtual_drive.sweep.runner") and None)
             names = {a: w["name"] for a, w in watch.scheduler_info()["workers"].items()}
