@@ -309,6 +309,10 @@ def parse_spec(doc: dict[str, Any], base: Path | None = None, path: Path | None 
     if mp is not None:
         if not (isinstance(mp, list) and len(mp) == 2 and all(isinstance(x, str) for x in mp)):
             raise SpecError("[sweep].map must be two parameter names")
+        bad = [m for m in mp if m not in INPUTS and m not in RATIOS]
+        if bad:
+            known = [*INPUTS, *RATIOS]
+            raise SpecError(f"[sweep].map: {bad[0]!r} is not an input (known: {known})")
         mp = (mp[0], mp[1])
     spec = Spec(
         path=path, name=str(sw.get("name", path.stem if path else "sweep")), seed=seed,
@@ -328,6 +332,8 @@ def _param(name: str, v: Any) -> Param:
         v = {"values": v if isinstance(v, list) else [v]}
     keys = set(v)
     unit = v.get("unit", "")
+    if name == "controller" and unit:
+        raise SpecError(f"{where}: the controller type takes no unit")
     relative = unit in ("%", "percent")
     si = "dimensionless" if name in RATIOS else INPUTS[name][0]
     factor = 1.0 if relative or not unit or name == "controller" else scale_to(unit, si, where)
