@@ -55,6 +55,13 @@ def _grouped(rows: list[dict[str, Any]], x: str, y: str) -> dict[tuple[float, fl
     return g
 
 
+def _label(name: str) -> str:
+    from virtual_drive.sweep.inputs import INPUTS
+
+    unit = INPUTS.get(name, ("", ""))[0]
+    return f"{name} ({unit})" if unit and unit != "dimensionless" else name
+
+
 def _eq17(ax: Any, x: str, y: str) -> None:
     if x == "L_c/L":
         ax.axvline(2.0, color="k", ls="--", lw=1, label="eq. (17): L_c = 2 L")
@@ -93,8 +100,8 @@ def write_plots(
                 ax.scatter(pts[unstable, 0], pts[unstable, 1], c="k", marker="x", s=size / 3,
                            label="not stable")  # fmt: skip
             fig.colorbar(sc, ax=ax, label=label)
-            ax.set_xlabel(x)
-            ax.set_ylabel(y)
+            ax.set_xlabel(_label(x))
+            ax.set_ylabel(_label(y))
             ax.set_title(f"{spec.name}: {label} over {x} x {y} ({len(rows)} runs)")
             _eq17(ax, x, y)
             if unstable.any() and x != "L_c/L" and y != "L_c/L":
