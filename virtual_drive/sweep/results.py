@@ -150,7 +150,7 @@ def _finite(v: Any) -> bool:
 
 
 def summarize(rows: list[dict[str, Any]], spec: Spec, worst: int = 5) -> dict[str, Any]:
-    """Fraction passing, failure reasons, trips, per-scenario counts, metric ranges and the
+    """Fraction passing, failure reasons, trips, per-scenario counts and metric ranges, and the
     ``worst`` worst runs (largest severity) with their swept inputs and re-run command."""
     n = len(rows)
     passed = sum(1 for r in rows if r["passed"])
@@ -164,11 +164,13 @@ def summarize(rows: list[dict[str, Any]], spec: Spec, worst: int = 5) -> dict[st
         d = per_sc.setdefault(r["scenario"], {"runs": 0, "passed": 0})
         d["runs"] += 1
         d["passed"] += int(r["passed"])
-    ranges = {}
-    for m in METRICS:
-        vals = [r[m] for r in rows if _finite(r[m]) and m not in ("stable", "emcy")]
-        if vals:
-            ranges[m] = [min(vals), max(vals)]
+    ranges: dict[str, dict[str, list[float]]] = {}  # per scenario: ss_error is A or rpm
+    for name in per_sc:
+        sc_rows = [r for r in rows if r["scenario"] == name]
+        for m in METRICS:
+            vals = [r[m] for r in sc_rows if _finite(r[m]) and m not in ("stable", "emcy")]
+            if vals:
+                ranges.setdefault(name, {})[m] = [min(vals), max(vals)]
     ranked = sorted(rows, key=lambda r: (-_category(r), -r["severity"], r["run"]))[:worst]
     show = [*spec.swept] or ["L_c/L", "R_c/R"]
     worst_rows = [
