@@ -16,7 +16,11 @@ from collections.abc import Sequence
 __all__ = ["build_parser", "main"]
 
 #: Modules providing ``add_parser(subparsers)``, in the order shown by ``--help``.
-_SUBCOMMANDS: tuple[str, ...] = ("virtual_drive.node.cli_run", "virtual_drive.hub_cli")
+_SUBCOMMANDS: tuple[str, ...] = (
+    "virtual_drive.node.cli_run",
+    "virtual_drive.hub_cli",
+    "virtual_drive.sweep.cli",
+)
 
 
 class _OneLineErrorParser(argparse.ArgumentParser):

@@ -516,6 +516,30 @@ class Simulator:
             self._last = None
             return self._points_rows[: m + 1].tolist()
 
+    def run_record(self, n_samples: int, out: dict[str, np.ndarray], start: int = 0) -> None:
+        """Run ``n_samples`` samples recording only the signals named in ``out`` (SIGNALS
+        names -> preallocated C-contiguous float32 arrays of length >= start + n_samples) into
+        ``[start, start + n_samples)``: one C call per 2**20 samples and no allocation, the
+        path of the robustness sweeps (``virtual_drive.sweep``)."""
+        n = int(n_samples)
+        if n < 0 or n != n_samples or start < 0:
+            raise ValueError(f"n_samples and start must be integers >= 0, got {n_samples!r}")
+        ptrs = ffi.new("float *[14]")
+        for name, arr in out.items():
+            if name not in SIGNALS:
+                raise ValueError(f"unknown signal {name!r} (known: {list(SIGNALS)})")
+            if arr.dtype != np.float32 or not arr.flags.c_contiguous or arr.shape[0] < start + n:
+                raise ValueError(f"out[{name!r}] must be C-contiguous float32 of >= {start + n}")
+        with self._lock:
+            done = 0
+            while done < n:
+                m = min(1 << 20, n - done)
+                for name, arr in out.items():
+                    ptrs[SIGNALS.index(name)] = ffi.cast("float *", arr[start + done :].ctypes.data)
+                lib.loop_run(self._L, m, ptrs, ffi.NULL)
+                done += m
+            self._last = None
+
     def update_state(self, out: dict[str, float]) -> None:
         """Write the latest value of every signal (SIGNALS names, float; hall_sector too) into
         ``out``: the per-chunk path of the node, without building or copying a dict."""
