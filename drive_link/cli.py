@@ -1107,6 +1107,9 @@ def build_parser() -> argparse.ArgumentParser:
     from ._cli_tools import register_tools
 
     register_tools(sub, bus)
+    from .report.cli import add_parser as add_report_parser
+
+    add_report_parser(sub, bus)
     from ._cli_design import add_parsers as add_design_parsers
 
     add_design_parsers(sub)
