@@ -507,8 +507,9 @@ def _settle_args(args: argparse.Namespace) -> Any:
 
 
 def _say(args: argparse.Namespace) -> Callable[[str], None]:
-    """An experiment's 'what I change' line: on stderr (stdout stays the result / JSON)."""
-    return lambda text: print(f"drive-link: {text}", file=sys.stderr, flush=True)
+    """An experiment's 'what I change' line, printed first on stdout (stderr keeps the
+    one-line error); with --json it is the result's "changes"."""
+    return lambda text: None if args.json else print(text, flush=True)
 
 
 def cmd_step(args: argparse.Namespace, d: Drive) -> int:

@@ -54,7 +54,7 @@ def cmd_report(args: argparse.Namespace, d: Drive) -> int:
 
     def say(text: str) -> None:
         if not args.json:
-            print(f"drive-link: {text}", file=sys.stderr, flush=True)
+            print(text, flush=True)
 
     try:
         rep = run_report(d, only, Hooks(progress=progress, say=say))
