@@ -439,7 +439,8 @@ def current_step(
     Leaves the drive as found (``restore``; ``found``: a snapshot the caller took before it
     changed anything itself): state, mode, setpoints, also on error and Ctrl-C; the mode
     switches coast unless ``brake``. Before the step i_p must be settled at i_from
-    (:class:`Settle`, default window 50 ms, tolerance max(0.5 A, 5 % of the step)).
+    (:class:`Settle`, default window 50 ms, tolerance max(0.5 A, 5 % of the step); for a law
+    without integral action, which settles with an error, steady within that tolerance).
     """
     if i_from == i_to:
         raise InvalidValue("current step needs i_from != i_to")
@@ -466,7 +467,11 @@ def current_step(
         _ensure_mode(drive, "current", brake)
         drive.set_current(i_from)
         _require_enabled(drive, enable)
-        start = wait_settled(drive, "i_p", i_from, tol, st, h, "A")
+        g0 = drive.read_gains()
+        # a law without integral action (predictive; deadbeat with R_c = 0) settles with an
+        # error: there the start is settled when steady, not when at i_from
+        integral = not (g0.type == 2 or (g0.type == 0 and g0.R_c == 0))
+        start = wait_settled(drive, "i_p", i_from if integral else None, tol, st, h, "A")
         tr, t_comm, attempt = _current_records(
             drive, channels, i_from, i_to, divider, length, pre_trigger, settle_s, timeout,
             commutation_retries, hall, h,
