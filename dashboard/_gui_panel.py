@@ -34,6 +34,7 @@ from dashboard._gui_tabs import (
     CurrentTab,
     IdentifyTab,
     PlotArea,
+    ReportTab,
     SpeedTab,
     TuningTab,
     parse_sequence,
@@ -48,7 +49,9 @@ _fmt = fmt  # older name
 __all__ = ["CURRENT_COLORS", "SPEED_COLORS", "Field", "Panel", "parse_sequence"]
 
 
-class Panel(PlotArea, SpeedTab, CurrentTab, TuningTab, IdentifyTab, CapturesTab, ConfigTab):
+class Panel(
+    PlotArea, SpeedTab, CurrentTab, TuningTab, IdentifyTab, CapturesTab, ConfigTab, ReportTab
+):
     """The GUI of one connected browser."""
 
     def __init__(self, owner: BenchGui, client: viser.ClientHandle) -> None:
@@ -167,6 +170,8 @@ class Panel(PlotArea, SpeedTab, CurrentTab, TuningTab, IdentifyTab, CapturesTab,
             self._build_captures_tab()
         with tabs.add_tab("Config"):
             self._build_config_tab()
+        with tabs.add_tab("Report"):
+            self._build_report_tab()
         self._build_plot_area()
         self.show_captures()
 
