@@ -82,15 +82,24 @@ def _overshoot(y: np.ndarray, y0: float, y1: float) -> float:
 
 
 def _plot_step(res: steps.StepResult, title: str, extra: dict[str, np.ndarray] | None = None,
-               paper_note: str = "") -> str:
+               paper_note: str = "", model: np.ndarray | None = None) -> str:
+    """The step like the paper's figures: measured i_p on top, the model dashed (``model``: a
+    prediction from the step's sample on, instead of the step test's own)."""
     tr = res.trace
     fig, (ax,) = new_figure(1)
     t_ms = tr.t * 1e3
     ax.step(t_ms, tr.signals["measurements.i_p_ref"], where="post", color="0.5", lw=0.8,
             ls="--", label="i_p* (A)")
-    ax.plot(t_ms, res.model_column(), color="tab:orange", lw=1.0, ls="--", label="model (A)")
+    col = res.model_column()
+    if model is not None:
+        k0 = tr.trigger_index
+        n = min(len(model), len(col) - k0)
+        col = np.full(len(col), float(model[0]))
+        col[k0 : k0 + n] = model[:n]
+        col[k0 + n :] = np.nan
+    ax.plot(t_ms, col, color="tab:orange", lw=1.0, ls="--", label="model (A)")
     for name, y in (extra or {}).items():
-        ax.plot(t_ms, y, lw=1.0, label=name)
+        ax.plot(t_ms, y, lw=1.0, color="tab:green", label=name)
     ax.plot(t_ms, tr.signals["measurements.i_p"], color="tab:blue", lw=1.8, marker=".", ms=3,
             label="i_p measured (A)", zorder=5)
     if res.commutation_at_s is not None:
@@ -239,9 +248,13 @@ def current_step_predictive(ctx: Context) -> ExperimentResult:
                     v_comp=loss if comp else 0.0)
                 r.metrics[f"steady_state_error_A_{tag}_eq25"] = Metric(
                     _final_error(y, i1), i1 - pred.i_p_final, 5.0 if not comp else 0.0, "A", 0.6)
+                full = design.predicted_step(
+                    "predictive", n_samples=len(res.trace.t) - res.trace.trigger_index,
+                    i_start=i0, i_final=i1, R=res.params["R"], L=L, L_c=L, feedforward=True,
+                    e_L=res.params["e_L"], v_loss=loss / 2, v_comp=loss if comp else 0.0)
                 figs.append(_plot_step(res, f"Predictive (eq. 23) {tag} eq. (25) compensation",
                                        paper_note="paper: ~5 A error without (Fig. 14), none "
-                                       "with (Fig. 15)"))
+                                       "with (Fig. 15)", model=full.i_p))
         finally:
             _write_off(d, old)
     r.figures += figs
