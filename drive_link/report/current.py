@@ -211,9 +211,12 @@ def current_step_pi(ctx: Context) -> ExperimentResult:
     return r
 
 
-def _final_error(y: np.ndarray, i_to: float) -> float:
-    tail = y[len(y) * 2 // 3 :]
-    return float(i_to - np.mean(tail))
+def _final_error(res: steps.StepResult, i_to: float) -> float:
+    """i_to − the median of i_p from the 5th sample after the step to the record's end (a
+    commutation disturbs a few samples only: the median ignores them) [A]."""
+    tr = res.trace
+    y = np.asarray(tr.signals["measurements.i_p"], dtype=float)[tr.trigger_index + 5 :]
+    return float(i_to - np.median(y))
 
 
 def current_step_predictive(ctx: Context) -> ExperimentResult:
@@ -241,13 +244,12 @@ def current_step_predictive(ctx: Context) -> ExperimentResult:
                          V_G=SIM_V_G if comp else 0.0, T_DD=0.0, T_SD=0.0)
                 with _with_gains(ctx, **g):
                     res = _step(ctx, i0, i1, j / 2, (j + 1) / 2)
-                _t, y, _p = _clean(res)
                 pred = design.predicted_step(
-                    "predictive", n_samples=len(y), i_start=i0, i_final=i1, R=res.params["R"],
+                    "predictive", n_samples=50, i_start=i0, i_final=i1, R=res.params["R"],
                     L=L, L_c=L, feedforward=True, e_L=res.params["e_L"], v_loss=loss / 2,
                     v_comp=loss if comp else 0.0)
                 r.metrics[f"steady_state_error_A_{tag}_eq25"] = Metric(
-                    _final_error(y, i1), i1 - pred.i_p_final, 5.0 if not comp else 0.0, "A", 0.6)
+                    _final_error(res, i1), i1 - pred.i_p_final, 5.0 if not comp else 0.0, "A", 0.6)
                 full = design.predicted_step(
                     "predictive", n_samples=len(res.trace.t) - res.trace.trigger_index,
                     i_start=i0, i_final=i1, R=res.params["R"], L=L, L_c=L, feedforward=True,
