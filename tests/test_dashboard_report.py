@@ -1,7 +1,8 @@
 """The Report tab in a real headless Chromium (/usr/bin/chromium): run the commissioning report
 on the virtual drive from the page with one experiment ticked, see its verdict, download the
 HTML (self-contained: the figure embedded) and the JSON (the issue's schema); the drive is left
-as the page found it (the REST API's state before and after)."""
+as the page found it (the REST API's state before and after), also when the run is cancelled
+during a speed step."""
 
 from __future__ import annotations
 
@@ -72,6 +73,20 @@ def test_report_tab_runs_and_downloads(tmp_path):
         for key in ("state", "mode"):
             if key in before:
                 assert after[key] == before[key], (before, after)
+        # Cancel during a speed step: the drive is put back as found
+        click(page, page.get_by_label("current step deadbeat", exact=True))
+        click(page, page.get_by_label("speed step", exact=True))
+        click(page, page.get_by_role("button", name="Run report"))
+        page.get_by_role("button", name="Cancel action").wait_for(timeout=60_000)
+        time.sleep(1.0)
+        click(page, page.get_by_role("button", name="Cancel action"))
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and "report cancelled" not in page.inner_text("body"):
+            time.sleep(0.5)
+        assert "report cancelled" in page.inner_text("body")
+        after = httpx.get(f"{dash.api_url}/api/state", timeout=30).json()
+        for key in ("state", "mode", "speed_setpoint", "current_setpoint"):
+            assert after[key] == before[key], (key, before, after)
         assert all(u.startswith(("http://127.0.0.1", "ws://127.0.0.1", "data:", "blob:"))
                    for u in requested), requested
         browser.close()
