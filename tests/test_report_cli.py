@@ -7,6 +7,8 @@ is the virtual plant's) must be found by identify_electrical."""
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import math
 import subprocess
@@ -17,6 +19,8 @@ import control
 import numpy as np
 import pytest
 from scipy import signal
+
+from drive_link import cli
 
 pytestmark = pytest.mark.timeout(240)
 
@@ -32,7 +36,8 @@ def hub(tmp_path_factory):
 
     store = tmp_path_factory.mktemp("store") / "params.json"
     with Hub(port=0) as h:
-        proc = spawn_virtual_drive(port=h.port, node_id=1, store=store)
+        # 4 simulated s per wall-clock s: the speed experiments' seconds pass 4 x faster
+        proc = spawn_virtual_drive(port=h.port, node_id=1, store=store, speed=4.0)
         try:
             yield h
         finally:
@@ -44,16 +49,25 @@ def dl(hub, *args: str, timeout: float = 200) -> subprocess.CompletedProcess:
     return subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
 
 
+def dl_in(hub, *args: str) -> tuple[int, str]:
+    """cli.main in this process (setup and read-back: no interpreter start per call)."""
+    out, err = io.StringIO(), io.StringIO()
+    argv = [args[0], "--host", "127.0.0.1", "--port", str(hub.port), *args[1:]]
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        rc = cli.main(argv)
+    return rc, out.getvalue() + err.getvalue()
+
+
 def read(hub, *names: str) -> dict:
-    p = dl(hub, "read", *names, "--json")
-    assert p.returncode == 0, p.stderr
-    return json.loads(p.stdout)
+    rc, out = dl_in(hub, "read", *names, "--json")
+    assert rc == 0, out
+    return json.loads(out)
 
 
 def where(hub) -> tuple:
-    p = dl(hub, "status", "--json")
-    assert p.returncode == 0, p.stderr
-    st = json.loads(p.stdout)
+    rc, out = dl_in(hub, "status", "--json")
+    assert rc == 0, out
+    st = json.loads(out)
     r = read(hub, "target_velocity", "setpoints.i_p_ref", "disable_operation_option_code",
              "current_controller.type", "current_controller.L_c")
     return st["state"], st["mode"], tuple(sorted(r.items()))
@@ -83,9 +97,9 @@ def _metric(rep: dict, exp: str, name: str) -> dict:
 
 
 def test_report_against_the_papers_equations(hub, tmp_path):
-    assert dl(hub, "nmt", "start").returncode == 0
-    p = dl(hub, "set-speed", "1000rpm", "--enable")
-    assert p.returncode == 0, p.stderr
+    assert dl_in(hub, "nmt", "start")[0] == 0
+    rc, out = dl_in(hub, "set-speed", "1000rpm", "--enable")
+    assert rc == 0, out
     before = where(hub)
     only = "current_step_deadbeat,lc_sweep,current_step_pi,identify_speed_model,speed_step"
     p = dl(hub, "report", "--only", only, "--out", str(tmp_path))
@@ -137,15 +151,15 @@ def test_report_against_the_papers_equations(hub, tmp_path):
 
 
 def test_identify_electrical_finds_a_second_motor(hub, tmp_path):
-    assert dl(hub, "nmt", "start").returncode == 0
+    assert dl_in(hub, "nmt", "start")[0] == 0
     R2, L2 = 0.6 * R0, 1.3 * L0
-    assert dl(hub, "disable").returncode == 0
+    assert dl_in(hub, "disable")[0] == 0
     try:
         for name, v in (("motor.L", L2), ("motor.R", R2)):
-            p = dl(hub, "write", name, repr(v))
-            assert p.returncode == 0, p.stderr
-        p = dl(hub, "set-speed", "1000rpm", "--enable")
-        assert p.returncode == 0, p.stderr
+            rc, out = dl_in(hub, "write", name, repr(v))
+            assert rc == 0, out
+        rc, out = dl_in(hub, "set-speed", "1000rpm", "--enable")
+        assert rc == 0, out
         p = dl(hub, "report", "--only", "identify_electrical", "--out", str(tmp_path), "--json")
         assert p.returncode == 0, p.stdout + p.stderr
         rep = json.loads(p.stdout)
@@ -154,6 +168,6 @@ def test_identify_electrical_finds_a_second_motor(hub, tmp_path):
         assert R == pytest.approx(R2, rel=0.1) and L == pytest.approx(L2, rel=0.1)
         assert R != pytest.approx(R0, rel=0.2) and L != pytest.approx(L0, rel=0.15)
     finally:
-        dl(hub, "disable")
-        dl(hub, "write", "motor.R", repr(R0))
-        dl(hub, "write", "motor.L", repr(L0))
+        dl_in(hub, "disable")
+        dl_in(hub, "write", "motor.R", repr(R0))
+        dl_in(hub, "write", "motor.L", repr(L0))
