@@ -82,7 +82,8 @@ def _overshoot(y: np.ndarray, y0: float, y1: float) -> float:
 
 
 def _plot_step(res: steps.StepResult, title: str, extra: dict[str, np.ndarray] | None = None,
-               paper_note: str = "", model: np.ndarray | None = None) -> str:
+               paper_note: str = "", model: np.ndarray | None = None,
+               x_ms: float = 2.0) -> str:
     """The step like the paper's figures: measured i_p on top, the model dashed (``model``: a
     prediction from the step's sample on, instead of the step test's own)."""
     tr = res.trace
@@ -104,7 +105,7 @@ def _plot_step(res: steps.StepResult, title: str, extra: dict[str, np.ndarray] |
             label="i_p measured (A)", zorder=5)
     if res.commutation_at_s is not None:
         ax.axvline(res.commutation_at_s * 1e3, color="0.7", lw=0.8)
-    ax.set_xlim(-0.2, min(t_ms[-1], 2.0))
+    ax.set_xlim(-0.1 * x_ms, min(t_ms[-1], x_ms))
     ax.set_xlabel("time after the step (ms)")
     ax.set_ylabel("i_p (A)")
     ax.set_title(title + (f"\n{paper_note}" if paper_note else ""), fontsize=9)
@@ -128,7 +129,8 @@ def current_step_deadbeat(ctx: Context) -> ExperimentResult:
     r.metrics["overshoot_pct"] = Metric(_overshoot(y, I_FROM, I_TO), _overshoot(p, I_FROM, I_TO),
                                         0.0, "%", 5.0)
     r.figures.append(_plot_step(res, f"Deadbeat, L_c/L = {L_c / L:.2f}",
-                                paper_note="paper: settles in two samples (z^-2, eq. 16)"))
+                                paper_note="paper: settles in two samples (z^-2, eq. 16)",
+                                x_ms=0.4))
     return r
 
 
