@@ -47,7 +47,7 @@ def cmd_report(args: argparse.Namespace, d: Drive) -> int:
             from tqdm import tqdm
 
             bar.append(tqdm(total=1000, file=sys.stderr, ascii=" #", mininterval=0.2,
-                            bar_format="{l_bar}{bar:30}| {elapsed} {desc}"))
+                            bar_format="{l_bar}{bar:30}| {elapsed}"))
         b = bar[0]
         b.set_description_str(text[:60], refresh=False)
         b.update(max(0, int(f * 1000) - b.n))
