@@ -8,8 +8,11 @@
   with the drive's L_c, R_c, the measured e_L and R) fits the measured first samples best
   (least squares, bounded search in (0.5 L_c, 5 L_c)).
 
-Uncertainties (1σ) from the scatter: the standard errors of the steady means for R; for L the
-residual RMS over the sensitivity of the response to L (Gauss-Newton), plus R's share.
+Uncertainties (1σ) from the scatter only: the standard errors of the steady means for R; for L
+the residual RMS over the sensitivity of the response to L (Gauss-Newton), plus R's share. They
+leave out systematic errors: on the virtual drive (default motor and one with L +30 %, R −40 %)
+R came out 0.8-1.3 % low (3-4 σ) and L within 0.2 % (about 2 σ), both well inside the verdict's
+tolerance (15 % R, 10 % L).
 """
 
 from __future__ import annotations
@@ -120,7 +123,8 @@ def identify_electrical(ctx: Context) -> ExperimentResult:
     r.notes.append(
         f"R = {est['R'] * 1e3:.3f} ± {est['sigma_R'] * 1e3:.3f} mΩ, L = {est['L'] * 1e6:.2f} ± "
         f"{est['sigma_L'] * 1e6:.2f} µH (fit RMS {est['rms_A']:.3f} A over "
-        f"{int(est['n_fit'])} samples). For the L_c in use: L_c/L = {ratio:.2f}, {verdict}; "
+        f"{int(est['n_fit'])} samples; 1σ from the scatter only, systematic errors not "
+        f"included). For the L_c in use: L_c/L = {ratio:.2f}, {verdict}; "
         f"margins with the measured R, L: GM {a['gain_margin_db']:.2f} dB, PM "
         f"{a['phase_margin_deg']:.1f}°, ‖S‖∞ {a['sensitivity_peak']:.2f}, predicted overshoot "
         f"{a['overshoot_pct']:.1f} % (L_c = L gives the two-sample deadbeat of eq. 16)."
