@@ -106,7 +106,7 @@ def current_step(bench: Bench, body: CurrentStepIn, average_samples: int = 1) ->
     n_post = max(10, round(body.duration_ms * 1e-3 / TS))
     pre = max(5, n_post // 10)
     with bench.long_action("current step", CURRENT_STEP_DEADLINE_S) as act:
-        bench.set_mode("current")  # the bench's way: off, switch, on again if it was on
+        # drive_link switches to current mode (coasting) and leaves the drive as found
         res = steps.current_step(
             bench.drive,
             body.from_A,
@@ -118,7 +118,6 @@ def current_step(bench: Bench, body: CurrentStepIn, average_samples: int = 1) ->
             average_samples=average_samples,
             hooks=_hooks(act),
         )
-        bench.current_setpoint = float(body.to_A)
     tr = res.trace
     cols = _columns(tr)
     i_p = cols.pop("i_p")
@@ -173,8 +172,7 @@ def identify(bench: Bench, body: IdentifyIn) -> dict[str, Any]:
     sf = _speed_factor(bench)
     deadline = IDENTIFY_DEADLINE_S + 4.0 * (body.duration_s + 0.1) / sf
     with bench.long_action("identification", deadline) as act:
-        bench.set_mode("current")
-        ident = steps.identify_speed_model(
+        ident = steps.identify_speed_model(  # leaves the drive as found (drive_link.steps)
             bench.drive,
             body.from_A,
             body.to_A,
@@ -182,8 +180,6 @@ def identify(bench: Bench, body: IdentifyIn) -> dict[str, Any]:
             settle_s=0.1 / sf + 0.02,
             hooks=_hooks(act),
         )
-        # the motor ran up to to_A: take it back to where it was (the fit needs no drive)
-        bench.restore(act.found)
     tr, fit = ident.trace, ident.fit
     cols = _columns(tr)
     bench.identified = {"a": fit.a, "b": fit.b, "Ts": TS, "r2": fit.r2}

@@ -35,6 +35,7 @@ from dashboard._gui_tabs import (
     CurrentTab,
     IdentifyTab,
     PlotArea,
+    ReportTab,
     SpeedTab,
     TuningTab,
     parse_sequence,
@@ -50,7 +51,15 @@ __all__ = ["CURRENT_COLORS", "SPEED_COLORS", "Field", "Panel", "parse_sequence"]
 
 
 class Panel(
-    PlotArea, SpeedTab, CurrentTab, TuningTab, IdentifyTab, CapturesTab, ConfigTab, BusTab
+    PlotArea,
+    SpeedTab,
+    CurrentTab,
+    TuningTab,
+    IdentifyTab,
+    CapturesTab,
+    ConfigTab,
+    BusTab,
+    ReportTab,
 ):
     """The GUI of one connected browser."""
 
@@ -172,6 +181,8 @@ class Panel(
             self._build_config_tab()
         with tabs.add_tab("Bus"):
             self._build_bus_tab()
+        with tabs.add_tab("Report"):
+            self._build_report_tab()
         self._build_plot_area()
         self.show_captures()
 

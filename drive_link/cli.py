@@ -48,7 +48,6 @@ from .errors import (
     StateError,
     UnknownObject,
 )
-from .restore import leave_as_found
 
 __all__ = [
     "EXIT_CODES",
@@ -499,6 +498,29 @@ def cmd_trace(args: argparse.Namespace, d: Drive) -> int:
     return 0
 
 
+def _settle_args(args: argparse.Namespace) -> Any:
+    """The --settle-window/--settle-timeout/--settle-tol options as a :class:`steps.Settle`
+    (None: the experiment's defaults)."""
+    from .steps import Settle
+
+    given = {
+        k: v
+        for k, v in (
+            ("window_s", args.settle_window),
+            ("timeout_s", args.settle_timeout),
+            ("tol", args.settle_tol),
+        )
+        if v is not None
+    }
+    return Settle(**given) if given else None
+
+
+def _say(args: argparse.Namespace) -> Callable[[str], None]:
+    """An experiment's 'what I change' line, printed first on stdout (stderr keeps the
+    one-line error); with --json it is the result's "changes"."""
+    return lambda text: None if args.json else print(text, flush=True)
+
+
 def cmd_step(args: argparse.Namespace, d: Drive) -> int:
     from . import steps
 
@@ -508,9 +530,9 @@ def cmd_step(args: argparse.Namespace, d: Drive) -> int:
     elif args.start is not None:
         for v in (args.start, args.start + args.delta):
             d.table["target_velocity"].check(units.parse_value(v, "rpm", integer=True))
+    settle = _settle_args(args)
     _usable_state(d)
-    with leave_as_found(d, _timeout(args, 3.0)):
-        res = _run_step(args, d, steps)
+    res = _run_step(args, d, steps, settle)  # leaves the drive as found (drive_link.steps)
     out = res.summary()
     _save_outputs(args, res, out)
     m = res.metrics
@@ -518,7 +540,8 @@ def cmd_step(args: argparse.Namespace, d: Drive) -> int:
 
     def text() -> str:
         lines = [
-            f"{res.kind} step {res.y_from:g} → {res.y_to:g} {unit}",
+            f"{res.kind} step {res.y_from:g} → {res.y_to:g} {unit} "
+            f"(settled start {res.start:.4g} {unit})",
             f"  rise time         {m.rise_time * 1e3:.4g} ms",
             f"  overshoot         {m.overshoot_pct:.3g} %",
             f"  settling time     {m.settling_time * 1e3:.4g} ms",
@@ -531,8 +554,9 @@ def cmd_step(args: argparse.Namespace, d: Drive) -> int:
     return 0
 
 
-def _run_step(args: argparse.Namespace, d: Drive, steps: Any) -> Any:
-    """The step test itself (drive_link.steps), run inside :func:`leave_as_found`."""
+def _run_step(args: argparse.Namespace, d: Drive, steps: Any, settle: Any) -> Any:
+    """The step test itself (drive_link.steps: settled start, drive left as found)."""
+    hooks = steps.Hooks(say=_say(args))
     if args.kind == "current":
         return steps.current_step(
             d,
@@ -542,6 +566,9 @@ def _run_step(args: argparse.Namespace, d: Drive, steps: Any) -> Any:
             length=args.length,
             pre_trigger=args.pre_trigger,
             enable=not args.no_enable,
+            hooks=hooks,
+            settle=settle,
+            brake=args.brake,
         )
     model = (args.model_a, args.model_b) if args.model_a is not None else None
     return steps.speed_step(
@@ -553,37 +580,37 @@ def _run_step(args: argparse.Namespace, d: Drive, steps: Any) -> Any:
         pre_trigger=args.pre_trigger,
         enable=not args.no_enable,
         model=model,
+        hooks=hooks,
+        settle=settle,
+        brake=args.brake,
     )
 
 
 def cmd_identify(args: argparse.Namespace, d: Drive) -> int:
     from . import design
-    from .steps import identify_speed_model
+    from .steps import Hooks, identify_speed_model
 
     for v in (args.i_from, args.i_to):
         d.table["setpoints.i_p_ref"].check(v)
+    settle = _settle_args(args)
     _usable_state(d)
-    with leave_as_found(d, _timeout(args, 3.0)):
-        if d.mode != "current" and d.state == OPERATION_ENABLED:
-            d.disable(timeout=_timeout(args, 3.0))
-        d.set_mode("current")
-        d.set_current(args.i_from)
-        if d.state != OPERATION_ENABLED:
-            d.enable(timeout=_timeout(args, 3.0))
-        ident = identify_speed_model(  # the dashboard's identification too
-            d,
-            args.i_from,
-            args.i_to,
-            divider=args.divider,
-            length=args.length,
-            pre_trigger=args.pre_trigger,
-            settle_s=args.settle,
-            enable=False,
-        )
+    ident = identify_speed_model(  # the dashboard's identification too; leaves as found
+        d,
+        args.i_from,
+        args.i_to,
+        divider=args.divider,
+        length=args.length,
+        pre_trigger=args.pre_trigger,
+        settle_s=args.settle,
+        hooks=Hooks(say=_say(args)),
+        settle=settle,
+        brake=args.brake,
+    )
     tr, fit = ident.trace, ident.fit
     k_p, k_i = design.ip_gains(fit.a, fit.b, xi=args.xi, omega_n=args.omega_n)
     out = {
         "fit": fit.as_dict(),
+        "start_rpm": ident.start_rpm,
         "ip_gains": {"speed_k_p": k_p, "speed_k_i": k_i, "xi": args.xi, "omega_n": args.omega_n},
     }
     _save_outputs(args, tr, out)
@@ -591,6 +618,8 @@ def cmd_identify(args: argparse.Namespace, d: Drive) -> int:
         args,
         out,
         lambda: (
+            f"settled start {ident.start_rpm:.4g} rpm at {args.i_from:g} A, step to "
+            f"{args.i_to:g} A\n"
             f"G(z) = b/(z - a): a = {fit.a:.8f}, b = {fit.b:.6g} rpm/A per sample "
             f"(R² {fit.r2:.4f})\nIP gains for ξ = {args.xi}, ω_n = {args.omega_n} rad/s: "
             f"speed_k_p = {k_p:.5g}, speed_k_i = {k_i:.5g}"
@@ -1071,6 +1100,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="trace samples before the step (default 50 current, 100 speed)",
     )
     p.add_argument("--no-enable", action="store_true", help="fail instead of enabling the drive")
+    _settle_options(p)
     p.add_argument(
         "--model-a",
         type=float,
@@ -1113,6 +1143,7 @@ def build_parser() -> argparse.ArgumentParser:
         default=0.1,
         help="wait at the start current before recording, s (default 0.1)",
     )
+    _settle_options(p)
     p.add_argument(
         "--xi", type=float, default=1.0, help="damping ratio ξ of the IP design (unitless)"
     )
@@ -1147,10 +1178,45 @@ def build_parser() -> argparse.ArgumentParser:
     from .monitor import add_parser as add_monitor_parser
 
     add_monitor_parser(sub, bus)
+    from .report.cli import add_parser as add_report_parser
+
+    add_report_parser(sub, bus)
     from ._cli_design import add_parsers as add_design_parsers
 
     add_design_parsers(sub)
     return ap
+
+
+def _settle_options(p: argparse.ArgumentParser) -> None:
+    """--settle-window/--settle-timeout/--settle-tol and --brake (step, identify-drive)."""
+    p.add_argument(
+        "--settle-window",
+        type=quantity("s"),
+        default=None,
+        help="the start counts as settled when it stays within --settle-tol for this long, s "
+        "(default 0.3 s speed step, 0.05 s current step, 0.5 s identify-drive)",
+    )
+    p.add_argument(
+        "--settle-timeout",
+        type=quantity("s"),
+        default=None,
+        help="give up (exit 5, no metrics) when the start has not settled by then, s "
+        "(default 15 s; 5 s current step)",
+    )
+    p.add_argument(
+        "--settle-tol",
+        type=float,
+        default=None,
+        help="settled band in the signal's unit: rpm (speed step: of the start; "
+        "identify-drive: spread of the speed) or A (current step) (default max(2 rpm, 1 %% of "
+        "the step); max(0.5 A, 5 %% of the step); 2 rpm)",
+    )
+    p.add_argument(
+        "--brake",
+        action="store_true",
+        help="switch modes on the drive's own disable ramp (brakes at the current limit) "
+        "instead of coasting",
+    )
 
 
 def _apply_step_defaults(args: argparse.Namespace) -> None:

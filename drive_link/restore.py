@@ -1,15 +1,20 @@
 """Leave the drive as it was found: :func:`leave_as_found` around a step test or identification.
 
-The snapshot is the CiA 402 state, the mode of operation and the setpoints (target_velocity
-rpm, setpoints.i_p_ref A, target_torque ‰). On the way out — normal end, error or Ctrl-C
-(KeyboardInterrupt) — :func:`restore` puts them back in an order the drive accepts (the mode
-changes only with the power stage off, CiA 402 / 0x6060 abort 0x08000022 otherwise):
+The snapshot is the CiA 402 state, the mode of operation, the setpoints (target_velocity
+rpm, setpoints.i_p_ref A, target_torque ‰), the disable-operation option code (0x605C), any
+further objects an experiment names (``settings``: e.g. the virtual load torque) and, when asked,
+the controller gains. On the way out — normal end, error or Ctrl-C (KeyboardInterrupt) —
+:func:`restore` puts them back in an order the drive accepts (the mode changes only with the
+power stage off, CiA 402 / 0x6060 abort 0x08000022 otherwise):
 
 1. a drive that was not enabled, or is enabled in another mode than before, is disabled first
-   (power stage off: a drive found off is stopped);
-2. the setpoints are written back;
-3. the mode is selected again;
-4. the state is reached again: OPERATION ENABLED (the motor returns to the old setpoint),
+   (power stage off: a drive found off is stopped). A mode switch coasts (:func:`switch_mode`:
+   0x605C = 0 for that one transition) instead of braking on the slow-down ramp at the
+   current limit, unless ``brake`` is asked;
+2. the settings and gains are written back (gains as one set, :meth:`Drive.apply_gains`);
+3. the setpoints are written back;
+4. the mode is selected again;
+5. the state is reached again: OPERATION ENABLED (the motor returns to the old setpoint),
    SWITCHED ON, or SWITCH ON DISABLED.
 
 A drive in FAULT is left there (the fault is reported by the caller's error). A second Ctrl-C
@@ -36,7 +41,19 @@ from .errors import DriveError
 if TYPE_CHECKING:
     from .drive import Drive
 
-__all__ = ["SETPOINTS", "Snapshot", "leave_as_found", "restore", "snapshot"]
+__all__ = [
+    "DISABLE_OPTION",
+    "SETPOINTS",
+    "Snapshot",
+    "apply_gains_stepwise",
+    "leave_as_found",
+    "restore",
+    "snapshot",
+    "switch_mode",
+]
+
+#: CiA 402 disable operation option code (0x605C): 0 coast, 1 slow-down ramp, then off.
+DISABLE_OPTION = "disable_operation_option_code"
 
 #: Setpoint objects saved and written back (name → unit, for messages).
 SETPOINTS: dict[str, str] = {
@@ -54,15 +71,89 @@ class Snapshot:
     state: str
     mode: str
     setpoints: dict[str, Any] = field(default_factory=dict)
+    settings: dict[str, Any] = field(default_factory=dict)
+    gains: dict[str, Any] | None = None
+
+    def describe(self) -> str:
+        """One line: what the drive is put back to (state, mode, setpoint in use)."""
+        sp = {"speed": "target_velocity", "current": "setpoints.i_p_ref"}.get(self.mode)
+        val = ""
+        if sp is not None and sp in self.setpoints:
+            val = f" at {self.setpoints[sp]:g} {SETPOINTS[sp]}"
+        return f"{self.state}, {self.mode} mode{val}"
 
 
-def snapshot(drive: Drive) -> Snapshot:
-    """Read the state, mode and setpoints of ``drive`` (objects it lacks are skipped)."""
+def snapshot(
+    drive: Drive, settings: tuple[str, ...] = (), gains: bool = False
+) -> Snapshot:
+    """Read the state, mode and setpoints of ``drive``, the disable option code, the objects
+    named in ``settings`` and (``gains``) the controller gains; objects it lacks are skipped."""
     values = {n: drive.read(n) for n in SETPOINTS if n in drive.table}
-    return Snapshot(drive.state, drive.mode, values)
+    names = (DISABLE_OPTION, *settings)
+    extra = {n: drive.read(n) for n in dict.fromkeys(names) if n in drive.table}
+    g = drive.read_gains().to_dict() if gains else None
+    return Snapshot(drive.state, drive.mode, values, extra, g)
 
 
-def restore(drive: Drive, snap: Snapshot, timeout: float = 3.0) -> str:
+def switch_mode(drive: Drive, mode: str, *, brake: bool = False, timeout: float = 3.0) -> None:
+    """Select ``mode``; an enabled drive is disabled for the switch and enabled again.
+
+    The power stage goes off coasting (0x605C set to 0 for that transition and put back), not
+    on the drive's slow-down ramp, which brakes at the current limit (-100 A) to standstill;
+    ``brake=True`` keeps the drive's own option code."""
+    if drive.mode == mode:
+        return
+    if drive.state != OPERATION_ENABLED:
+        drive.set_mode(mode, timeout=max(0.5, timeout / 3))
+        return
+    _coast_disable(drive, brake, timeout)
+    drive.set_mode(mode, timeout=max(0.5, timeout / 3))
+    drive.enable(timeout=timeout)
+
+
+def apply_gains_stepwise(drive: Drive, changes: dict[str, Any]) -> None:
+    """:meth:`Drive.apply_gains` as one set; if the drive refuses the set (SDO abort), one gain
+    at a time in an order it accepts (each intermediate set admissible). The virtual drive checks
+    each staged value against the active set when 0x20F1 applies a set, so it refuses e.g.
+    predictive + feed-forward in one set from deadbeat without feed-forward (abort 0x06090030)
+    but takes emf_feedforward = 1 first, then type = 2."""
+    from .errors import SdoAbort
+
+    try:
+        drive.apply_gains(**changes)
+        return
+    except SdoAbort as exc:
+        last: SdoAbort = exc
+    pending = dict(changes)
+    while pending:
+        done = False
+        for k in list(pending):
+            try:
+                drive.apply_gains(**{k: pending[k]})
+            except SdoAbort as exc:
+                last = exc
+                continue
+            del pending[k]
+            done = True
+        if not done:
+            raise last
+
+
+def _coast_disable(drive: Drive, brake: bool, timeout: float) -> str:
+    """Power stage off; coasting unless ``brake`` (see :func:`switch_mode`)."""
+    if brake or DISABLE_OPTION not in drive.table:
+        return drive.disable(timeout=timeout)
+    old = drive.read(DISABLE_OPTION)
+    if old == 0:
+        return drive.disable(timeout=timeout)
+    drive.write(DISABLE_OPTION, 0)
+    try:
+        return drive.disable(timeout=timeout)
+    finally:
+        drive.write(DISABLE_OPTION, old)
+
+
+def restore(drive: Drive, snap: Snapshot, timeout: float = 3.0, brake: bool = False) -> str:
     """Put ``drive`` back into ``snap`` (see the module doc); returns the state reached."""
     _stop_trace(drive)
     state = drive.state
@@ -70,7 +161,15 @@ def restore(drive: Drive, snap: Snapshot, timeout: float = 3.0) -> str:
         return state
     mode_changed = drive.mode != snap.mode
     if state == OPERATION_ENABLED and (snap.state != OPERATION_ENABLED or mode_changed):
-        state = drive.disable(timeout=timeout)
+        state = _coast_disable(drive, brake, timeout)
+    for name, value in snap.settings.items():
+        if drive.read(name) != value:
+            drive.write(name, value)
+    if snap.gains is not None:
+        now = drive.read_gains().to_dict()
+        diff = {k: v for k, v in snap.gains.items() if now.get(k) != v}
+        if diff:
+            apply_gains_stepwise(drive, diff)
     for name, value in snap.setpoints.items():
         if drive.read(name) != value:
             drive.write(name, value)
@@ -116,21 +215,31 @@ def _sigint_held() -> Iterator[None]:
 
 
 @contextlib.contextmanager
-def leave_as_found(drive: Drive, timeout: float = 3.0) -> Iterator[Snapshot]:
-    """Snapshot ``drive``, run the block, :func:`restore` it on any exit (Ctrl-C included).
+def leave_as_found(
+    drive: Drive,
+    timeout: float = 3.0,
+    *,
+    settings: tuple[str, ...] = (),
+    gains: bool = False,
+    brake: bool = False,
+    found: Snapshot | None = None,
+) -> Iterator[Snapshot]:
+    """Snapshot ``drive`` (or take ``found``, a snapshot made earlier by the caller), run the
+    block, :func:`restore` it on any exit (Ctrl-C included). ``settings``/``gains``: what else
+    the block may change (see :func:`snapshot`); ``brake``: see :func:`switch_mode`.
 
     If the block failed and the restore fails too, one :class:`DriveError` names both.
     """
-    snap = snapshot(drive)
+    snap = found if found is not None else snapshot(drive, settings, gains)
     try:
         yield snap
     except BaseException as exc:
         try:
             with _sigint_held():
-                restore(drive, snap, timeout)
+                restore(drive, snap, timeout, brake)
         except (DriveError, KeyboardInterrupt) as rexc:
             what = "interrupted" if isinstance(exc, KeyboardInterrupt) else str(exc)
             raise DriveError(f"{what}; restoring the drive failed too: {rexc}") from exc
         raise
     with _sigint_held():
-        restore(drive, snap, timeout)
+        restore(drive, snap, timeout, brake)

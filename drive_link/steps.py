@@ -17,6 +17,7 @@ the step.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import time
 from collections.abc import Callable
@@ -30,6 +31,7 @@ from firmware_protocol import enums, paper
 
 from . import design, identify, metrics
 from .errors import DriveTimeout, InvalidValue, StateError
+from .restore import Snapshot, leave_as_found, snapshot, switch_mode
 from .trace import TS, Trace, Trigger
 
 if TYPE_CHECKING:
@@ -42,6 +44,8 @@ __all__ = [
     "SPEED_MODEL_PAPER",
     "Hooks",
     "Identification",
+    "NotSettled",
+    "Settle",
     "StepResult",
     "current_step",
     "first_commutation",
@@ -51,6 +55,7 @@ __all__ = [
     "record_setpoint_step",
     "sector_changes",
     "speed_step",
+    "wait_settled",
 ]
 
 COMMUTATION_RETRIES = 4
@@ -88,9 +93,12 @@ class StepResult:
     commutation_at_s: float | None = None
     model_rms_error: float = math.nan
     attempts: int = 1
+    start: float = math.nan
+    changes: str = ""
 
     def summary(self) -> dict[str, Any]:
-        """JSON-friendly summary (metrics, setpoints, parameters, model error, commutation)."""
+        """JSON-friendly summary (metrics, setpoints, parameters, model error, commutation,
+        the settled start value measured before the step, what the test changed)."""
         unit = self.trace.units.get(self.signal, "")
         return {
             "kind": self.kind,
@@ -98,6 +106,8 @@ class StepResult:
             "unit": unit,
             "from": self.y_from,
             "to": self.y_to,
+            "start": self.start,
+            "changes": self.changes,
             "metrics": self.metrics.as_dict(),
             "params": self.params,
             "model_rms_error": self.model_rms_error,
@@ -142,13 +152,10 @@ class StepResult:
         return tr.to_png(path, title=title, overlay=over)
 
 
-def _ensure_mode(drive: Drive, mode: str) -> None:
-    """Select ``mode``; a drive that refuses mode changes while enabled is disabled first."""
-    if drive.mode == mode:
-        return
-    if drive.state == "OPERATION ENABLED":
-        drive.disable()
-    drive.set_mode(mode)
+def _ensure_mode(drive: Drive, mode: str, brake: bool = False) -> None:
+    """Select ``mode``; an enabled drive is switched coasting, not braking
+    (:func:`drive_link.restore.switch_mode`), and enabled again."""
+    switch_mode(drive, mode, brake=brake)
 
 
 def _require_enabled(drive: Drive, enable: bool) -> None:
@@ -168,6 +175,13 @@ class Hooks:
 
     progress: Callable[[float, str], None] | None = None
     sleep: Callable[[float], None] = time.sleep
+    say: Callable[[str], None] | None = None
+    """Called once before an experiment changes anything, with one line saying what it
+    changes and what it puts back (the CLI prints it on stderr, the dashboard shows it)."""
+
+    def announce(self, text: str) -> None:
+        if self.say is not None:
+            self.say(text)
 
     def report(self, fraction: float, text: str) -> None:
         if self.progress is not None:
@@ -196,13 +210,72 @@ def _wait_done(drive: Drive, timeout: float, hooks: Hooks, poll_s: float = 0.02)
         state = drive.trace.state
 
 
-def _settle_speed(drive: Drive, w: float, tol: float, timeout: float, hooks: Hooks) -> None:
-    """Wait until |measured speed − ``w``| ≤ ``tol`` (rpm), at most ``timeout`` s."""
-    deadline = time.monotonic() + timeout
-    while abs(float(drive.read("measurements.speed")) - w) > tol:
-        if time.monotonic() >= deadline:
-            raise DriveTimeout(f"speed not back within {tol:g} rpm of {w:g} rpm in {timeout:g} s")
-        hooks.sleep(0.05)
+class NotSettled(DriveTimeout):
+    """The start of a step did not settle: no metrics are computed from it."""
+
+
+@dataclass(frozen=True)
+class Settle:
+    """When a start counts as settled: every reading of the signal over the last ``window_s``
+    [s] lies within ``tol`` (the signal's unit: rpm or A) of the target, or, with no target,
+    within ``tol`` of each other (steady); given up after ``timeout_s`` [s]. ``tol`` None: the
+    experiment's default."""
+
+    window_s: float = 0.3
+    timeout_s: float = 15.0
+    tol: float | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("window_s", "timeout_s"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v >= 0):
+                raise InvalidValue(f"settle {name} must be a finite time >= 0 s (got {v!r})")
+        if self.tol is not None and not (math.isfinite(self.tol) and self.tol > 0):
+            raise InvalidValue(f"settle tolerance must be > 0 (got {self.tol!r})")
+
+
+def wait_settled(
+    drive: Drive,
+    signal: str,
+    target: float | None,
+    tol: float,
+    settle: Settle,
+    hooks: Hooks,
+    unit: str = "",
+    poll_s: float = 0.02,
+) -> float:
+    """Wait until ``measurements.<signal>`` is settled (:class:`Settle`); returns its mean over
+    the window. :class:`NotSettled` names the last value and the spread when it does not."""
+    name = f"measurements.{signal}"
+    t0 = time.monotonic()
+    samples: list[tuple[float, float]] = []
+    while True:
+        now = time.monotonic()
+        samples.append((now, float(drive.read(name))))
+        samples = [(t, v) for t, v in samples if t >= now - settle.window_s - poll_s]
+        span = now - samples[0][0]
+        vals = [v for _, v in samples]
+        if target is None:
+            ok = max(vals) - min(vals) <= tol
+        else:
+            ok = max(abs(v - target) for v in vals) <= tol
+        if ok and span >= settle.window_s:
+            return float(np.mean(vals))
+        if now - t0 >= settle.timeout_s:
+            want = f"within {tol:g} {unit} of {target:g} {unit}" if target is not None else (
+                f"steady within {tol:g} {unit}"
+            )
+            raise NotSettled(
+                f"start not settled: {signal} {vals[-1]:.4g} {unit} (spread "
+                f"{max(vals) - min(vals):.3g} {unit} over {span:.2g} s), not {want} for "
+                f"{settle.window_s:g} s within {settle.timeout_s:g} s; no metrics computed "
+                "(longer --settle-timeout?)"
+            )
+        hooks.sleep(poll_s)
+
+
+def _describe_change(kind: str, found: Snapshot, plan: str) -> str:
+    return f"{kind}: {plan}; afterwards the drive is put back to {found.describe()}"
 
 
 def _upload(drive: Drive, hooks: Hooks) -> Trace:
@@ -342,6 +415,10 @@ def current_step(
     commutation_retries: int = COMMUTATION_RETRIES,
     average_samples: int = 1,
     hooks: Hooks | None = None,
+    settle: Settle | None = None,
+    brake: bool = False,
+    found: Snapshot | None = None,
+    restore: bool = True,
 ) -> StepResult:
     """Pseudo-current step i_from → i_to (A) in "current" mode.
 
@@ -358,10 +435,18 @@ def current_step(
     metrics (of i_p averaged over ``average_samples``) and the model's RMS error [A] are taken
     up to :data:`COMMUTATION_MARGIN` loop samples before the first sector change after the step
     when at least 10 samples precede it.
+
+    Leaves the drive as found (``restore``; ``found``: a snapshot the caller took before it
+    changed anything itself): state, mode, setpoints, also on error and Ctrl-C; the mode
+    switches coast unless ``brake``. Before the step i_p must be settled at i_from
+    (:class:`Settle`, default window 50 ms, tolerance max(0.5 A, 5 % of the step); for a law
+    without integral action, which settles with an error, steady within that tolerance).
     """
     if i_from == i_to:
         raise InvalidValue("current step needs i_from != i_to")
     h = hooks or Hooks()
+    st = settle or Settle(window_s=0.05, timeout_s=5.0)
+    tol = st.tol if st.tol is not None else max(0.5, 0.05 * abs(i_to - i_from))
     channels = ["i_p", "i_p_ref", "v_L", "e_L", *extra]
     hall = commutation_retries > 0 or "hall_sector" in extra
     if hall and "hall_sector" not in channels:
@@ -372,9 +457,55 @@ def current_step(
             f"{len(channels)} channels x {length} samples exceed the recorder's {capacity} "
             "samples: shorten the record"
         )
-    _ensure_mode(drive, "current")
-    drive.set_current(i_from)
-    _require_enabled(drive, enable)
+    snap = found if found is not None else snapshot(drive)
+    h.announce(
+        _describe_change(
+            "current step", snap, f"current mode, i_p* {i_from:g} A, then {i_to:g} A"
+        )
+    )
+    with _kept(drive, snap, restore, brake):
+        _ensure_mode(drive, "current", brake)
+        drive.set_current(i_from)
+        _require_enabled(drive, enable)
+        g0 = drive.read_gains()
+        # a law without integral action (predictive; deadbeat with R_c = 0) settles with an
+        # error: there the start is settled when steady, not when at i_from
+        integral = not (g0.type == 2 or (g0.type == 0 and g0.R_c == 0))
+        start = wait_settled(drive, "i_p", i_from if integral else None, tol, st, h, "A")
+        tr, t_comm, attempt = _current_records(
+            drive, channels, i_from, i_to, divider, length, pre_trigger, settle_s, timeout,
+            commutation_retries, hall, h,
+        )
+        loop = (drive.read_gains(), float(drive.read("motor.R")), float(drive.read("motor.L")))
+    return _current_result(
+        loop, tr, t_comm, attempt, i_from, i_to, divider, average_samples, start,
+        _describe_change("current step", snap, f"i_p* {i_from:g} → {i_to:g} A"), h,
+    )
+
+
+def _kept(drive: Drive, snap: Snapshot, restore: bool, brake: bool) -> Any:
+    """:func:`leave_as_found` with ``snap``, or nothing when ``restore`` is False."""
+    if not restore:
+        return contextlib.nullcontext(snap)
+    return leave_as_found(drive, found=snap, brake=brake)
+
+
+def _current_records(
+    drive: Drive,
+    channels: list[str],
+    i_from: float,
+    i_to: float,
+    divider: int,
+    length: int,
+    pre_trigger: int,
+    settle_s: float,
+    timeout: float | None,
+    commutation_retries: int,
+    hall: bool,
+    h: Hooks,
+) -> tuple[Trace, float | None, int]:
+    """The current step's records, repeated while a commutation disturbs them (see
+    :func:`current_step`): the least disturbed record, its first sector change, attempts."""
     tries = max(1, commutation_retries)
     best: tuple[tuple[bool, float], Trace, float | None] | None = None
     attempt = 0
@@ -407,10 +538,25 @@ def current_step(
             break
     assert best is not None
     _, tr, t_comm = best
+    return tr, t_comm, attempt
+
+
+def _current_result(
+    loop: tuple[Any, float, float],
+    tr: Trace,
+    t_comm: float | None,
+    attempt: int,
+    i_from: float,
+    i_to: float,
+    divider: int,
+    average_samples: int,
+    start: float,
+    changes: str,
+    h: Hooks,
+) -> StepResult:
+    """Metrics and the model's prediction of a recorded current step."""
     h.report(0.95, "model and metrics")
-    g = drive.read_gains()
-    R = float(drive.read("motor.R"))
-    L = float(drive.read("motor.L"))
+    g, R, L = loop
     k0 = tr.trigger_index
     i_p = _column(tr, "i_p")
     e_L = float(np.mean(tr.signals["measurements.e_L"][: max(k0, 1)]))
@@ -467,6 +613,8 @@ def current_step(
         commutation_at_s=t_comm,
         model_rms_error=rms,
         attempts=attempt,
+        start=start,
+        changes=changes,
     )
 
 
@@ -483,44 +631,73 @@ def speed_step(
     timeout: float | None = None,
     *,
     hooks: Hooks | None = None,
+    settle: Settle | None = None,
+    extra: tuple[str, ...] = (),
+    brake: bool = False,
+    found: Snapshot | None = None,
+    restore: bool = True,
 ) -> StepResult:
     """Speed step of ``delta_rpm`` (rpm) from ``start_rpm`` (default: the present target) in
-    "speed" mode, recorded with channels speed, speed_ref, i_p_ref, i_p.
+    "speed" mode, recorded with channels speed, speed_ref, i_p_ref, i_p (and ``extra``, e.g.
+    i_a for the paper's Figs. 18-19).
+
+    The start must be settled first: the measured speed within ``settle.tol`` (default
+    max(2 rpm, 1 % of the step)) of ``start_rpm`` for ``settle.window_s`` s, within
+    ``settle.timeout_s`` s (:class:`Settle`; :class:`NotSettled` otherwise), and the recorded
+    speed before the step must agree: a start that drifted raises :class:`NotSettled` with no
+    metrics. The measured start is ``StepResult.start`` (also ``y_from``).
 
     The prediction is :func:`drive_link.design.predicted_speed_step` with the drive's IP gains
     and the speed model ``model`` = (a, b) (default: the paper's, :data:`SPEED_MODEL_PAPER`;
-    pass the result of ``drive-link identify`` for the machine at hand).
+    pass the result of ``drive-link identify`` for the machine at hand). The drive is left as
+    found (see :func:`current_step`).
     """
     if delta_rpm == 0:
         raise InvalidValue("speed step needs a non-zero delta")
-    _ensure_mode(drive, "speed")
-    w0 = float(drive.read("target_velocity")) if start_rpm is None else float(start_rpm)
-    w1 = w0 + float(delta_rpm)
-    drive.set_speed(w0)
-    _require_enabled(drive, enable)
     h = hooks or Hooks()
-    h.sleep(settle_s)
-    def back_to_w0() -> None:  # a retried step starts from rest at w0 again
+    st = settle or Settle()
+    tol = st.tol if st.tol is not None else max(2.0, 0.01 * abs(float(delta_rpm)))
+    snap = found if found is not None else snapshot(drive)
+    target = snap.setpoints.get("target_velocity", 0)
+    w0 = float(target) if start_rpm is None else float(start_rpm)
+    w1 = w0 + float(delta_rpm)
+    plan = f"speed mode, {w0:g} rpm (settled), then {round(w1):g} rpm"
+    h.announce(_describe_change("speed step", snap, plan))
+    channels = ["speed", "speed_ref", "i_p_ref", "i_p", *extra]
+    with _kept(drive, snap, restore, brake):
+        _ensure_mode(drive, "speed", brake)
         drive.set_speed(w0)
-        _settle_speed(drive, w0, max(5.0, 0.02 * abs(w1 - w0)), 10.0, h)
+        _require_enabled(drive, enable)
+        h.report(0.02, f"settling at {w0:g} rpm")
+        wait_settled(drive, "speed", w0, tol, st, h, "rpm")
         h.sleep(settle_s)
 
-    tr = record_setpoint_step(
-        drive,
-        ["speed", "speed_ref", "i_p_ref", "i_p"],
-        back_to_w0,
-        lambda: drive.set_speed(w1),
-        divider,
-        length,
-        pre_trigger,
-        timeout,
-        hooks=h,
-    )
-    g = drive.read_gains()
+        def back_to_w0() -> None:  # a retried step starts from rest at w0 again
+            drive.set_speed(w0)
+            wait_settled(drive, "speed", w0, tol, st, h, "rpm")
+
+        tr = record_setpoint_step(
+            drive,
+            channels,
+            back_to_w0,
+            lambda: drive.set_speed(w1),
+            divider,
+            length,
+            pre_trigger,
+            timeout,
+            hooks=h,
+        )
+        g = drive.read_gains()
     a, b = model or SPEED_MODEL_PAPER
     k0 = tr.trigger_index
     speed = tr.signals["measurements.speed"].astype(float)
-    w_start = float(np.mean(speed[: max(k0, 1)]))
+    pre = speed[: max(k0, 1)]
+    w_start = float(np.mean(pre))
+    if float(np.max(np.abs(pre - w0))) > tol:
+        raise NotSettled(
+            f"start not settled: the recorded speed before the step ran {np.min(pre):.4g}.."
+            f"{np.max(pre):.4g} rpm, not within {tol:g} rpm of {w0:g} rpm; no metrics computed"
+        )
     n_after = len(tr.t) - k0
     pred = design.predicted_speed_step(
         a,
@@ -540,6 +717,7 @@ def speed_step(
         "speed_k_i": g.speed_k_i,
         "divider": divider,
         "Ts": TS,
+        "settle_tol_rpm": tol,
     }
     return StepResult(
         "speed",
@@ -550,6 +728,8 @@ def speed_step(
         m,
         {"t": tr.t[k0:], "measurements.speed": pred.speed[:n_after]},
         params,
+        start=w_start,
+        changes=_describe_change("speed step", snap, f"{w0:g} → {round(w1):g} rpm"),
     )
 
 
@@ -565,10 +745,18 @@ class Identification:
     model: np.ndarray
     i_from: float
     i_to: float
+    start_rpm: float = math.nan
+    changes: str = ""
 
     def summary(self) -> dict[str, Any]:
         """JSON-friendly: the fit (a, b, R², RMS, time constant, DC gain ...) and the step."""
-        return {"fit": self.fit.as_dict(), "from": self.i_from, "to": self.i_to}
+        return {
+            "fit": self.fit.as_dict(),
+            "from": self.i_from,
+            "to": self.i_to,
+            "start_rpm": self.start_rpm,
+            "changes": self.changes,
+        }
 
 
 def identification_record(duration_s: float) -> tuple[int, int, int]:
@@ -595,13 +783,21 @@ def identify_speed_model(
     enable: bool = True,
     timeout: float | None = None,
     hooks: Hooks | None = None,
+    settle: Settle | None = None,
+    brake: bool = False,
+    found: Snapshot | None = None,
+    restore: bool = True,
 ) -> Identification:
     """Current step i_from → i_to (A) in "current" mode with i_p and speed recorded, then the
     fit of ``G(z) = b/(z - a)`` (eq. 26) at the loop rate.
 
     The record covers ``duration_s`` s after the step (:func:`identification_record`), or is
-    given as ``divider``/``length``/``pre_trigger``. Sets the mode and i_from, enables (if
-    ``enable``), waits ``settle_s`` s, steps, and puts i_from back afterwards (also on error).
+    given as ``divider``/``length``/``pre_trigger``. Sets the mode (switching coasting, not
+    braking, unless ``brake``) and i_from, enables (if ``enable``), waits until the speed is
+    steady at i_from (:class:`Settle`: every reading over ``window_s`` within ``tol``, default
+    2 rpm, of each other; :class:`NotSettled` after ``timeout_s``), waits ``settle_s`` s, steps,
+    and leaves the drive as found afterwards (also on error and Ctrl-C; see
+    :func:`current_step`). The settled start speed is ``Identification.start_rpm``.
     """
     if i_from == i_to:
         raise InvalidValue("identification needs i_from != i_to")
@@ -611,11 +807,17 @@ def identify_speed_model(
         length = n0 if length is None else length
         pre_trigger = p0 if pre_trigger is None else pre_trigger
     h = hooks or Hooks()
-    _ensure_mode(drive, "current")
-    drive.set_current(i_from)
-    _require_enabled(drive, enable)
-    h.report(0.05, f"settling at {i_from:g} A")
-    try:
+    st = settle or Settle(window_s=0.5, timeout_s=15.0)
+    tol = st.tol if st.tol is not None else 2.0
+    snap = found if found is not None else snapshot(drive)
+    plan = f"current mode, i_p* {i_from:g} A until the speed is steady, then {i_to:g} A"
+    h.announce(_describe_change("identification", snap, plan))
+    with _kept(drive, snap, restore, brake):
+        _ensure_mode(drive, "current", brake)
+        drive.set_current(i_from)
+        _require_enabled(drive, enable)
+        h.report(0.05, f"settling at {i_from:g} A")
+        start = wait_settled(drive, "speed", None, tol, st, h, "rpm")
         h.sleep(settle_s)
         tr = record_setpoint_step(
             drive,
@@ -628,11 +830,12 @@ def identify_speed_model(
             timeout,
             hooks=h,
         )
-    finally:
-        drive.set_current(i_from)
     h.report(0.95, "fitting")
     i_p = _column(tr, "i_p")
     speed = _column(tr, "speed")
     fit = identify.fit_first_order(i_p, speed, Ts=divider * TS)
     model = identify.simulate_first_order(fit.a_D, fit.b_D, i_p, speed[0], fit.offset)
-    return Identification(tr, fit, model, float(i_from), float(i_to))
+    ident = Identification(tr, fit, model, float(i_from), float(i_to))
+    ident.start_rpm = start
+    ident.changes = _describe_change("identification", snap, f"i_p* {i_from:g} → {i_to:g} A")
+    return ident

@@ -12,6 +12,7 @@ from dashboard._gui_tabs.config import ConfigTab
 from dashboard._gui_tabs.current import CurrentTab
 from dashboard._gui_tabs.identify import IdentifyTab
 from dashboard._gui_tabs.plots import PlotArea
+from dashboard._gui_tabs.report import ReportTab
 from dashboard._gui_tabs.speed import SpeedTab, parse_sequence
 from dashboard._gui_tabs.tuning import TuningTab
 
@@ -22,6 +23,7 @@ __all__ = [
     "CurrentTab",
     "IdentifyTab",
     "PlotArea",
+    "ReportTab",
     "SpeedTab",
     "TuningTab",
     "parse_sequence",

@@ -120,8 +120,9 @@ def test_speed_step_to_1000_rpm_and_back(bench):
         _wait_speed(bench, d, 0.0, 5.0, 5.0)
         g = d.read_gains()
         for w0, w1 in ((0.0, 1000.0), (1000.0, 0.0)):
-            res = steps.speed_step(
-                d, w1 - w0, start_rpm=w0, divider=100, length=1000, pre_trigger=20
+            res = steps.speed_step(  # the second step starts where the first one ended
+                d, w1 - w0, start_rpm=w0, divider=100, length=1000, pre_trigger=20,
+                restore=False,
             )
             tr = res.trace
             k0 = tr.trigger_index
