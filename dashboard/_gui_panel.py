@@ -40,6 +40,7 @@ from dashboard._gui_tabs import (
     parse_sequence,
 )
 from dashboard._gui_tabs.plots import PLOT_AREA_WIDTH_PX, STRIP_PX
+from dashboard._gui_words import gui_text
 from dashboard._security import token_ok
 
 if TYPE_CHECKING:
@@ -131,8 +132,8 @@ class Panel(PlotArea, SpeedTab, CurrentTab, TuningTab, IdentifyTab, CapturesTab,
                 done = fn(event)
             except FieldError as exc:
                 self.notice(md, f"{exc} — nothing sent")
-            except Exception as exc:
-                self.notice(md, str(exc) or type(exc).__name__)
+            except Exception as exc:  # drive_link speaks CLI: say it with the GUI's controls
+                self.notice(md, gui_text(str(exc)) or type(exc).__name__)
             else:
                 self.notice(md, done if isinstance(done, str) else "", "ok")
             self.owner.refresh_status()
