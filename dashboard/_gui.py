@@ -175,6 +175,10 @@ class BenchGui:
             panel.load_gains()
         if self.scene is not None:  # its "3D rotor" checkbox and, shown, its rotor
             self.scene.attach(client, shown=self.config.scene_3d_shown)
+            box = self.scene.toggles.get(client.client_id)
+            if box is not None:  # the readout leaves room for the rotor when it is shown
+                panel.fit_readout(bool(box.value))
+                box.on_update(lambda e: panel.fit_readout(bool(box.value)))
         self.refresh_status()
 
     def _on_disconnect(self, client: viser.ClientHandle) -> None:

@@ -90,11 +90,19 @@ def readout_html(s: dict[str, Any], latest: dict[str, float]) -> str:
     live = s.get("live") or {}
     load = live.get("bus_load")
     hb = s.get("heartbeat_age_s")
+    ages = s.get("ages_s") or {}
+    emcy = s.get("emcy") or []
+
+    def line(name: str, value: str) -> str:
+        return f"<div style='color:#555;margin-top:5px'>{name}<br><b>{value}</b></div>"
+
     small = (
-        f"<div style='color:#555;margin-top:6px'>heartbeat<br>"
-        f"<b>{fmt(hb, '.2f')} s</b> ago</div>"
-        f"<div style='color:#555;margin-top:4px'>bus load<br><b>"
-        f"{fmt(load * 100 if load is not None else None, '.0f')} %</b></div>"
+        line("heartbeat", f"{fmt(hb, '.2f')} s ago")
+        + line("newest data", f"{fmt(ages.get('live'), '.2f')} s old")
+        + line("bus load", f"{fmt(load * 100 if load is not None else None, '.0f')} %")
+        + line("EMCY", f"{len(emcy)} seen" if emcy else "none")
+        + (line("load torque", f"{fmt(s.get('T_load'), '.3g')} N·m")
+           if s.get("virtual") else "")
     )
     return (
         "<div style='font-size:0.8em;line-height:1.3'>"

@@ -8,6 +8,7 @@ with SIGCONT:
 - the drive (its TPDOs, heartbeat and SDO answers stop: the old status loop waited on SDO
   timeouts, so the page kept "● live" and ``/api/state`` took 17 s per call);
 - the hub (the whole bus goes silent);
+- the node's NMT state set to STOPPED by another master (TPDOs and SDO stop, heartbeats go on);
 - the dashboard itself (its status and plot loops stop: only the page can tell).
 
 Truths: the page's own DOM (the freshness badge's text, and for the frozen dashboard the
@@ -158,6 +159,37 @@ def test_a_frozen_drive_is_stale_within_a_second(rig):
 def test_a_frozen_hub_is_stale_within_a_second(rig):
     bus, dash, page = rig
     check_frozen(page, dash.api_url, bus.hub_process.pid, "hub")
+
+
+def test_a_stopped_bus_node_is_stale_within_a_second_while_its_heartbeat_goes_on(rig):
+    """NMT stop from another master on the bus: the drive stops its TPDOs and answers no SDO,
+    but its heartbeat goes on (reporting STOPPED). The live data is stale, the NMT badge says
+    STOPPED, and the status never waits on the SDO reads that now time out."""
+    from drive_link import Drive
+
+    bus, dash, page = rig
+    page.wait_for_function(BAR_LIVE, timeout=60_000)
+    with Drive.connect(host="127.0.0.1", port=bus.port, node_id=1, heartbeat_ms=None) as d:
+        d.nmt("stop")
+        t_stop = time.monotonic()
+        try:
+            page_waits(page, BAR_STALE, 20.0)
+            shown = time.monotonic() - t_stop
+            page.wait_for_function(
+                "() => /NMT STOPPED/.test(document.querySelector('.bench-statusbar').innerText)",
+                polling=20, timeout=20_000,
+            )
+            took, s = state_calls(dash.api_url)
+        finally:
+            d.nmt("start")
+    load = os.getloadavg()[0]
+    # nmt() returns once a heartbeat confirmed STOPPED: up to a producer period after the stop
+    assert shown <= SHOWN_WITHIN_S + 0.25, f"the page showed STALE {shown:.2f} s after"
+    assert statistics.median(took) <= 0.100, f"/api/state took {took} s (load {load:.1f})"
+    assert max(took) < 1.0, f"/api/state took {took} s: it waited on an SDO timeout"
+    assert s["nmt_state"] == "STOPPED" and "live" in s["stale"], s
+    assert "heartbeat" not in s["stale"], s["ages_s"]  # the node itself is alive
+    page_waits(page, BAR_LIVE, 30.0)
 
 
 def test_a_frozen_dashboard_is_stale_on_the_page_by_itself(rig):

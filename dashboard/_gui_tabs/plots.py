@@ -40,7 +40,10 @@ __all__ = ["PLOT_AREA_WIDTH_PX", "PlotArea", "axis_key", "capture_view", "unit_a
 #: strip (:data:`STRIP_PX`): at 1280 px the plots get 789 px (62 %).
 PLOT_AREA_WIDTH_PX = 1700
 STRIP_PX = 120  #: viser's minimum canvas width: the readout column between plots and controls
-READOUT_HEIGHT_PX = 300  #: height of the readout in the strip (viser's notices go below it)
+READOUT_HEIGHT_PX = 300  #: height of the readout in the strip over a shown 3D rotor (px)
+#: its height when no rotor is drawn there (px): the strip is the readout, viser's notices
+#: (software WebGL, uploads) go below it
+READOUT_FULL_PX = 560
 
 #: hides the legend row of the invisible min-span helper series (4th row, last, of a live plot)
 LEGEND_CSS = "<style>.uplot .u-legend tr.u-series:nth-child(4):last-child{display:none}</style>"
@@ -140,7 +143,11 @@ class PlotArea:
         self.readout_panel = gui.add_panel()
         with self.readout_panel.add_tab("Now"):
             self.readout_html = gui.add_html("")
-        self.readout_panel.float(x=0, y=0, width=STRIP_PX, height=READOUT_HEIGHT_PX)
+        self.readout_panel.float(x=0, y=0, width=STRIP_PX, height=READOUT_FULL_PX)
+
+    def fit_readout(self, rotor_shown: bool) -> None:
+        """The readout over the top of a shown 3D rotor, or the whole strip without one."""
+        self.readout_panel.set_height(READOUT_HEIGHT_PX if rotor_shown else READOUT_FULL_PX)
 
     def _live_plot(self, name: str, unit: str, colors: tuple[str, str]) -> Any:
         window = self.config.live_window_s
