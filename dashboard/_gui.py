@@ -436,8 +436,8 @@ class BenchGui:
         stream = (self.stream_errors, self.plot_restarts, self.last_stream_error)
         status = status_html(s, latest, rate, stale, fresh_txt, stream)
         legends = (
-            legend(("speed", "speed*"), "rpm", SPEED_COLORS, fresh),
-            legend(("i_p", "i_p*"), "A", CURRENT_COLORS, fresh),
+            legend(("speed", "speed*"), "rpm", SPEED_COLORS, fresh, stale, self._tick),
+            legend(("i_p", "i_p*"), "A", CURRENT_COLORS, fresh, stale, self._tick),
         )
         ctl = s.get("controller")
         gone = None

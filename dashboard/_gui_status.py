@@ -109,17 +109,27 @@ def status_html(
     return "<div style='font-size:0.85em;line-height:1.35'>" + "<br>".join(lines) + "</div>"
 
 
-def legend(names: tuple[str, str], unit: str, colors: tuple[str, str], fresh: str) -> str:
+def legend(
+    names: tuple[str, str],
+    unit: str,
+    colors: tuple[str, str],
+    fresh: str,
+    stale: bool = False,
+    tick: int = 0,
+) -> str:
     """A live plot's legend line: the measurement (solid, strong) and its reference (dashed,
     muted), then the freshness badge (``fresh``: :func:`dashboard._gui_statusbar.fresh_badge`,
-    red when the data or the page's updates stopped)."""
+    red when the data or the page's updates stopped). Its classes let the bar's CSS grey the
+    plot under it: at once when ``stale``, and by itself when no tick re-sent the legend for
+    PAGE_STALE_S (the class alternating with ``tick`` restarts that timer)."""
     measured, ref = names
     sw = (
         f"<span style='color:{colors[0]};font-weight:bold'>━</span> {html.escape(measured)} "
         f"({unit}, measured) <span style='color:{colors[1]}'>╌</span> {html.escape(ref)} "
         f"({unit}, reference)"
     )
-    return f"<div style='font-size:0.8em'>{sw} · {fresh}</div>"
+    cls = f"bench-legend bench-t{tick % 2}" + (" bench-plot-stale" if stale else "")
+    return f"<div class='{cls}' style='font-size:0.8em'>{sw} · {fresh}</div>"
 
 
 def controller_text(ctl: dict | None, panel: Any, gone: float | None) -> str:

@@ -32,7 +32,9 @@ PAGE_STALE_S = 1.0  #: the page turns stale by itself when no status tick came f
 GREEN, RED, AMBER, GREY, BLUE = "#1e8449", "#b03a2e", "#b9770e", "#7f8c8d", "#1f618d"
 
 #: CSS of the bar: the pinned block (the folder holding the bar, found through the marker
-#: class), the badges, and the page-side stale switch (a restarted animation per tick).
+#: class), the badges, the page-side stale switch (a restarted animation per tick) and the
+#: live plots greyed under a stale legend (at once when the server says so; by themselves
+#: when the legend's tick class stopped alternating: a changed animation name restarts it).
 BAR_CSS = f"""<style>
 div[style*="overflow: hidden; min-height: 0px"]:has(.bench-statusbar) {{
   overflow: clip !important; }}
@@ -53,6 +55,11 @@ div[style*="padding-top: var(--mantine-spacing-xs)"] > .mantine-Paper-root:has(.
 .bench-fresh .bench-dead::after {{
   content: "STALE · page not updated for " counter(bench-s) " s"; }}
 .mantine-Notification-root {{ font-size: 0.8em; }}
+div:has(> .bench-plot-stale) + div .uplot {{ opacity: 0.35; filter: grayscale(1); }}
+@keyframes bench-dim-a {{ to {{ opacity: 0.35; filter: grayscale(1); }} }}
+@keyframes bench-dim-b {{ to {{ opacity: 0.35; filter: grayscale(1); }} }}
+div:has(> .bench-t0) + div .uplot {{ animation: bench-dim-a 0s linear {PAGE_STALE_S}s forwards; }}
+div:has(> .bench-t1) + div .uplot {{ animation: bench-dim-b 0s linear {PAGE_STALE_S}s forwards; }}
 </style>"""
 
 

@@ -49,12 +49,17 @@ BAR_LIVE = """() => [...document.querySelectorAll('.bench-statusbar .bench-badge
 #: the page-side switch: no tick for PAGE_STALE_S, the red "page not updated" badge shows
 PAGE_STALE = """() => [...document.querySelectorAll('.bench-statusbar .bench-dead')]
     .some(e => getComputedStyle(e).visibility === 'visible')"""
-#: both live plots' legends marked stale
+#: both live plots' legends marked stale and both plots greyed out
 PLOTS_STALE = """() => [...document.querySelectorAll('.bench-fresh')]
     .filter(f => !f.closest('.bench-statusbar'))
     .filter(f => /STALE/.test(f.innerText)
         || getComputedStyle(f.querySelector('.bench-dead')).visibility === 'visible')
-    .length >= 2"""
+    .length >= 2
+    && [...document.querySelectorAll('.uplot')].slice(0, 2)
+        .every(p => parseFloat(getComputedStyle(p).opacity) < 0.5)"""
+#: the live plots drawn in full again
+PLOTS_LIVE = """() => [...document.querySelectorAll('.uplot')].slice(0, 2)
+    .every(p => parseFloat(getComputedStyle(p).opacity) > 0.99)"""
 
 
 @pytest.fixture(scope="module")
@@ -128,6 +133,7 @@ def check_frozen(page, api_url: str, pid: int, what: str) -> None:
     assert "live" in s["stale"] and s["ages_s"]["live"] > 0.5, s["ages_s"]
     # let go: the page is live again
     page_waits(page, BAR_LIVE, 30.0)
+    page_waits(page, PLOTS_LIVE, 10.0)
     took, s = state_calls(api_url, 2)
     assert "live" not in s["stale"], s
 
@@ -211,3 +217,4 @@ def test_a_frozen_dashboard_is_stale_on_the_page_by_itself(rig):
     )
     assert int(counted) >= 1, f"the page counted {counted!r} s"
     page_waits(page, BAR_LIVE, 30.0)
+    page_waits(page, PLOTS_LIVE, 10.0)
