@@ -200,7 +200,9 @@ class Bench:
         health["store_status"] = store
         holder = self.lease.holder
         action = self.action
-        nmt = _safe(d.heartbeat._heartbeat_state) if hb_t else None
+        # the last heartbeat's state ("OFFLINE" once they stopped); a drive without heartbeats:
+        # the worker's answer (drive_link's SDO fallback)
+        nmt = _safe(d.heartbeat._heartbeat_state) if hb_t else self.watch.get("nmt_state")[0]
         out: dict[str, Any] = {
             "bus": self.description,
             "node_id": self.node_id,

@@ -131,6 +131,8 @@ class DriveWatch:
             return
         d = self.drive
         self._read("mode", lambda: d.mode)
+        if getattr(d.heartbeat, "last_time", None) is None:  # no heartbeat: SDO fallback
+            self._read("nmt_state", lambda: d.nmt_state)
         if not self._statusword_in_tpdo():
             self._read("statusword", lambda: int(d.read("statusword")))
         now = time.monotonic()
