@@ -6,7 +6,9 @@ Figures (goals from the issue):
   2. plot refresh rate: redraws per second of the speed plot's canvas (goal ≥ 20 Hz);
   3. server CPU: the dashboard process alone (the virtual drive and the loopback hub run in a
      separate ``virtual-drive run --hub`` process), in % of one core, with no browser (goal
-     ≤ 5 %), one browser streaming the live plots (goal ≤ 15 %) and three (goal ≤ 25 %);
+     ≤ 5 %), one browser streaming the live plots (goal ≤ 8 %) and three (goal ≤ 25 %), and
+     the bytes on the socket to the one streaming tab (kernel tcp_info, ``ss -tin``; goal
+     ≤ 0.5 MB/s);
   4. time to usable: from ``page.goto`` to the Enable button visible and the speed plot redrawn
      with new data twice (goal ≤ 5 s idle machine, ≤ 15 s busy host).
 
@@ -32,7 +34,7 @@ nothing); ``--3d`` shows it on every page (``drive-dashboard --show-3d``).
 Every figure is printed with the load average (1 min) at the time it was taken.
 
 Run: python benchmarks/bench_dashboard.py [--steps 6] [--window 10] [--browsers 3] [--3d]
-     [--rotor]
+     [--rotor] [--hogs 4]
 """
 
 from __future__ import annotations
@@ -48,6 +50,7 @@ import time
 import msgspec
 import numpy as np
 import zstandard
+from _socket_bytes import bytes_sent
 
 from dashboard._gui_pace import PagePace
 from dashboard.browser import free_port, launch, run_dashboard, stop_process
@@ -118,13 +121,14 @@ def decode_frame(payload: bytes) -> list[dict]:
 
 
 def shows_setpoint(messages: list[dict], target: float) -> bool:
-    """True if a uPlot data update has a third array (speed*) ending at ``target``."""
+    """True if a uPlot data update has a second array (speed*: data order x, reference,
+    measurement, envelope; the measurement is drawn last, on top) ending at ``target``."""
     for m in messages:
         if m.get("type") != "GuiUpdateMessage":
             continue
         for v in m.get("updates", {}).values():
             if isinstance(v, list) and len(v) >= 3 and all(isinstance(a, np.ndarray) for a in v):
-                ref = v[2]
+                ref = v[1]
                 if ref.size and abs(float(ref[-1]) - target) < 0.5:
                     return True
     return False
@@ -175,7 +179,7 @@ def server_side_latency(hub_port: int, steps: int) -> list[float]:
             bench.set_speed(target)
             while time.monotonic() - t0 < 1.0:
                 d = gui.panels[-1].speed_plot.data
-                if len(d[2]) and abs(d[2][-1] - target) < 0.5:
+                if len(d[1]) and abs(d[1][-1] - target) < 0.5:
                     break
                 time.sleep(0.0005)
             out.append((time.monotonic() - t0) * 1e3)
@@ -326,12 +330,22 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="only the 3D rotor's cost: shown vs hidden vs --no-3d (1 browser)",
     )
+    ap.add_argument(
+        "--hogs", type=int, default=0,
+        help="stress-ng --cpu N in a separate session meanwhile (the busy-host figures)",
+    )
     args = ap.parse_args(argv)
     if args.rotor:
         print("\n".join(rotor_cost(args.window)))
         return 0
     from playwright.sync_api import sync_playwright
 
+    hogs = None
+    if args.hogs:
+        hogs = subprocess.Popen(
+            ["stress-ng", "--cpu", str(args.hogs), "--quiet"], start_new_session=True
+        )
+        time.sleep(2.0)
     load_start = os.getloadavg()[0]
     hub_port = free_port()
     drive = subprocess.Popen(
@@ -357,6 +371,7 @@ def main(argv: list[str] | None = None) -> int:
         args_dash = ["--join-hub", str(hub_port)] + (["--show-3d"] if args.scene else [])
         running = stack.enter_context(run_dashboard(args_dash))
         dash, url = running.proc, running.gui_url
+        gui_port = int(url.rstrip("/").rsplit(":", 1)[1])
         time.sleep(2.0)
         c0, w0 = cpu_seconds(dash.pid), time.monotonic()
         time.sleep(args.window / 2)
@@ -401,11 +416,15 @@ def main(argv: list[str] | None = None) -> int:
             page.wait_for_timeout(2000)
             offset = clock_offset(page)
 
-            # --- refresh rate and server CPU while this browser streams
+            # --- refresh rate, server CPU and bytes on the socket while this browser streams
             d0 = len(page.evaluate(SPEED_CANVAS_DRAWS))
+            s0 = bytes_sent(gui_port)
             c0, w0 = cpu_seconds(dash.pid), time.monotonic()
             page.wait_for_timeout(args.window * 1e3)
             stream_cpu = (cpu_seconds(dash.pid) - c0) / (time.monotonic() - w0) * 100
+            s1 = bytes_sent(gui_port)
+            socket_mbs = sum(v - s0.get(k, 0) for k, v in s1.items()) / (
+                time.monotonic() - w0) / 1e6
             stream_load = os.getloadavg()[0]
             d1 = page.evaluate(SPEED_CANVAS_DRAWS)
             span_ms = d1[-1] - d1[d0] if len(d1) > d0 + 1 else float("nan")
@@ -438,6 +457,8 @@ def main(argv: list[str] | None = None) -> int:
                 )
                 page.wait_for_timeout(1000)
 
+            step_load = os.getloadavg()[0]
+
             # --- server CPU with more browsers streaming (one Chromium process each)
             more = [launch(p) for _ in range(max(0, args.browsers - 1))]
             for b in more:
@@ -456,9 +477,13 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         stack.close()  # the dashboard first, then the drive and its hub
         stop_process(drive)
+        if hogs is not None:
+            stop_process(hogs)
     rotor = rotor_cost(args.window) if args.scene else []
 
     print()
+    if args.hogs:
+        print(f"busy host: stress-ng --cpu {args.hogs} in a separate session throughout")
     print(
         f"machine: {os.cpu_count()} cores, load average {load_start:.1f} at the start, "
         f"{os.getloadavg()[0]:.1f} at the end (other work on the machine skews every figure)"
@@ -466,20 +491,29 @@ def main(argv: list[str] | None = None) -> int:
     if latencies:
         print(
             f"step-to-plot latency: median {statistics.median(latencies):.0f} ms, "
-            f"max {max(latencies):.0f} ms over {len(latencies)} steps (goal <= 100 ms)"
+            f"max {max(latencies):.0f} ms over {len(latencies)} steps (goal <= 100 ms median, "
+            f"<= 250 ms max) [load {step_load:.1f}]"
         )
     print(
         f"  of which server side (command -> plot data sent): median "
         f"{statistics.median(server_ms):.1f} ms, max {max(server_ms):.1f} ms"
     )
-    print(f"speed plot refresh in the browser: {refresh_hz:.1f} Hz (goal >= 20 Hz)")
+    print(
+        f"speed plot refresh in the browser: {refresh_hz:.1f} Hz (goal >= 20 Hz) "
+        f"[load {stream_load:.1f}]"
+    )
+    print(
+        f"traffic to the one streaming tab: {socket_mbs:.3f} MB/s on the socket (kernel "
+        f"tcp_info bytes_sent of the GUI port's connections; goal <= 0.5 MB/s) "
+        f"[load {stream_load:.1f}]"
+    )
     print(
         f"page usable (Enable visible, speed plot moving): {t_usable:.1f} s after opening "
         f"(Enable at {t_enable:.1f} s; goal <= 5 s idle, <= 15 s busy) [load {usable_load:.1f}]"
     )
     print(
         f"dashboard server CPU, % of one core: {idle_cpu:.1f} % with no browser (goal <= 5 %) "
-        f"[load {idle_load:.1f}]; {stream_cpu:.1f} % with one browser streaming (goal <= 15 %) "
+        f"[load {idle_load:.1f}]; {stream_cpu:.1f} % with one browser streaming (goal <= 8 %) "
         f"[load {stream_load:.1f}]; {many_cpu:.1f} % with {max(1, args.browsers)} browsers "
         f"(goal <= 25 %) [load {many_load:.1f}]"
     )

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from collections.abc import Callable
 from typing import Annotated, Any, TypeVar
 
@@ -33,8 +34,34 @@ from drive_link import jsonable
 
 __all__ = ["router"]
 
-router = APIRouter(prefix="/api")
 T = TypeVar("T")
+
+
+def _refuse_duplicates(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    """json.loads object hook: a key given twice is refused (json keeps the last silently)."""
+    out: dict[str, Any] = {}
+    for k, v in pairs:
+        if k in out:
+            raise HTTPException(422, f"duplicate key {k!r} in the JSON body: give it once")
+        out[k] = v
+    return out
+
+
+async def unique_keys(request: Request) -> None:
+    """Refuse (422) a JSON body with a key given twice at any depth, before FastAPI parses it
+    (with json, where the last one wins): ``{"rpm": 100, "rpm": 3000}`` is ambiguous."""
+    if request.method not in ("POST", "PUT", "PATCH", "DELETE"):
+        return
+    raw = await request.body()  # cached: the route's body parsing reads the same bytes
+    if not raw.strip():
+        return
+    try:
+        json.loads(raw, object_pairs_hook=_refuse_duplicates)
+    except ValueError:
+        return  # not JSON at all: FastAPI's own 422 says so
+
+
+router = APIRouter(prefix="/api", dependencies=[Depends(unique_keys)])
 
 
 def get_bench(request: Request) -> Bench:

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from dashboard._actions import Found, LongAction
+from dashboard._known import STALE_LIMITS_S, DriveWatch, live_ages, state_name
 from dashboard._security import ControlLease
 from drive_link import jsonable
 from firmware_protocol import emcy_codes
@@ -83,7 +84,7 @@ STATUS_FIELDS = (
     "supervision_rearmed_at",
 )
 SEQUENCE_SLACK_S = 5.0  #: a sequence step later than this (busy host) stops the sequence, s
-STATUS_PERIOD_S = 2.0  #: Drive.status() (a dozen SDO reads) at most this often (s)
+STATUS_PERIOD_S = 2.0  #: (older name, unused) the status is no longer read by SDO in state()
 STORE_PERIOD_S = 10.0  #: the parameter store's health (one SDO read) at most this often (s)
 
 EMCY_TEXT = emcy_codes.MEANINGS
@@ -144,8 +145,9 @@ class Bench:
         self.trace_config = TraceIn()  # default for POST /api/trace/capture without a body
         self.sequence_progress: dict[str, Any] | None = None
         self.action: LongAction | None = None  # the long action under way (progress, cancel)
-        self._drive_cache: dict[str, Any] = {}  # last drive values read for state()
-        self._status_t = 0.0  # time.monotonic() of the last Drive.status() read
+        #: SDO-only values (mode, parameter store) read in a worker of its own: state()
+        #: never waits on an SDO timeout
+        self.watch = DriveWatch(drive, busy=lambda: self.action is not None).start()
 
     # ---------------------------------------------------------------- events
     def emit(self, kind: str, data: dict | None = None) -> None:
@@ -157,82 +159,62 @@ class Bench:
                 pass
 
     # ---------------------------------------------------------------- state
-    def _drive_reads(self) -> dict[str, Any]:
-        """The drive values of :meth:`state` that need SDO, read under the bench lock only (a
-        status read never crosses an action's SDO exchange) and one SDO at a time (a command
-        waits for at most one status read). While a long action holds the lock, the last
-        values read are returned (``"cached": True``)."""
-        d = self.drive
-        cache = self._drive_cache
-        if not self.lock.acquire(timeout=0.05):
-            return {**cache, "cached": True}
-        try:
-            vals: dict[str, Any] = {
-                "nmt_state": _safe(lambda: d.nmt_state),
-                "state": _safe(lambda: d.state),
-                "mode": _safe(lambda: d.mode),
-            }
-        finally:
-            self.lock.release()
-        vals["status"] = self._status_fields(cache.get("status"))
-        self._drive_cache = vals
-        return {**vals, "cached": False}
-
-    def _status_fields(self, old: dict[str, Any] | None) -> dict[str, Any]:
-        """STATUS_FIELDS from drive_link: bus health and restart supervision (no SDO) at every
-        call, the parameter store (one SDO read) every STORE_PERIOD_S; with an older
-        drive_link, Drive.status() as a whole every STATUS_PERIOD_S (under the lock)."""
-        d = self.drive
-        now = time.monotonic()
-        out = dict(old or dict.fromkeys(STATUS_FIELDS))
-        if hasattr(d, "bus_health") and hasattr(d, "supervisor"):
-            out.update(_safe(lambda: dict(d.bus_health()), {}) or {})
-            sup = _safe(lambda: dict(d.supervisor.status()), {}) or {}
-            for k in ("boots_seen", "supervision_rearmed_at"):
-                if k in sup:
-                    out[k] = sup[k]
-            if hasattr(d, "store_status") and now - self._status_t >= STORE_PERIOD_S:
-                if self.lock.acquire(timeout=0.05):
-                    try:
-                        self._status_t = now
-                        out["store_status"] = _safe(d.store_status)
-                    finally:
-                        self.lock.release()
-            return {k: out.get(k) for k in STATUS_FIELDS}
-        if now - self._status_t >= STATUS_PERIOD_S and self.lock.acquire(timeout=0.05):
-            try:
-                self._status_t = now
-                st = _safe(lambda: dict(d.status()), {}) or {}
-                out.update({k: st.get(k) for k in STATUS_FIELDS if k in st})
-            finally:
-                self.lock.release()
-        return {k: out.get(k) for k in STATUS_FIELDS}
-
     def state(self) -> dict[str, Any]:
-        """Connection and drive state for display (values as the drive reports them).
+        """Connection and drive state for display, built from what is known (never an SDO
+        read: see :mod:`dashboard._known`), answered in well under 100 ms whatever the drive
+        or the bus do.
 
-        Also the fields of ``drive_link.Drive.status()`` named in :data:`STATUS_FIELDS`
-        (None while the installed drive_link does not provide them), read at most once per
-        STATUS_PERIOD_S s."""
+        ``ages_s``: the age (s) of each part (``live``: newest TPDO sample; ``heartbeat``;
+        ``statusword``: the CiA 402 state; ``mode``; ``store_status``), None before the first;
+        ``stale``: the parts older than their limit (:data:`dashboard._known.STALE_LIMITS_S`).
+        Also the fields of ``drive_link.Drive.status()`` named in :data:`STATUS_FIELDS`."""
         d = self.drive
-        stats = {}
+        now, wall = time.monotonic(), time.time()
         try:
             stats = as_dict(d.live.stats)
         except Exception as exc:  # pragma: no cover - shown to the user
             stats = {"error": str(exc)}
+        newest = _safe(lambda: live_ages(d.live), {}) or {}
+        ages: dict[str, float | None] = dict.fromkeys(STALE_LIMITS_S)
+        if newest:
+            ages["live"] = max(0.0, wall - max(t for _, t in newest.values()))
+        hb_t = _safe(lambda: d.heartbeat.last_time)
+        ages["heartbeat"] = max(0.0, now - hb_t) if hb_t else None
+        sw = None
+        if "statusword" in newest:
+            sw, sw_t = newest["statusword"]
+            ages["statusword"] = max(0.0, wall - sw_t)
+        limits = dict(STALE_LIMITS_S)
+        if "statusword" not in newest:  # no TPDO carries it: the worker's SDO poll
+            sw, ages["statusword"] = self.watch.get("statusword")
+            limits["statusword"] = limits["mode"]
+        mode, ages["mode"] = self.watch.get("mode")
+        store, ages["store_status"] = self.watch.get("store_status")
+        stale = [k for k, lim in limits.items() if ages.get(k) is None or ages[k] > lim]
+        health = dict.fromkeys(STATUS_FIELDS)
+        health.update(_safe(lambda: dict(d.bus_health()), {}) or {})
+        sup = _safe(lambda: dict(d.supervisor.status()), {}) or {}
+        for k in ("boots_seen", "supervision_rearmed_at"):
+            if k in sup:
+                health[k] = sup[k]
+        health["store_status"] = store
         holder = self.lease.holder
-        reads = self._drive_reads()
         action = self.action
+        # the last heartbeat's state ("OFFLINE" once they stopped); a drive without heartbeats:
+        # the worker's answer (drive_link's SDO fallback)
+        nmt = _safe(d.heartbeat._heartbeat_state) if hb_t else self.watch.get("nmt_state")[0]
         out: dict[str, Any] = {
             "bus": self.description,
             "node_id": self.node_id,
             "virtual": self.virtual,
-            "nmt_state": reads.get("nmt_state"),
-            "heartbeat_age_s": _safe(lambda: time.monotonic() - d.heartbeat.last_time),
-            "state": reads.get("state"),
-            "mode": reads.get("mode"),
-            "drive_values_cached": reads.get("cached", False),
-            **(reads.get("status") or dict.fromkeys(STATUS_FIELDS)),
+            "nmt_state": nmt,
+            "heartbeat_age_s": ages["heartbeat"],
+            "state": state_name(sw),
+            "statusword": int(sw) if sw is not None else None,
+            "mode": mode,
+            "ages_s": ages,
+            "stale": stale,
+            **{k: health.get(k) for k in STATUS_FIELDS},
             "action": action.public() if action is not None else None,
             "speed_setpoint": self.speed_setpoint,
             "current_setpoint": self.current_setpoint,
@@ -267,6 +249,7 @@ class Bench:
                 self.drive.fault_reset()
             else:
                 raise ValueError(f"unknown command {name!r}")
+        self.watch.poke()
         self.emit("state")
 
     def set_mode(self, mode: str, setpoint: Callable[[], None] | None = None) -> None:
@@ -285,10 +268,12 @@ class Bench:
             if enabled:
                 self.drive.disable()
             self.drive.set_mode(mode)
+            self.watch.note("mode", mode)  # confirmed by drive_link's set_mode
             if setpoint is not None:
                 setpoint()
             if enabled:
                 self.drive.enable(timeout=2.0)
+        self.watch.poke()
         self.emit("state")
 
     def set_speed(self, rpm: float) -> None:
@@ -459,6 +444,7 @@ class Bench:
 
     def close(self) -> None:
         self.stop_sequence()
+        self.watch.stop()
 
 
 def _emcy(e: Any) -> dict[str, Any]:

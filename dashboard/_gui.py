@@ -41,10 +41,11 @@ from dashboard._gui_field import CURRENT_COLORS, SPEED_COLORS
 from dashboard._gui_field import fmt as _fmt
 from dashboard._gui_guard import guard_handshake, install_send_lock, refuse_share_url
 from dashboard._gui_pace import answer as pace_answer
-from dashboard._gui_panel import Panel
+from dashboard._gui_panel import CONTROL_WIDTH_PX, Panel
 from dashboard._gui_scene import RotorScene
 from dashboard._gui_scene import background as scene_background
 from dashboard._gui_status import DROP_WINDOW_S, controller_text, legend, status_html
+from dashboard._gui_statusbar import badges_html, fresh_badge, readout_html
 from dashboard._security import LeaseError, allowed_hosts, allowed_origins
 from dashboard.config import BenchConfig
 
@@ -54,11 +55,18 @@ WAKE_TIMEOUT_S = 0.030  #: after a setpoint change, wait at most this for the dr
 MIN_SPAN_SPEED_RPM = 50.0  #: the speed plot's y axis spans at least this (rpm)
 MIN_SPAN_I_P_A = 5.0  #: the i_p plot's y axis spans at least this (A)
 BRAND_COLOR = (31, 97, 141)  #: steel blue: buttons, tabs, sliders
-CONTROL_WIDTH_PX = 380  #: requested width of the control panel (docked right, px)
+# CONTROL_WIDTH_PX (dashboard._gui_panel): the requested widths of the control panel (docked
+# right) and the plot area (docked left) are together wider than any screen, so viser scales
+# both to the window and keeps only its minimum 120 px canvas strip between them (the readout
+# column); at 1280 px the controls get 371 px, the plots 789 px.
 LEASE_GRACE_S = 10.0  #: a browser whose WebSocket closed loses control after this (s)
 PLOT_BUCKETS = 80  #: time buckets per live plot (≤ 3 points each sent: min, max, last)
 IDLE_WAIT_S = 1.0  #: with no browser the plot thread wakes this often (s), for the watchdog
 WATCHDOG_S = 3.0  #: a plot thread silent for this long is replaced (s)
+#: the status loop's period (s): the page's bar is re-sent this often, so data that stopped
+#: shows as stale within STALE_AFTER_S + this, and a page that got no tick for PAGE_STALE_S
+#: turns stale by itself
+STATUS_PERIOD_S = 0.2
 
 # re-exported for tests and older imports
 from dashboard._live_plot import min_span_envelope  # noqa: E402
@@ -92,6 +100,7 @@ class BenchGui:
         self.last_live: dict[str, np.ndarray] = {}
         self._gone: dict[str, float] = {}  # lease token → time.monotonic() its browser left
         self._drops: list[tuple[float, int]] = []  # (monotonic, dropped total)
+        self._tick = 0  # status ticks sent (makes each tick's bar differ: page-side staleness)
         self.scene: RotorScene | None = None
 
     # ------------------------------------------------------------------ lifecycle
@@ -127,6 +136,8 @@ class BenchGui:
         )
         if self.scene is None:  # a calm strip between the plots and the controls
             self.server.scene.set_background_image(scene_background())
+        else:  # θ_e by SDO in the drive watch's worker, never in the status loop
+            self.bench.watch.hooks.append(self.scene.maybe_anchor)
         self.bench.lease.on_change(self._on_lease_change)
         self.bench.listeners.append(self._on_bench_event)
         self._start_plot_thread()
@@ -164,6 +175,10 @@ class BenchGui:
             panel.load_gains()
         if self.scene is not None:  # its "3D rotor" checkbox and, shown, its rotor
             self.scene.attach(client, shown=self.config.scene_3d_shown)
+            box = self.scene.toggles.get(client.client_id)
+            if box is not None:  # the readout leaves room for the rotor when it is shown
+                panel.fit_readout(bool(box.value))
+                box.on_update(lambda e: panel.fit_readout(bool(box.value)))
         self.refresh_status()
 
     def _on_disconnect(self, client: viser.ClientHandle) -> None:
@@ -309,20 +324,21 @@ class BenchGui:
         self.last_push = time.monotonic()
         if not ready:
             return True  # nothing new: send nothing
-        td, cd = live_plot.decimate(t, cols, PLOT_BUCKETS)
-        x = td - newest
-        n = len(x)
+        # each plot decimated on its own signals (fewer kept points than over all four);
+        # data order (x, reference, measurement, envelope): the measurement drawn on top
+        ts, (sp, sp_ref) = live_plot.decimate(t, [cols[0], cols[1]], PLOT_BUCKETS)
+        tc, (ip, ip_ref) = live_plot.decimate(t, [cols[2], cols[3]], PLOT_BUCKETS)
         speed = (
-            x,
-            cd[0],
-            cd[1],
-            live_plot.min_span_envelope(n, cd[0], cd[1], min_span=MIN_SPAN_SPEED_RPM),
+            ts - newest,
+            sp_ref,
+            sp,
+            live_plot.min_span_envelope(len(ts), sp, sp_ref, min_span=MIN_SPAN_SPEED_RPM),
         )
         current = (
-            x,
-            cd[2],
-            cd[3],
-            live_plot.min_span_envelope(n, cd[2], cd[3], min_span=MIN_SPAN_I_P_A),
+            tc - newest,
+            ip_ref,
+            ip,
+            live_plot.min_span_envelope(len(tc), ip, ip_ref, min_span=MIN_SPAN_I_P_A),
         )
         for p in ready:
             try:
@@ -343,13 +359,11 @@ class BenchGui:
 
     # ------------------------------------------------------------------ status
     def _status_loop(self) -> None:
-        while not self._stop.wait(0.25):
+        while not self._stop.wait(STATUS_PERIOD_S):
             try:
                 self._watchdog()
                 self._expire_leases()
                 self.refresh_status()
-                if self.scene is not None:
-                    self.scene.maybe_anchor()  # θ_e again while a browser shows the rotor
             except Exception as exc:  # shown on the next good tick; never die
                 log.warning("status tick failed: %s", exc)
 
@@ -364,51 +378,66 @@ class BenchGui:
             )
             self._start_plot_thread()
 
-    def freshness(self) -> tuple[bool, str]:
-        """(stale, text) of the live view for the page."""
-        latest_t = None
-        with contextlib.suppress(Exception):
-            w = self.bench.drive.live.window(0.5, ["measurements.speed"])
-            if len(w["t"]):
-                latest_t = float(w["t"][-1])
-        age = live_plot.data_age_s(latest_t)
+    def freshness(self, s: dict | None = None) -> tuple[bool, str]:
+        """(stale, text) of the live view for the page: the age (s) of the newest sample
+        (from ``s`` = :meth:`Bench.state` when given) and of the last plot push."""
+        age = None
+        if s is not None:
+            age = (s.get("ages_s") or {}).get("live")
+        else:
+            with contextlib.suppress(Exception):
+                w = self.bench.drive.live.window(0.5, ["measurements.speed"])
+                if len(w["t"]):
+                    age = live_plot.data_age_s(float(w["t"][-1]))
         push_age = time.monotonic() - self.last_push if self.last_push else None
         return live_plot.freshness_text(age, push_age)
 
     def _drop_rate(self, dropped: Any) -> float | None:
-        """Dropped TPDO frames per second over the last DROP_WINDOW_S."""
+        """Dropped TPDO frames per second over the last DROP_WINDOW_S, never negative: the
+        drive_link total is an estimate from the TPDO cadence that can step back (a late frame
+        arrives, a pause closes a count window, the counters are reset); a total below the
+        previous one starts the window again instead of giving a negative rate."""
         try:
             total = int(dropped)
         except (TypeError, ValueError):
             return None
         now = time.monotonic()
+        if self._drops and total < self._drops[-1][1]:
+            self._drops = []  # the counter stepped back: a new window
         self._drops.append((now, total))
         self._drops = [(t, d) for t, d in self._drops if now - t <= DROP_WINDOW_S]
         t0, d0 = self._drops[0]
-        return (total - d0) / (now - t0) if now - t0 > 0.5 else 0.0
+        return max(0.0, (total - d0) / (now - t0)) if now - t0 > 0.5 else 0.0
 
     def refresh_status(self) -> None:
+        """Send every caught-up page its status bar (re-sent every tick: the page turns
+        stale by itself when the ticks stop), legends and details. Never waits on the drive:
+        :meth:`Bench.state` is built from what is known."""
         if self.server is None:
             return
         panels = self.panel_list()
         if not panels:
             return
+        self._tick += 1
         try:
             s = self.bench.state()
         except Exception as exc:
             for p in panels:
                 p.show_status(f"<b>state unavailable:</b> {html.escape(str(exc))}")
             return
-        stale, fresh_txt = self.freshness()
+        stale, fresh_txt = self.freshness(s)
+        fresh = fresh_badge(stale, fresh_txt, self._tick)
+        bar = f"<div class='bench-statusbar'>{badges_html(s)} {fresh}</div>"
         latest: dict = {}
         with contextlib.suppress(Exception):
             latest = self.bench.drive.live.latest()
+        readout = readout_html(s, latest)
         rate = self._drop_rate((s.get("live") or {}).get("dropped"))
         stream = (self.stream_errors, self.plot_restarts, self.last_stream_error)
         status = status_html(s, latest, rate, stale, fresh_txt, stream)
         legends = (
-            legend(("speed", "speed*"), "rpm", SPEED_COLORS, stale, fresh_txt),
-            legend(("i_p", "i_p*"), "A", CURRENT_COLORS, stale, fresh_txt),
+            legend(("speed", "speed*"), "rpm", SPEED_COLORS, fresh, stale, self._tick),
+            legend(("i_p", "i_p*"), "A", CURRENT_COLORS, fresh, stale, self._tick),
         )
         ctl = s.get("controller")
         gone = None
@@ -419,6 +448,8 @@ class BenchGui:
             if not p.pace.ready():
                 continue  # this page is behind: it gets the newest status once it caught up
             try:
+                p.show_bar(bar)
+                p.show_readout(readout)
                 p.show_status(status)
                 p.show_legends(*legends)
                 p.show_action(s.get("action"), s.get("sequence"))

@@ -22,11 +22,15 @@ __all__ = [
     "SPEED_COLORS",
     "Field",
     "fmt",
+    "live_series",
     "series",
 ]
 
-SPEED_COLORS = ("#1f77b4", "#ff7f0e")
-CURRENT_COLORS = ("#2ca02c", "#d62728")
+SPEED_COLORS = ("#1a5fb4", "#e67e22")  #: (measured speed: strong, speed*: muted, dashed)
+CURRENT_COLORS = ("#1e7b34", "#c0392b")  #: (measured i_p: strong, i_p*: muted, dashed)
+MEASURED_WIDTH_PX = 2.25  #: line width of a measurement (drawn last: on top)
+REFERENCE_WIDTH_PX = 1.25  #: line width of a reference (drawn first, dashed)
+REFERENCE_DASH = (6, 4)  #: on/off pattern of a reference line (px)
 PLOT_HEIGHT_PX = 310  #: height of a main-area plot including its legend (px): two fit in 800 px
 
 
@@ -45,6 +49,20 @@ def series(labels: tuple[str, ...], colors: tuple[str, ...], x_label: str) -> li
     for lab, col in zip(labels, colors, strict=False):
         out.append(uplot.Series(label=lab, stroke=col, width=1.5))
     return out
+
+
+def live_series(name: str, unit: str, colors: tuple[str, str], x_label: str) -> list[Any]:
+    """uPlot series of a live plot: x, the reference ``name``* (thin, dashed, drawn first)
+    and the measurement ``name`` (strong, drawn on top); data order (x, reference,
+    measurement)."""
+    return [
+        uplot.Series(label=x_label),
+        uplot.Series(
+            label=f"{name}* ({unit})", stroke=colors[1], width=REFERENCE_WIDTH_PX,
+            dash=list(REFERENCE_DASH),
+        ),
+        uplot.Series(label=f"{name} ({unit})", stroke=colors[0], width=MEASURED_WIDTH_PX),
+    ]
 
 
 class Field:

@@ -28,6 +28,7 @@ import viser
 from dashboard._fields import FieldError
 from dashboard._gui_field import CURRENT_COLORS, SPEED_COLORS, Field, fmt
 from dashboard._gui_pace import PagePace
+from dashboard._gui_statusbar import BAR_CSS, notices_css
 from dashboard._gui_tabs import (
     BusTab,
     CapturesTab,
@@ -40,10 +41,16 @@ from dashboard._gui_tabs import (
     TuningTab,
     parse_sequence,
 )
+from dashboard._gui_tabs.plots import PLOT_AREA_WIDTH_PX, STRIP_PX
+from dashboard._gui_words import gui_text
 from dashboard._security import token_ok
 
 if TYPE_CHECKING:
     from dashboard._gui import BenchGui
+
+#: requested width of the control panel (px): with the plot area's 1700 px wider than any
+#: screen, so viser scales both to the window keeping only its 120 px canvas strip
+CONTROL_WIDTH_PX = 800
 
 _fmt = fmt  # older name
 
@@ -75,6 +82,7 @@ class Panel(
         self._muted = 0
         self.gains: dict[str, Any] | None = None
         self.last_status = ""
+        self.last_bar = ""
         self.last_legends: tuple[str, str] = ("", "")
         self.pace = PagePace(client)  # live updates only as fast as this page applies them
         self.plot_newest: float | None = None  # host time of the newest sample sent here
@@ -136,8 +144,8 @@ class Panel(
                 done = fn(event)
             except FieldError as exc:
                 self.notice(md, f"{exc} — nothing sent")
-            except Exception as exc:
-                self.notice(md, str(exc) or type(exc).__name__)
+            except Exception as exc:  # drive_link speaks CLI: say it with the GUI's controls
+                self.notice(md, gui_text(str(exc)) or type(exc).__name__)
             else:
                 self.notice(md, done if isinstance(done, str) else "", "ok")
             self.owner.refresh_status()
@@ -147,18 +155,28 @@ class Panel(
     # ------------------------------------------------------------------ layout
     def _build(self) -> None:
         gui = self.gui
+        # sent once: the bar's pinning, badges, page-side stale switch and where notices go
+        gui.add_html(BAR_CSS + notices_css(CONTROL_WIDTH_PX, PLOT_AREA_WIDTH_PX, STRIP_PX))
+        # the status bar: pinned at the top of the panel (BAR_CSS), however far it scrolls
+        with gui.add_folder("State", expand_by_default=True):
+            self.bar_html = gui.add_html("<div class='bench-statusbar'>connecting …</div>")
+            self.quick_btn = gui.add_button(
+                "Quick stop", color="red", hint="CiA 402 quick stop: the drive brakes and halts"
+            )
+            self.controller_md = gui.add_markdown("")
+            # small and plain: ownership is shown, it does not compete with Quick stop
+            self.take_btn = gui.add_button_group("Control", ("Take control",))
+        self.control_md = gui.add_markdown("", visible=False)
         self.status_html = gui.add_html("connecting …")
-        self.controller_md = gui.add_markdown("")
         if self.config.token is not None:
             self.token_in = gui.add_text(
                 "Access token", "", hint="the bench's --token; needed to change anything"
             )
             gui.add_button("Sign in").on_click(lambda e: self._sign_in())
-        self.take_btn = gui.add_button("Take control", color="orange")
-        self.drive_btns = gui.add_button_group(
-            "Drive", ("Enable", "Disable", "Quick stop", "Fault reset")
+        self.drive_btns = gui.add_button_group("Drive", ("Enable", "Disable", "Fault reset"))
+        self.quick_btn.on_click(
+            self.action(lambda e: self.bench.command("quick_stop"), self.control_md)
         )
-        self.control_md = gui.add_markdown("", visible=False)
         self.take_btn.on_click(
             self.action(self._take_control, self.control_md, needs_control=False)
         )
@@ -218,6 +236,15 @@ class Panel(
         if text != self.last_status:
             self.last_status = text
             self.status_html.content = text
+
+    def show_readout(self, text: str) -> None:
+        if text != self.readout_html.content:
+            self.readout_html.content = text
+
+    def show_bar(self, text: str) -> None:
+        if text != self.last_bar:
+            self.last_bar = text
+            self.bar_html.content = text
 
     def show_legends(self, speed: str, current: str) -> None:
         if (speed, current) != self.last_legends:

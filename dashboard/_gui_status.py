@@ -12,9 +12,22 @@ from typing import Any
 
 from dashboard._gui_field import fmt as _fmt
 
-__all__ = ["DROP_WINDOW_S", "controller_text", "legend", "status_html"]
+__all__ = ["DROP_WINDOW_S", "controller_text", "legend", "setpoints_text", "status_html"]
 
 DROP_WINDOW_S = 5.0  #: dropped-frame rate over this window (s)
+
+
+def setpoints_text(s: dict, latest: dict) -> str:
+    """Speed and i_p with the setpoint of the mode in use only (speed mode: speed*; current
+    mode: i_p*; an unknown mode: none), so no stale setpoint of another mode is shown."""
+    mode = s.get("mode")
+    speed = f"<b>speed</b> {_fmt(latest.get('measurements.speed'), '.1f')} rpm"
+    i_p = f"<b>i_p</b> {_fmt(latest.get('measurements.i_p'), '.2f')} A"
+    if mode == "speed":
+        speed += f" (set {_fmt(s.get('speed_setpoint'), '.0f')})"
+    elif mode == "current":
+        i_p += f" (set {_fmt(s.get('current_setpoint'), '.1f')})"
+    return f"{speed} · {i_p}"
 
 
 def status_html(
@@ -25,8 +38,9 @@ def status_html(
     fresh_txt: str,
     stream: tuple[int, int, str | None] = (0, 0, None),
 ) -> str:
-    """The status block: freshness, bus, NMT/402/mode, speed and i_p with their setpoints,
-    heartbeat age, bus load, dropped TPDO frames/s (``rate``), EMCY and bus health.
+    """The status details under the bar: bus and node, speed and i_p with the setpoint of the
+    mode in use, heartbeat age (s), bus load, dropped TPDO frames/s (``rate``, never
+    negative), the age of each part of the state, EMCY and bus health.
 
     ``s`` is :meth:`Bench.state`, ``latest`` the newest live values, ``stream`` (errors,
     restarts, last error) of the plot thread. Always the same number of lines.
@@ -45,19 +59,23 @@ def status_html(
     expected = sum(
         float(t.get("expected_hz") or 0.0) for t in (live.get("tpdo") or {}).values()
     )
+    if rate is not None:
+        rate = max(0.0, rate)
     share = f" ({100 * rate / expected:.1f} %)" if rate is not None and expected else ""
     e = html.escape
-    fresh = (
-        f"<b style='color:#b03a2e'>⚠ {e(fresh_txt)}</b>"
-        if stale
-        else f"<span style='color:#1e8449'>● {e(fresh_txt)}</span>"
+    ages = s.get("ages_s") or {}
+    stale_parts = set(s.get("stale") or ())
+    age_txt = " · ".join(
+        (f"<span style='color:#b03a2e'>{k} {_fmt(v, '.1f')} s</span>" if k in stale_parts
+         else f"{k} {_fmt(v, '.1f')} s")
+        for k, v in ages.items()
     )
+    fresh = f"<b>ages</b> {age_txt}"
     if stream_errors or plot_restarts:
         fresh += (
             f" <span title='{e(last_stream_error or '')}'>· stream recovered "
             f"{stream_errors} error(s), {plot_restarts} restart(s)</span>"
         )
-    cached = " (last read: an action holds the drive)" if s.get("drive_values_cached") else ""
     extra = []
     for key, label in (
         ("bus_state", "CAN"),
@@ -80,37 +98,38 @@ def status_html(
         f"{_fmt(rate, '.1f')} frames/s{share}</span>"
     )
     lines = [
-        fresh,
         f"<b>Bus</b> {e(str(s['bus']))} · <b>node</b> {s['node_id']}",
-        f"<b>NMT</b> {e(str(s.get('nmt_state')))} · <b>402</b> {e(str(s.get('state')))} · "
-        f"<b>mode</b> {e(str(s.get('mode')))}{cached}",
-        f"<b>speed</b> {_fmt(latest.get('measurements.speed'), '.1f')} rpm "
-        f"(set {_fmt(s['speed_setpoint'], '.0f')}) · "
-        f"<b>i_p</b> {_fmt(latest.get('measurements.i_p'), '.2f')} A "
-        f"(set {_fmt(s.get('current_setpoint'), '.1f')})",
-        f"<b>heartbeat age</b> {_fmt(hb * 1e3 if hb is not None else None, '.0f')} ms · "
+        setpoints_text(s, latest),
+        f"<b>heartbeat</b> {_fmt(hb, '.2f')} s ago · "
         f"<b>bus load</b> {_fmt(load * 100 if load is not None else None, '.1f')} % · {drops}",
+        fresh,
         f"<b>faults/EMCY</b> {e(emcy_txt)}",
     ]
     lines.append(" · ".join(extra) or "&nbsp;")  # always the same number of lines
     return "<div style='font-size:0.85em;line-height:1.35'>" + "<br>".join(lines) + "</div>"
 
 
-
-
 def legend(
-    names: tuple[str, str], unit: str, colors: tuple[str, str], stale: bool, fresh_txt: str
+    names: tuple[str, str],
+    unit: str,
+    colors: tuple[str, str],
+    fresh: str,
+    stale: bool = False,
+    tick: int = 0,
 ) -> str:
-    sw = " ".join(
-        f"<span style='color:{c}'>━</span> {html.escape(n)} ({unit})"
-        for n, c in zip(names, colors, strict=True)
+    """A live plot's legend line: the measurement (solid, strong) and its reference (dashed,
+    muted), then the freshness badge (``fresh``: :func:`dashboard._gui_statusbar.fresh_badge`,
+    red when the data or the page's updates stopped). Its classes let the bar's CSS grey the
+    plot under it: at once when ``stale``, and by itself when no tick re-sent the legend for
+    PAGE_STALE_S (the class alternating with ``tick`` restarts that timer)."""
+    measured, ref = names
+    sw = (
+        f"<span style='color:{colors[0]};font-weight:bold'>━</span> {html.escape(measured)} "
+        f"({unit}, measured) <span style='color:{colors[1]}'>╌</span> {html.escape(ref)} "
+        f"({unit}, reference)"
     )
-    mark = (
-        f"<b style='color:#b03a2e'>⚠ {html.escape(fresh_txt)}</b>"
-        if stale
-        else "<span style='color:#1e8449'>● live</span>"
-    )
-    return f"<div style='font-size:0.8em'>{sw} · {mark}</div>"
+    cls = f"bench-legend bench-t{tick % 2}" + (" bench-plot-stale" if stale else "")
+    return f"<div class='{cls}' style='font-size:0.8em'>{sw} · {fresh}</div>"
 
 
 def controller_text(ctl: dict | None, panel: Any, gone: float | None) -> str:

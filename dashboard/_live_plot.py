@@ -13,7 +13,7 @@ import numpy as np
 
 __all__ = ["STALE_AFTER_S", "data_age_s", "decimate", "freshness_text", "min_span_envelope"]
 
-STALE_AFTER_S = 1.0  #: the live view says "stale" when the newest sample is older than this
+STALE_AFTER_S = 0.5  #: the live view says "stale" when the newest sample is older than this (s)
 
 
 def decimate(
@@ -98,12 +98,13 @@ def data_age_s(newest_t: float | None, now: float | None = None) -> float | None
 
 
 def freshness_text(age_s: float | None, push_age_s: float | None = None) -> tuple[bool, str]:
-    """(stale, text) for the page: fresh data shows its age in ms; data older than
-    STALE_AFTER_S, no data at all, or plots not refreshed for that long show "STALE"."""
+    """(stale, text) for the page: fresh data shows its age in s; data older than
+    STALE_AFTER_S, no data at all, or plots not refreshed for that long show "STALE". Ages
+    in s."""
     if age_s is None:
         return True, "STALE · no live data yet"
     if push_age_s is not None and push_age_s > STALE_AFTER_S and age_s <= STALE_AFTER_S:
         return True, f"STALE · plots not refreshed for {push_age_s:.1f} s"
     if age_s > STALE_AFTER_S:
         return True, f"STALE · newest data {age_s:.1f} s old"
-    return False, f"live · data {age_s * 1e3:.0f} ms old"
+    return False, f"live · data {age_s:.2f} s old"

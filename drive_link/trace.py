@@ -124,11 +124,16 @@ class Trace:
         axes = np.atleast_1d(axes)
         t_ms = self.t * 1e3
         for ax, (unit, names) in zip(axes, by_unit.items(), strict=False):
+            # the measurement on top (zorder) and stronger; overlays (models) thin, dashed
             for n in names:
-                ax.plot(t_ms, self.signals[n], label=n, lw=1)
+                ax.plot(t_ms, self.signals[n], label=f"{n} ({unit})" if unit else n, lw=1.4,
+                        zorder=3)
             for n, v in (overlay or {}).items():
                 if n.split(" ")[0] in names or len(by_unit) == 1:
-                    ax.plot(t_ms[: len(v)], v, "--", label=n, lw=1)
+                    lab = n if not unit else (
+                        f"{n[:-1]}, {unit})" if n.endswith(")") else f"{n} ({unit})"
+                    )
+                    ax.plot(t_ms[: len(v)], v, "--", label=lab, lw=0.9, zorder=2)
             ax.set_ylabel(unit)
             ax.axvline(0.0, color="k", lw=0.5, alpha=0.5)
             ax.grid(True, alpha=0.3)

@@ -250,6 +250,61 @@ def test_change_L_c_and_see_readback_and_margins(page, bench):
     page.screenshot(path=str(out / "dashboard_e2e.png"))
 
 
+STATUS_BAR = """() => {
+  const inView = (el) => {
+    if (!el) return {top: -1, bottom: -1, onTop: false};  // not on the page at all
+    const r = el.getBoundingClientRect();
+    const hit = document.elementFromPoint(r.x + r.width / 2, r.y + r.height / 2);
+    return {top: r.top, bottom: r.bottom, onTop: !!hit && el.contains(hit)};
+  };
+  const quick = [...document.querySelectorAll('button')]
+    .find(b => b.innerText.trim() === 'Quick stop');
+  const badge = [...document.querySelectorAll('.bench-statusbar .bench-badge')]
+    .find(b => /OPERATION ENABLED|SWITCH|FAULT|QUICK STOP|READY/.test(b.innerText));
+  const scrolled = Math.max(...[...document.querySelectorAll('.mantine-ScrollArea-viewport')]
+    .map(e => e.scrollTop));
+  const boxes = (sel) => [...document.querySelectorAll(sel)].map(e => e.getBoundingClientRect());
+  const notices = boxes('.mantine-Notification-root');
+  const covered = [...boxes('.uplot'), ...[...document.querySelectorAll('button, input')]
+      .filter(e => !e.closest('.mantine-Notification-root'))
+      .map(e => e.getBoundingClientRect()).filter(r => r.width && r.height)]
+    .filter(r => notices.some(n => n.left < r.right && r.left < n.right
+                                   && n.top < r.bottom && r.top < n.bottom));
+  return {quick: inView(quick), quickBg: getComputedStyle(quick).backgroundColor,
+          badge: inView(badge), scrolled, notices: notices.length, covered: covered.length};
+}"""
+
+
+def test_status_bar_stays_in_view_and_uncovered_while_the_tuning_tab_scrolls(page):
+    """1280×800 (issue 24): with the Tuning tab scrolled to its end, the CiA 402 badge and
+    Quick stop are in view and on top (the element at their centre is theirs), Quick stop is
+    red, and viser's notices (software WebGL here) cover no plot and no control."""
+    click(page, page.get_by_role("tab", name="Tuning"))
+    time.sleep(0.3)
+    page.evaluate(
+        "() => document.querySelectorAll('.mantine-ScrollArea-viewport')"
+        ".forEach(e => { e.scrollTop = e.scrollHeight; })"
+    )
+    time.sleep(0.5)
+    got = page.evaluate(STATUS_BAR)
+    assert got["scrolled"] > 100, got  # the panel did scroll: the premise of the test
+    for name in ("quick", "badge"):  # Quick stop first: the old page scrolled it away
+        box = got[name]
+        assert 0 <= box["top"] and box["bottom"] <= VIEWPORT["height"], (name, got)
+        assert box["onTop"], (name, got)
+    r, g, b = map(int, re.findall(r"\d+", got["quickBg"])[:3])
+    assert r > 180 and g < 120 and b < 120, got["quickBg"]  # red: the safety control
+    assert got["covered"] == 0, got
+    out = ROOT / "artifacts"
+    out.mkdir(exist_ok=True)
+    page.screenshot(path=str(out / "dashboard_e2e_status_bar.png"))
+    page.evaluate(
+        "() => document.querySelectorAll('.mantine-ScrollArea-viewport')"
+        ".forEach(e => { e.scrollTop = 0; })"
+    )
+    click(page, page.get_by_role("tab", name="Speed"))
+
+
 def test_nothing_leaves_the_machine(page, bench):
     """The GUI and the API docs load no asset from a CDN or any other host."""
     page.goto(f"{bench[1]}/docs")

@@ -101,7 +101,7 @@ def test_decimate_equals_a_bucket_by_bucket_oracle(spacing):
 
 
 def test_freshness_text():
-    assert freshness_text(0.04) == (False, "live · data 40 ms old")
+    assert freshness_text(0.04) == (False, "live · data 0.04 s old")
     stale, txt = freshness_text(3.2)
     assert stale and "3.2 s" in txt
     assert freshness_text(None)[0] is True

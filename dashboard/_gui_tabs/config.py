@@ -13,6 +13,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from dashboard._gui_words import CONFIG_FORCE_LABEL, diff_rows
 from drive_link import config_dcf
 from drive_link.record import record_bus
 
@@ -53,6 +54,12 @@ class ConfigTab:
         self.dcf_dry = gui.add_checkbox(
             "Compare only (dry run)", True, hint="show what the file would change; write nothing"
         )
+        self.dcf_force = gui.add_checkbox(
+            CONFIG_FORCE_LABEL,
+            False,
+            hint="load a file whose gain set is stable but has poor margins (L_c > 1.5 L, "
+            "GM < 2 dB or ‖S‖∞ > 5); an unstable set is refused regardless",
+        )
         up = gui.add_upload_button("Load configuration (.dcf)", mime_type=".dcf,text/plain")
         self.cfg_md = gui.add_markdown("", visible=False)
         up.on_upload(self.action(self._load_dcf, self.cfg_md, needs_control=False))
@@ -78,16 +85,16 @@ class ConfigTab:
     def _load_dcf(self, event: Any) -> str | None:
         f = event.target.value
         dry = bool(self.dcf_dry.value)
+        force = bool(self.dcf_force.value)
         if not dry and not self._control(self.cfg_md):
             return None
         with tempfile.TemporaryDirectory() as d:
             path = Path(d) / Path(f.name).name
             path.write_bytes(f.content)
             with self.bench.lock:
-                res = config_dcf.load(self.bench.drive, path, dry_run=dry)
+                res = config_dcf.load(self.bench.drive, path, dry_run=dry, force=force)
         changes = res.get("changes") or []
-        rows = "; ".join(f"{c['name']}: {c['drive']} → {c['file']}" for c in changes[:12])
-        more = f" (+{len(changes) - 12} more)" if len(changes) > 12 else ""
+        rows = diff_rows(changes)
         if dry:
             head = f"{f.name}: {len(changes)} change(s) (dry run, nothing written)"
         else:
@@ -95,7 +102,7 @@ class ConfigTab:
             head = f"{f.name}: {n if isinstance(n, int) else len(n)} object(s) written"
             with contextlib.suppress(Exception):
                 self.load_gains()
-        return f"{head}{': ' + rows + more if rows else ''}"
+        return f"{head}{': ' + rows if rows else ''}"
 
     def _record_button(self, event: Any) -> str | None:
         if event.target.value == "Start recording":

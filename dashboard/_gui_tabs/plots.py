@@ -21,16 +21,29 @@ import numpy as np
 import viser.uplot as uplot
 
 from dashboard import _loop_view as loop_view
-from dashboard._gui_field import CURRENT_COLORS, PLOT_HEIGHT_PX, SPEED_COLORS, series
+from dashboard._gui_field import (
+    CURRENT_COLORS,
+    PLOT_HEIGHT_PX,
+    SPEED_COLORS,
+    live_series,
+    series,
+)
+from dashboard._plot_style import SignalStyle, capture_styles
 
 if TYPE_CHECKING:
     from dashboard._bench import Capture
 
-__all__ = ["PLOT_AREA_WIDTH_PX", "PlotArea", "capture_view"]
+__all__ = ["PLOT_AREA_WIDTH_PX", "PlotArea", "axis_key", "capture_view", "unit_axes"]
 
-#: requested width of the plot area (px); viser scales the docked regions down together on a
-#: narrower window, keeping 120 px of 3D canvas: at 1280 px the plots get ~61 % of the width.
-PLOT_AREA_WIDTH_PX = 780
+#: requested width of the plot area (px); with the control panel's 800 px wider than any
+#: screen: viser scales both docked regions to the window, keeping its minimum 120 px canvas
+#: strip (:data:`STRIP_PX`): at 1280 px the plots get 789 px (62 %).
+PLOT_AREA_WIDTH_PX = 1700
+STRIP_PX = 120  #: viser's minimum canvas width: the readout column between plots and controls
+READOUT_HEIGHT_PX = 300  #: height of the readout in the strip over a shown 3D rotor (px)
+#: its height when no rotor is drawn there (px): the strip is the readout, viser's notices
+#: (software WebGL, uploads) go below it
+READOUT_FULL_PX = 560
 
 #: hides the legend row of the invisible min-span helper series (4th row, last, of a live plot)
 LEGEND_CSS = "<style>.uplot .u-legend tr.u-series:nth-child(4):last-child{display:none}</style>"
@@ -47,27 +60,58 @@ def _cursor(key: str) -> Any:
     )
 
 
-def capture_view(cap: Capture) -> tuple[str, str, list[str], tuple[np.ndarray, ...]]:
-    """(title, x label, series labels, data) of a capture for the capture plot."""
+def capture_view(
+    cap: Capture,
+) -> tuple[str, str, list[SignalStyle], tuple[np.ndarray, ...]]:
+    """(title, x label, series styles in drawing order, data) of a capture for the capture
+    plot: each signal on the axis of its own unit (:mod:`dashboard._plot_style`)."""
     c = cap.columns
+    styles = capture_styles(cap.kind, list(c))[: len(CAPTURE_COLORS)]
     if cap.kind == "identification":
-        names = [("speed", "speed (rpm)"), ("model", "model (rpm)")]
         x, x_label = np.asarray(c["t"], dtype=np.float64), "t (s)"
         title = f"#{cap.id} identification: speed and the fitted G(z) = b/(z − a)"
     else:
-        pretty = {"i_p_avg": "ī_p (A)", "i_p_ref": "i_p* (A)", "model": "model (A)"}
-        names = [(k, pretty.get(k, f"{k} (A)")) for k in c if k != "t"][: len(CAPTURE_COLORS)]
         x, x_label = np.asarray(c["t"], dtype=np.float64) * 1e3, "t (ms)"
         title = f"#{cap.id} {cap.kind.replace('_', ' ')} at 50 kHz"
-    data = (x, *(np.asarray(c[k], dtype=np.float64) for k, _ in names))
-    return title, x_label, [lab for _, lab in names], data
+    data = (x, *(np.asarray(c[s.key], dtype=np.float64) for s in styles))
+    return title, x_label, styles, data
 
 
-def _capture_series(labels: list[str] | tuple[str, ...], x_label: str) -> tuple[Any, ...]:
-    """The capture plot's series: one per label, the remaining slots hidden."""
-    out = series(tuple(labels), CAPTURE_COLORS, x_label)
-    for col in CAPTURE_COLORS[len(labels) :]:
-        out.append(uplot.Series(label="", stroke=col, show=False))
+def _styled(s: SignalStyle) -> Any:
+    """A uPlot series of a styled signal, on the scale of its unit."""
+    return uplot.Series(
+        label=s.label, stroke=s.color, width=s.width, dash=list(s.dash) or None,
+        scale=axis_key(s.unit),
+    )
+
+
+def axis_key(unit: str) -> str:
+    """The uPlot scale key of a unit ("1" for a dimensionless signal)."""
+    return unit or "1"
+
+
+def unit_axes(units: list[str], x_label: str) -> tuple[Any, ...]:
+    """The x axis, then one y axis per unit: the first on the left, the others on the right
+    (grid lines only for the first)."""
+    axes = [uplot.Axis(label=x_label)]
+    for k, u in enumerate(units):
+        axes.append(
+            uplot.Axis(
+                scale=axis_key(u), label=u or "1", size=60, side=3 if k == 0 else 1,
+                grid={"show": k == 0},
+            )
+        )
+    return tuple(axes)
+
+
+def _capture_series(styles: list[SignalStyle], x_label: str) -> tuple[Any, ...]:
+    """The capture plot's series: one per styled signal, the remaining slots hidden (on the
+    first unit's scale)."""
+    out: list[Any] = [uplot.Series(label=x_label)]
+    out += [_styled(s) for s in styles]
+    key = axis_key(styles[0].unit) if styles else "A"
+    for col in CAPTURE_COLORS[len(styles) :]:
+        out.append(uplot.Series(label="", stroke=col, show=False, scale=key))
     return tuple(out)
 
 
@@ -95,6 +139,15 @@ class PlotArea:
             self._build_loop_plots()
         self.plot_panel.dock_left()
         self.plot_panel.set_width(PLOT_AREA_WIDTH_PX)
+        # the canvas strip between plots and controls: the live readout, not an empty gap
+        self.readout_panel = gui.add_panel()
+        with self.readout_panel.add_tab("Now"):
+            self.readout_html = gui.add_html("")
+        self.readout_panel.float(x=0, y=0, width=STRIP_PX, height=READOUT_FULL_PX)
+
+    def fit_readout(self, rotor_shown: bool) -> None:
+        """The readout over the top of a shown 3D rotor, or the whole strip without one."""
+        self.readout_panel.set_height(READOUT_HEIGHT_PX if rotor_shown else READOUT_FULL_PX)
 
     def _live_plot(self, name: str, unit: str, colors: tuple[str, str]) -> Any:
         window = self.config.live_window_s
@@ -103,7 +156,7 @@ class PlotArea:
         return self.gui.add_uplot(
             (x0, zero, zero, zero),
             (
-                *series((f"{name} ({unit})", f"{name}* ({unit})"), colors, "t (s)"),
+                *live_series(name, unit, colors, "t (s)"),
                 uplot.Series(label="", stroke="rgba(0,0,0,0)", width=0, points={"show": False}),
             ),
             scales={"x": uplot.Scale(time=False, range=(-window, 0.0))},
@@ -119,7 +172,7 @@ class PlotArea:
         self._capture_axes: tuple[str, ...] = ()
         self.capture_plot = self.gui.add_uplot(
             (np.zeros(2), *(nan,) * n),
-            _capture_series((), "t (ms)"),
+            _capture_series([], "t (ms)"),
             scales={"x": uplot.Scale(time=False, auto=True)},
             axes=(uplot.Axis(label="t (ms)"), uplot.Axis(label="A", size=60)),
             cursor=_cursor("capture"),
@@ -127,18 +180,18 @@ class PlotArea:
         )
 
     def show_capture_plot(self, cap: Capture) -> None:
-        """Show ``cap`` in the Capture tab; unused series slots stay empty (NaN) and unlabelled."""
-        title, x_label, labels, data = capture_view(cap)
+        """Show ``cap`` in the Capture tab, each signal on the axis of its unit, measurements
+        on top; unused series slots stay empty (NaN) and unlabelled."""
+        title, x_label, styles, data = capture_view(cap)
         n = len(CAPTURE_COLORS)
         filler = np.full(data[0].size, np.nan)
-        names = (*labels, *("",) * (n - len(labels)))
-        axes = (x_label, *names)
-        if axes != self._capture_axes:  # labels change with the capture's kind
-            unit = "rpm" if cap.kind == "identification" else "A"
-            self.capture_plot.series = _capture_series(labels, x_label)
-            self.capture_plot.axes = (uplot.Axis(label=x_label), uplot.Axis(label=unit, size=60))
-            self._capture_axes = axes
-        self.capture_plot.data = (*data, *(filler,) * (n - len(labels)))
+        units = list(dict.fromkeys(s.unit for s in styles))
+        sig = (x_label, *(f"{s.key}|{s.label}|{s.unit}" for s in styles))
+        if sig != self._capture_axes:  # labels and axes change with the capture's columns
+            self.capture_plot.series = _capture_series(styles, x_label)
+            self.capture_plot.axes = unit_axes(units, x_label)
+            self._capture_axes = sig
+        self.capture_plot.data = (*data, *(filler,) * (n - len(styles)))
         self.capture_md.content = f"**{title}**"
 
     # ------------------------------------------------------------------ loop
