@@ -174,6 +174,9 @@ SLOW_FIRST = (
     "tests/test_link_check.py",
     "tests/test_sdo_client_recovery.py",
     "tests/test_fuzz_sdo.py",
+    "tests/test_readme_setup.py",
+    "tests/test_readme_using.py",
+    "tests/test_readme_commands.py",
 )
 LANE_TEST = "tests/test_socketcan_lane.py::test_socketcan_lane"
 

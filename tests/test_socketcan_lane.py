@@ -87,6 +87,7 @@ def test_socketcan_lane():
     assert res["rc"] == 0, lane.failure_message(output)  # one line, then each failure's reason
 
 
+@pytest.mark.unit
 def test_lane_without_uml_says_so_in_one_line(monkeypatch):
     """No UML kernel (package missing): the runner returns one line, runs nothing."""
     monkeypatch.setattr(uml, "KERNELS", ("no-such-linux-uml",))
@@ -95,6 +96,7 @@ def test_lane_without_uml_says_so_in_one_line(monkeypatch):
     assert "\n" not in res.problem and "apt-get install user-mode-linux" in res.problem
 
 
+@pytest.mark.unit
 def test_ci_runs_the_readme_test_command_which_installs_the_lane():
     """.ci/run runs the README's test command as written; the "Set up" section has exactly two
     commands, and the test command installs what the lane and the busy condition need."""
