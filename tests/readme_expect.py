@@ -211,6 +211,9 @@ def _replayed(r: Result, s: ShellSession) -> list[str]:
         rows = list(csv.reader(fh))
     if len(rows) < 1000 or not any(h.startswith("measurements.speed") for h in rows[0]):
         bad.append(f"live.csv: {len(rows)} rows, header {rows[0] if rows else None}")
+    # --trace-csv: the file, or one line saying the recording holds no trace upload
+    if not (s.cwd / "trace.csv").exists() and not re.search(r"^no trace upload in ", r.out, re.M):
+        bad.append("--trace-csv trace.csv: no file and no word why")
     return bad
 
 
