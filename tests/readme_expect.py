@@ -20,8 +20,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from readme_blocks import ROOT
-from readme_session import Result, ShellSession
+from readme_blocks import ROOT, Line
+from readme_session import Result, ShellSession, _live_terminal
 
 #: The motor's inductance, paper Table/§2 (H).
 L_MOTOR = 14.8e-6
@@ -225,9 +225,25 @@ def _shell_session(r: Result, s: ShellSession) -> list[str]:
     )(r, s)
 
 
+def _state(s: ShellSession) -> str:
+    m = re.search(r"^\s+state: (.+)$", s.run_text("drive-link status").out, re.M)
+    return m[1].strip() if m else "?"
+
+
 def _live_screen(r: Result, s: ShellSession) -> list[str]:
+    """The panels of the signals asked for; ``x`` quits leaving the drive running (the shell
+    above enabled it at 1000 rpm), ``q`` quick-stops it and quits (CiA 402: the drive leaves
+    OPERATION ENABLED through QUICK STOP ACTIVE)."""
     screen = r.extra.get("screen", "")
-    return [f"screen lacks {sig}" for sig in r.extra.get("signals", []) if sig not in screen]
+    bad = [f"screen lacks {sig}" for sig in r.extra.get("signals", []) if sig not in screen]
+    if (st := _state(s)) != "OPERATION ENABLED":
+        bad.append(f"after x the drive is {st}, not left OPERATION ENABLED")
+    q = _live_terminal(s, Line(r.cmd, ""), s.localize(r.cmd), key=b"q")
+    if q.rc != 0 or q.problem:
+        bad.append(f"with q: exit {q.rc} {q.problem}")
+    if (st := _state(s)) not in ("QUICK STOP ACTIVE", "SWITCH ON DISABLED"):
+        bad.append(f"after q the drive is {st}, not quick-stopped")
+    return bad
 
 
 def _frames(r: Result, s: ShellSession) -> list[str]:

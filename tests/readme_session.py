@@ -340,8 +340,9 @@ def _shell(session: ShellSession, line: Line, cmd: str) -> Result:
     return res
 
 
-def _live_terminal(session: ShellSession, line: Line, cmd: str) -> Result:
-    """``drive-link live --plot …`` on a terminal: wait for its panels, then ``x`` (quit)."""
+def _live_terminal(session: ShellSession, line: Line, cmd: str, key: bytes = b"x") -> Result:
+    """``drive-link live --plot …`` on a terminal: wait for its panels, then ``key`` (``x``
+    quits leaving the drive as it is)."""
     t0 = time.monotonic()
     p, master, reader = _pty_spawn(session, cmd)
     res = Result(line.cmd, line.comment, None)
@@ -352,7 +353,7 @@ def _live_terminal(session: ShellSession, line: Line, cmd: str) -> Result:
         time.sleep(1.0)
         res.extra["screen"] = _strip_ansi(reader.text)
         res.extra["signals"] = signals
-        os.write(master, b"x")
+        os.write(master, key)
     finally:
         _pty_end(p, master, res)
     res.out, res.seconds = _strip_ansi(reader.text), time.monotonic() - t0
