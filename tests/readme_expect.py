@@ -20,6 +20,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+from conftest import heartbeat_explained, min_rate
 from readme_blocks import ROOT, Line
 from readme_session import Result, ShellSession, _live_terminal
 
@@ -31,8 +32,12 @@ Check = Callable[[Result, ShellSession], list[str]]
 
 @dataclass(frozen=True)
 class Expect:
+    """``rc``: the exit status the README's table gives; ``check``: what the comment says
+    (``rc_by_check``: the check judges the exit status itself)."""
+
     rc: int = 0
     check: Check | None = None
+    rc_by_check: bool = False
 
 
 def _has(*patterns: str, stream: str = "out") -> Check:
@@ -138,12 +143,29 @@ def _design_ip(r: Result, s: ShellSession) -> list[str]:
 
 
 def _check_items(r: Result, s: ShellSession) -> list[str]:
-    items = re.findall(r"^(PASS|FAIL|SKIP|N/A)\s+(\w+)", r.out, re.M)
-    m = re.search(r"^(\d+)/(\d+) passed", r.out, re.M)
+    """Every item PASS; a heartbeat or TPDO rate item that failed only as far as the kernel
+    kept the drive's process waiting meanwhile is accepted (as in tests/test_link_check.py)."""
+    items = re.findall(r"^(PASS|FAIL|SKIP|N/A)\s+(\w+)\s*(.*)$", r.out, re.M)
     bad = [] if len(items) >= 10 else [f"only {len(items)} pass/fail items"]
-    if m is None:
+    if r.rc not in (0, 1):
+        bad.append(f"exit {r.rc} (README: 0 all pass, 1 a failed check)")
+    if re.search(r"^(\d+)/(\d+) passed", r.out, re.M) is None:
         bad.append("no 'N/M passed' line")
-    return bad + [f"{name}: {v}" for v, name in items if v == "FAIL"]
+    unexplained = [
+        f"{name}: {detail}"
+        for v, name, detail in items
+        if v == "FAIL" and not _explained(name, detail, r.extra.get("drive_wait", 0.0))
+    ]
+    if r.rc == 1 and not any(v == "FAIL" for v, _, _ in items):
+        bad.append("exit 1 with no failed item")
+    return bad + unexplained
+
+
+def _explained(name: str, detail: str, wait: float) -> bool:
+    m = re.fullmatch(r"TPDO\d+ at (\d+) Hz, expected (\d+) Hz", detail)
+    if name == "pdo_rates" and m:
+        return int(m[1]) >= min_rate(int(m[2]), wait, 0.5)
+    return name == "heartbeat" and heartbeat_explained(detail, wait)
 
 
 def _activated(r: Result, s: ShellSession) -> list[str]:
@@ -265,7 +287,7 @@ EXPECT: dict[str, Expect] = {
     f"drive-link set-gains L_c=40e-6 {H}": Expect(8, _set_gains_refused),
     "drive-link design --Lc 22.2e-6 --json": Expect(0, _design_table1),
     "drive-link design --a 0.9999785 --b 3.33715e-4 --xi 1 --wn 2.3 --json": Expect(0, _design_ip),
-    f"drive-link check {H}": Expect(0, _check_items),
+    f"drive-link check {H}": Expect(0, _check_items, rc_by_check=True),
     # "Using drive-link"
     ". .venv/bin/activate": Expect(0, _activated),
     "drive-link objects L_c": Expect(0, _objects_row),
@@ -325,7 +347,7 @@ def judge(r: Result, s: ShellSession | None) -> list[str]:
     """Problems of one line's result (empty: as the README says)."""
     exp = EXPECT.get(r.cmd, Expect())
     bad = [r.problem] if r.problem else []
-    if r.rc is not None and r.rc != exp.rc:
+    if r.rc is not None and r.rc != exp.rc and not (exp.rc_by_check and s is not None):
         last = (r.err.strip() or r.out.strip()).splitlines()[-1:] or [""]
         bad.append(f"exit {r.rc}, README expects {exp.rc}: {last[0][-300:]}")
     if "Traceback (most recent call last)" in r.err + r.out:

@@ -43,6 +43,7 @@ from pathlib import Path
 
 if __package__ in (None, ""):
     sys.path.insert(0, str(Path(__file__).resolve().parent))
+from conftest import RunQueueProbe
 from readme_blocks import LINE_NOT_HERE, Block, Line, lines_of
 
 #: First word of a background command → what it prints when it is ready.
@@ -179,6 +180,7 @@ class ShellSession:
             return handler(self, line, cmd)
         envfile = self.cwd / ".readme-env"
         t0 = time.monotonic()
+        probes = [RunQueueProbe(p.pid) for _, p, _, _ in self.background if p.poll() is None]
         try:
             p = subprocess.run(
                 ["bash", "-c", self._script(cmd, envfile)],
@@ -200,9 +202,13 @@ class ShellSession:
                 f"no end in {LINE_TIMEOUT:g} s",
             )
         self._take_env(envfile)
-        return Result(
+        wait = max([pr.stop() for pr in probes], default=0.0)
+        res = Result(
             line.cmd, line.comment, p.returncode, p.stdout, p.stderr, time.monotonic() - t0
         )
+        # run-queue wait of the background drive meanwhile, s/s (tests/conftest.py)
+        res.extra["drive_wait"] = wait
+        return res
 
     def run_text(self, cmd: str) -> Result:
         """A further command in this session (a check's own probe)."""
