@@ -58,10 +58,13 @@ def test_setup_block_installs_and_serves_the_bench(tmp_path):
     assert (copy / "pyproject.toml").exists() and not (copy / ".venv").exists()
     session = rs.ShellSession(copy, fresh=True)
     session.ready_timeout = 480.0  # a venv and a build on a loaded host
-    results = rs.run_blocks([block], copy, rx.judge, session=session)
-    [(r, bad)] = results
-    assert not bad, f"$ {r.cmd}\n{bad}\n{r.err[-2000:]}"
-    assert r.extra.get("status") == 200, r.extra
-    assert "<html" in r.extra["page"].lower(), r.extra["page"][:300]
-    installed = copy / ".venv" / "bin"
-    assert all((installed / exe).exists() for exe in ("drive-link", "virtual-drive"))
+    try:
+        results = rs.run_blocks([block], copy, rx.judge, session=session)
+        [(r, bad)] = results
+        assert not bad, f"$ {r.cmd}\n{bad}\n{r.err[-2000:]}"
+        assert r.extra.get("status") == 200, r.extra
+        assert "<html" in r.extra["page"].lower(), r.extra["page"][:300]
+        installed = copy / ".venv" / "bin"
+        assert all((installed / exe).exists() for exe in ("drive-link", "virtual-drive"))
+    finally:
+        shutil.rmtree(copy, ignore_errors=True)  # a whole venv: not kept in pytest's tmp
