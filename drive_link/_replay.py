@@ -585,6 +585,9 @@ def cmd_replay(args: argparse.Namespace) -> int:
             )
         lines += [f"saved {out['csv']}"] if "csv" in out else []
         lines += [f"saved {p}" for p in out.get("trace_csv", []) + out.get("trace_png", [])]
+        asked = [f"--{k.replace('_', '-')}" for k in ("trace_csv", "trace_png") if k in out]
+        if asked and not rep.traces:
+            lines.append(f"no trace upload in {rep.path}: nothing saved for {', '.join(asked)}")
         return "\n".join(lines + plot)
 
     if args.json and plot:

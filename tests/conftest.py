@@ -119,6 +119,42 @@ def heartbeat_explained(detail: str, wait: float) -> bool:
 
 
 # --------------------------------------------------------------------------------------------
+# The ``unit`` marker cannot lie: a unit test that opens a socket or starts a process fails
+# --------------------------------------------------------------------------------------------
+
+
+def _refuse(what: str):
+    def refuse(*args, **kwargs):
+        raise AssertionError(
+            f"a test marked 'unit' must not {what} (pytest.mark.unit: no process, "
+            "socket or browser)"
+        )
+
+    return refuse
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_protocol(item, nextitem):
+    """While a ``unit`` test runs (its fixtures included), connecting or binding a socket and
+    starting a process raise. ``UNIT_GUARD_ALL=1`` guards every test (to find candidates)."""
+    if item.get_closest_marker("unit") is None and not os.environ.get("UNIT_GUARD_ALL"):
+        return (yield)
+    import socket
+    import subprocess
+
+    mp = pytest.MonkeyPatch()
+    for name in ("connect", "connect_ex", "bind"):
+        mp.setattr(socket.socket, name, _refuse(f"{name} a socket"))
+    mp.setattr(subprocess.Popen, "__init__", _refuse("start a process"))
+    for name in ("fork", "posix_spawn", "posix_spawnp", "execv", "execve"):
+        mp.setattr(os, name, _refuse(f"call os.{name}"))
+    try:
+        return (yield)
+    finally:
+        mp.undo()
+
+
+# --------------------------------------------------------------------------------------------
 # Order and grouping of the run (serial or pytest-xdist ``-n N --dist loadgroup``)
 # --------------------------------------------------------------------------------------------
 
@@ -138,6 +174,9 @@ SLOW_FIRST = (
     "tests/test_link_check.py",
     "tests/test_sdo_client_recovery.py",
     "tests/test_fuzz_sdo.py",
+    "tests/test_readme_setup.py",
+    "tests/test_readme_using.py",
+    "tests/test_readme_commands.py",
 )
 LANE_TEST = "tests/test_socketcan_lane.py::test_socketcan_lane"
 

@@ -23,6 +23,7 @@ pytestmark = pytest.mark.timeout(60)
 PER_NODE = 100 * (47 + 8 * 6) + 2 * 1000 * (47 + 8 * 8) + 100 * (47 + 8 * 8)  # bit/s
 
 
+@pytest.mark.unit
 def test_default_streams_offer_the_iso_frame_bits_of_the_od_table():
     assert default_tpdo_bits_per_s() == pytest.approx(PER_NODE)  # 242,600 bit/s
     # a lower bound: the exact length of a real frame (stuff bits included) is never shorter
@@ -30,6 +31,7 @@ def test_default_streams_offer_the_iso_frame_bits_of_the_od_table():
     assert frame_bits(0x181, b"\x27\x02\x00\x00\x00\x00") >= 47 + 48
 
 
+@pytest.mark.unit
 @pytest.mark.parametrize(
     ("nodes", "bitrate", "warned"),
     [(1, 1_000_000, False), (3, 1_000_000, False), (4, 1_000_000, True), (2, 500_000, True)],

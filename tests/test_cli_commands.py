@@ -12,7 +12,7 @@ import pytest
 
 from drive_link import cli
 
-pytestmark = pytest.mark.timeout(90)
+pytestmark = [pytest.mark.timeout(90), pytest.mark.unit]
 
 
 @pytest.fixture(scope="module")

@@ -18,7 +18,7 @@ from drive_link import cli
 from drive_link.errors import InvalidValue
 from firmware_protocol import load_od
 
-pytestmark = pytest.mark.timeout(120)
+pytestmark = [pytest.mark.timeout(120), pytest.mark.unit]
 
 
 @pytest.fixture(scope="module")

@@ -24,6 +24,7 @@ ROOT = Path(__file__).resolve().parents[1]
 BIN = Path(sys.executable).parent
 
 
+@pytest.mark.unit
 def test_plain_install_has_what_the_readme_shows():
     """`pip install -e .` (no extras) brings the PNG writer and the units library."""
     req = importlib.metadata.requires("bldc-bench") or []
@@ -41,6 +42,7 @@ def _readme_block(title: str) -> list[str]:
     return [ln.split("  #", 1)[0].strip() for ln in block.splitlines() if ln.strip()]
 
 
+@pytest.mark.unit
 def test_readme_drive_link_commands_parse_in_order():
     """Every `drive-link` line of the README's session parses (the venv is activated first)."""
     lines = _readme_block("Using drive-link")
@@ -54,6 +56,7 @@ def test_readme_drive_link_commands_parse_in_order():
         assert callable(args.func), c
 
 
+@pytest.mark.unit
 def test_help_has_no_markup_and_every_option_says_what_it_is():
     ap = cli.build_parser()
     top = ap.format_help()

@@ -210,6 +210,7 @@ def _parsed(argv: list[str]) -> dict:
     return {k: getattr(args, k, None) for k in _WANT}
 
 
+@pytest.mark.unit
 def test_every_command_takes_bus_options_before_and_after():
     sub = next(a for a in cli.build_parser()._actions if a.dest == "cmd")
     assert len(sub.choices) >= 20
@@ -231,6 +232,7 @@ def test_every_command_takes_bus_options_before_and_after():
         assert defaults["node"] == 1 and defaults["json"] is False and defaults["timeout"] is None
 
 
+@pytest.mark.unit
 def test_option_after_the_command_wins_and_host_port_both_sides():
     got = _parsed(["--node", "3", "status", "--node", "5"])
     assert got["node"] == 5

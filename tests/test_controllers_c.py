@@ -39,6 +39,7 @@ def test_compiles_as_strict_c99_float32(tmp_path):
     assert res.returncode == 0, res.stderr
 
 
+@pytest.mark.unit
 def test_source_rules():
     for name in ("controllers.c", "controllers.h"):
         text = (CSRC / name).read_text()
@@ -57,6 +58,7 @@ def _current(type_, Lc=L, Rc=R, kp=0.4647, ki=0.0492, ff=0):
     return c
 
 
+@pytest.mark.unit
 def test_configure_rejects_bad_values_and_keeps_state():
     c = _current(0)
     before = (c.Phi_c, c.Gamma_c, c.L_c)
@@ -65,6 +67,7 @@ def test_configure_rejects_bad_values_and_keeps_state():
     assert (c.Phi_c, c.Gamma_c, c.L_c) == before
 
 
+@pytest.mark.unit
 @pytest.mark.parametrize("Lc", [L, 0.5 * L, 1.5 * L])
 def test_deadbeat_law_is_eq15(Lc):
     """Output of the C law for a random error sequence = lfilter of eq. (15) built here."""
@@ -78,6 +81,7 @@ def test_deadbeat_law_is_eq15(Lc):
     np.testing.assert_allclose(v, ref, rtol=2e-4, atol=2e-3 * np.abs(ref).max())
 
 
+@pytest.mark.unit
 def test_pi_law_is_eq22():
     rng = np.random.default_rng(2)
     e = rng.normal(0.0, 1.0, 400)
@@ -88,6 +92,7 @@ def test_pi_law_is_eq22():
     np.testing.assert_allclose(v, ref, rtol=1e-4, atol=1e-4 * np.abs(ref).max())
 
 
+@pytest.mark.unit
 def test_ip_closed_loop_is_eq27():
     """IP controller in the C code closing the loop on b/(z - a) = eq. (27) from python-control."""
     a, b, kp, ki = 0.9999785, 3.33715e-4, 0.2113, 2.9994e-5
@@ -107,6 +112,7 @@ def test_ip_closed_loop_is_eq27():
     assert out.max() < 500.0 * 1.002  # xi = 1: no overshoot
 
 
+@pytest.mark.unit
 def test_ip_float32_integrator_does_not_stall():
     """At 1000 rpm holding ~211 A of integral, a 0.5 rpm error adds k_p k_i e = 3.2e-6 A per
     sample.  The naive float32 forms (x = sum e in rpm*samples, or q += k_p k_i e in A) lose
@@ -134,6 +140,7 @@ def test_ip_float32_integrator_does_not_stall():
     assert x == x0 and q == q0  # both naive forms stall completely
 
 
+@pytest.mark.unit
 def test_current_saturation_and_realizable_reference():
     """m is clipped to +-1; after clipping the stored error is the one that gives the applied
     voltage (Hanus conditioning), so the next unsaturated output is the linear law's."""

@@ -8,10 +8,13 @@ import dataclasses
 import typing
 
 import numpy as np
+import pytest
 import viser._messages as messages
 from viser._assignable_props_api import AssignablePropsBase
 
 from dashboard._gui_cast import install_fast_cast
+
+pytestmark = pytest.mark.unit
 
 
 def _same(a: object, b: object) -> bool:

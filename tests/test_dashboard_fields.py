@@ -13,6 +13,8 @@ from dashboard._gui_panel import parse_sequence
 from dashboard._live_plot import decimate, freshness_text
 from dashboard._tuning import display, preview_markdown
 
+pytestmark = pytest.mark.unit
+
 RATIO = NumberSpec("L_c / L", 0.0, 3.0, lo_open=True)
 LC_UH = NumberSpec("L_c (µH)", 0.0, 2000.0, lo_open=True)
 

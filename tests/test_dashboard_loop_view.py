@@ -12,6 +12,8 @@ import pytest
 
 from dashboard import _loop_view as loop_view
 
+pytestmark = pytest.mark.unit
+
 TS, R, L = 20e-6, 6.2e-3, 14.8e-6
 A, B = 0.9999785, 3.33715e-4
 BASE = dict(R_c=R, k_p=0.4647, k_i=0.0492, speed_k_p=0.2113, speed_k_i=2.9994e-5)

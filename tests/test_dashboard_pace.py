@@ -10,8 +10,12 @@ from __future__ import annotations
 
 import re
 
+import pytest
+
 from dashboard import _gui_pace
 from dashboard._gui_pace import AHEAD, PATH_PREFIX, PagePace, answer
+
+pytestmark = pytest.mark.unit
 
 
 class _Page:

@@ -98,6 +98,7 @@ def test_in_process_drive_is_opt_in():
         assert bench.drive.nmt_state == "OPERATIONAL"
 
 
+@pytest.mark.unit
 def test_cli_refuses_both_virtual_placements(capsys):
     from dashboard.cli import main
 

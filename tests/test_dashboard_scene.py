@@ -25,6 +25,7 @@ from dashboard._gui_scene import (
 pytestmark = pytest.mark.timeout(60)
 
 
+@pytest.mark.unit
 def test_yoke_mesh_is_closed_and_has_the_tube_volume():
     n, r_in, r_out, h = 48, 0.99, 1.12, 0.62
     v, f = _tube(r_in, r_out, h, n)
@@ -42,6 +43,7 @@ def test_yoke_mesh_is_closed_and_has_the_tube_volume():
     assert vol == pytest.approx(ngon * (r_out**2 - r_in**2) * h, rel=1e-5)
 
 
+@pytest.mark.unit
 def test_six_step_table():
     """Each 60° sector drives two different phases; each phase is driven + for 120° and − for
     120° per electrical turn; successive sectors (wrapping) change exactly one phase."""
@@ -55,6 +57,7 @@ def test_six_step_table():
         assert (a[0] != b[0]) + (a[1] != b[1]) == 1
 
 
+@pytest.mark.unit
 def test_background_is_a_neutral_gradient():
     img = background()
     assert img.dtype == np.uint8 and img.ndim == 3 and img.shape[2] == 3

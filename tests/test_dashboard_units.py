@@ -12,7 +12,7 @@ from dashboard._security import ControlLease, LeaseError, allowed_origins, origi
 from dashboard.cli import main
 from dashboard.config import BenchConfig
 
-pytestmark = pytest.mark.timeout(30)
+pytestmark = [pytest.mark.timeout(30), pytest.mark.unit]
 
 
 def test_lease_one_controller_and_visible_take_over():

@@ -36,6 +36,7 @@ def f32(x: float) -> float:
 
 
 # ---------------------------------------------------------------- GUI fields
+@pytest.mark.unit
 @pytest.mark.parametrize(
     "spec,text,oracle",
     [
@@ -53,6 +54,7 @@ def test_field_converts_a_unit_like_pint(spec, text, oracle):
     assert spec.parse("20") == 20  # a bare number is in the field's unit, as before
 
 
+@pytest.mark.unit
 @pytest.mark.parametrize(
     "spec,text,match",
     [
@@ -79,6 +81,7 @@ def test_field_refuses_in_one_line(spec, text, match):
         assert text.split()[-1] in msg and spec.unit in msg
 
 
+@pytest.mark.unit
 def test_sequence_with_units():
     steps = parse_sequence("0 s:1000 rpm, 500ms:1500rpm, 2:0")
     assert steps == [(0.0, 1000), (pytest.approx(U("500 ms").to("s").magnitude), 1500), (2.0, 0.0)]
@@ -87,6 +90,7 @@ def test_sequence_with_units():
 
 
 # ---------------------------------------------------------------- API models
+@pytest.mark.unit
 def test_models_take_units_and_keep_strictness():
     assert GainsIn.model_validate({"L_c": "22.2 uH"}).L_c == pytest.approx(
         U("22.2 uH").to("H").magnitude, rel=1e-15

@@ -22,7 +22,7 @@ from viser.infra._async_message_buffer import AsyncMessageBuffer
 
 from dashboard._gui_guard import LoopSafeEvent
 
-pytestmark = pytest.mark.timeout(120)
+pytestmark = [pytest.mark.timeout(120), pytest.mark.unit]
 
 
 def run_scenario(safe: bool, seconds: float) -> tuple[int, int]:

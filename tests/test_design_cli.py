@@ -34,6 +34,7 @@ def _json(capsys, argv):
     return json.loads(out)
 
 
+@pytest.mark.unit
 @pytest.mark.parametrize(
     ("Lc", "gm", "pm_abs", "s_inf"),
     [(0.5 * L, 12.0, 73.6, 1.33), (L, 6.0, 60.0, 1.99), (1.5 * L, 2.5, 41.6, 3.97)],
@@ -58,6 +59,7 @@ def test_design_json_reproduces_table1(capsys, Lc, gm, pm_abs, s_inf):
     assert d["sensitivity_peak"] == pytest.approx(s_inf, rel=0.01)
 
 
+@pytest.mark.unit
 def test_design_overshoot_orders_like_fig8(capsys):
     """Fig. 8: L_c = L deadbeat (no overshoot), 0.5 L overdamped-ish, 1.5 L underdamped."""
     os_ = {
@@ -71,6 +73,7 @@ def test_design_overshoot_orders_like_fig8(capsys):
     assert d["settling_time_s"] == pytest.approx(2 * 20e-6, abs=1e-9)  # two samples
 
 
+@pytest.mark.unit
 def test_design_pi_and_unstable(capsys):
     d = _json(
         capsys, ["design", "--controller", "pi", "--kp", "0.4647", "--ki", "0.0492", "--json"]
@@ -84,6 +87,7 @@ def test_design_pi_and_unstable(capsys):
     assert u["overshoot_pct"] is None
 
 
+@pytest.mark.unit
 def test_design_pi_from_spec(capsys):
     d = _json(
         capsys, ["design", "--controller", "pi", "--crossover-hz", "1000", "--pm", "60", "--json"]
@@ -92,6 +96,7 @@ def test_design_pi_from_spec(capsys):
     assert d["gain_crossover_hz"] == pytest.approx(1000.0, rel=1e-4)
 
 
+@pytest.mark.unit
 def test_design_ip_gains(capsys):
     d = _json(
         capsys,
@@ -103,12 +108,14 @@ def test_design_ip_gains(capsys):
     assert 1.5 < d["settling_time_s"] < 3.0
 
 
+@pytest.mark.unit
 def test_design_text_output(capsys):
     assert run_cli(["design", "--Lc", repr(1.5 * L)]) == 0
     out = capsys.readouterr().out
     assert "stable" in out and "2.50 dB" in out and "‖S‖∞ = 4.000" in out
 
 
+@pytest.mark.unit
 @pytest.mark.parametrize(
     ("argv", "code"),  # README exit-code table: 7 a value refused, 2 the command line's form
     [
@@ -136,6 +143,7 @@ def test_design_bad_input_one_line_exit_code(capsys, argv, code):
     assert err.startswith("drive-link design: error:")
 
 
+@pytest.mark.unit
 def test_identify_requires_csv(capsys):
     assert run_cli(["identify"]) == 2
     err = capsys.readouterr().err
@@ -158,6 +166,7 @@ def _write_trace(path, D=500, n=1400, header=("t", "i_p", "speed"), noise=0.0, s
     return a, b
 
 
+@pytest.mark.unit
 def test_identify_plain_csv(tmp_path, capsys):
     f = tmp_path / "trace.csv"
     a, b = _write_trace(f)
@@ -169,6 +178,7 @@ def test_identify_plain_csv(tmp_path, capsys):
     assert "rms" in d
 
 
+@pytest.mark.unit
 def test_identify_trace_capture_format_with_ip_gains(tmp_path, capsys):
     f = tmp_path / "trace.csv"
     a, _ = _write_trace(
@@ -182,6 +192,7 @@ def test_identify_trace_capture_format_with_ip_gains(tmp_path, capsys):
     assert "a = 0.99997" in capsys.readouterr().out
 
 
+@pytest.mark.unit
 @pytest.mark.parametrize(
     ("content", "match"),
     [
@@ -203,6 +214,7 @@ def test_identify_bad_csv_one_line_exit_7(tmp_path, capsys, content, match):
     assert match in err
 
 
+@pytest.mark.unit
 def test_identify_missing_file(tmp_path, capsys):
     assert run_cli(["identify", "--csv", str(tmp_path / "nope.csv")]) == 7
     assert "cannot read" in capsys.readouterr().err

@@ -11,7 +11,7 @@ import pytest
 from drive_link import design
 from drive_link.metrics import step_metrics
 
-pytestmark = pytest.mark.timeout(60)
+pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 
 Ts = 20e-6
 A_PAPER = 0.9999785  # printed rounded as 0.99997 (see docs/overview.md)

@@ -18,7 +18,7 @@ from drive_link import design
 from drive_link._cli_design import run_cli
 from drive_link.design import speed_loop
 
-pytestmark = pytest.mark.timeout(60)
+pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 
 FS = 50e3
 Ts = 1 / FS

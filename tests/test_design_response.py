@@ -14,7 +14,7 @@ from scipy import signal
 
 from drive_link import design
 
-pytestmark = pytest.mark.timeout(60)
+pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 
 R, L, FS = 6.2e-3, 14.8e-6, 50e3
 TS = 1 / FS

@@ -10,7 +10,7 @@ import pytest
 
 from drive_link import design
 
-pytestmark = pytest.mark.timeout(60)
+pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 
 L = design.L_TABLE2
 R = design.R_TABLE2

@@ -14,7 +14,7 @@ from drive_link import design
 
 sim_mod = pytest.importorskip("virtual_drive.sim")
 
-pytestmark = pytest.mark.timeout(60)
+pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 
 L = design.L_TABLE2
 

@@ -42,7 +42,7 @@ import pytest
 from canopen.sdo import SdoClient
 from canopen.sdo.exceptions import SdoAbortedError, SdoCommunicationError
 
-pytestmark = pytest.mark.timeout(240)
+pytestmark = [pytest.mark.timeout(240), pytest.mark.unit]
 
 SEED = 20261123
 N_DOWNLOADS = 2000

@@ -80,6 +80,7 @@ def test_non_loopback_host_exits_nonzero_with_one_line():
     assert len(lines) == 1 and "127.0.0.1" in lines[0]
 
 
+@pytest.mark.unit
 @pytest.mark.parametrize(
     "args",
     [
@@ -104,6 +105,7 @@ def test_bad_arguments_are_one_line_errors(args, capsys):
     assert len(err.strip().splitlines()) == 1, err
 
 
+@pytest.mark.unit
 @pytest.mark.parametrize("nodes", ["0-3", "1-200", "3-1", "x", "1,1"])
 def test_bad_node_lists_are_one_line_errors(nodes, capsys):
     code = main(["hub", "--port", "0", "--nodes", nodes])

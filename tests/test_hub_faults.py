@@ -114,6 +114,7 @@ def test_delay_adds_latency_set_at_run_time():
         b.shutdown()
 
 
+@pytest.mark.unit
 @pytest.mark.parametrize(
     "kwargs",
     [
@@ -133,12 +134,14 @@ def test_bad_faults_are_refused_and_nothing_changes(kwargs):
         Hub(port=0, **kwargs)
 
 
+@pytest.mark.unit
 @pytest.mark.parametrize("bitrate", [0, -1, 1.5, True, 2_000_000_000])
 def test_bad_bitrate_is_refused(bitrate):
     with pytest.raises(ValueError):
         Hub(port=0, bitrate=bitrate)
 
 
+@pytest.mark.unit
 @pytest.mark.parametrize("host", ["0.0.0.0", "", "192.168.1.10", "::", "::1", "example.com"])
 def test_non_loopback_host_is_refused(host):
     with pytest.raises(ValueError, match=r"127\.0\.0\.1"):
@@ -178,6 +181,7 @@ def test_busy_port_raises_and_stop_releases_it():
     again.stop()
 
 
+@pytest.mark.unit
 def test_jitter_delay_is_uniform_bounded_and_reproducible():
     """delay 2 ms ± 1 ms: frames far apart get end + U(1, 3) ms; frames back to back keep
     their order (never due before the previous one, nor before they complete)."""

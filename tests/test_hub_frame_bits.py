@@ -22,6 +22,8 @@ import pytest
 
 from firmware_protocol.can_bits import crc15, frame_bits, frame_bits_fast, stuff_bit_count
 
+pytestmark = pytest.mark.unit
+
 # --- independent oracles (test-only) ---------------------------------------------------------
 
 

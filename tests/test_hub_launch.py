@@ -86,6 +86,7 @@ def test_hub_in_its_own_process_ends_with_the_block():
     assert not _alive(pid)
 
 
+@pytest.mark.unit
 @pytest.mark.parametrize(
     "kwargs",
     [{"nodes": (0,)}, {"nodes": (1, 1)}, {"nodes": (128,)}, {"drop_rate": 2.0}, {"bitrate": 0}],
@@ -95,6 +96,7 @@ def test_bad_settings_raise_before_anything_starts(kwargs):
         pass
 
 
+@pytest.mark.unit
 def test_parse_nodes():
     assert parse_nodes("1-4") == (1, 2, 3, 4)
     assert parse_nodes("2") == (2,)

@@ -291,6 +291,7 @@ def test_a_stalled_client_overruns_without_blocking_the_hub():
         stalled.close()
 
 
+@pytest.mark.unit
 def test_fast_frame_paths_agree_with_python_cans_own_encoder_and_parser():
     """The hub's per-frame paths (parse_send_fields, frame_line) against python-can's socketcand
     client functions (the truth of what clients send and read) and the full parse_send."""

@@ -48,6 +48,7 @@ def _skip_if_starved(probe: RunQueueProbe, what: str) -> None:
 _WALL = time.time() - time.monotonic()
 
 
+@pytest.mark.unit
 def test_sendat_elements_round_trip_through_both_parsers():
     cases = [
         (0x181, b"", False),

@@ -14,7 +14,7 @@ from scipy import signal
 
 from drive_link.identify import fit_first_order, identify_first_order, simulate_first_order
 
-pytestmark = pytest.mark.timeout(60)
+pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 
 A = 0.9999785
 B = 3.33715e-4

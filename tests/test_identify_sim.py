@@ -16,7 +16,7 @@ from drive_link.identify import fit_first_order
 
 sim_mod = pytest.importorskip("virtual_drive.sim")
 
-pytestmark = pytest.mark.timeout(120)
+pytestmark = [pytest.mark.timeout(120), pytest.mark.unit]
 
 A_PAPER = 0.9999785
 B_PAPER = 3.33715e-4

@@ -16,7 +16,7 @@ from conftest import RunQueueProbe, heartbeat_explained, min_rate
 from drive_link import cli
 from drive_link.check import ITEMS
 
-pytestmark = pytest.mark.timeout(90)
+pytestmark = [pytest.mark.timeout(90), pytest.mark.unit]
 
 
 @pytest.fixture

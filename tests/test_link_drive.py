@@ -21,7 +21,7 @@ from conftest import RunQueueProbe, min_rate
 from drive_link import Drive, InvalidValue, NodeNotFound, SdoAbort, StateError, scan
 from drive_link.trace import Trigger
 
-pytestmark = pytest.mark.timeout(60)
+pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 
 L_MOTOR = 14.8e-6
 

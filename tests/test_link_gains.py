@@ -21,7 +21,7 @@ import pytest
 from drive_link import Drive, cli
 from drive_link.gains import GainsRefused, apply_gains, check_gains
 
-pytestmark = pytest.mark.timeout(90)
+pytestmark = [pytest.mark.timeout(90), pytest.mark.unit]
 
 R, L, TS = 6.2e-3, 14.8e-6, 20e-6
 UNSTABLE_PI = {"type": 1, "k_p": 2.0, "k_i": 0.0492}  # 4.3 x the paper's k_p

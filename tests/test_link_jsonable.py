@@ -5,8 +5,11 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 
 from drive_link import jsonable
+
+pytestmark = pytest.mark.unit
 
 
 def _strict_loads(text: str):

@@ -7,8 +7,11 @@ from __future__ import annotations
 import struct
 
 import numpy as np
+import pytest
 
 from drive_link._live import BATCH, LiveStreams, MappedField, TpdoConfig
+
+pytestmark = pytest.mark.unit
 
 
 class _Network:

@@ -12,6 +12,8 @@ import pytest
 
 from drive_link.gains import check_gains
 
+pytestmark = pytest.mark.unit
+
 R, L, TS = 6.2e-3, 14.8e-6, 20e-6
 PAPER = dict(type=0, L_c=L, R_c=R, k_p=0.4647, k_i=0.0492, speed_k_p=0.2113, speed_k_i=2.9994e-5)
 

@@ -27,6 +27,7 @@ pytestmark = pytest.mark.timeout(60)
 
 
 # ------------------------------------------------------------------ object table vs contract
+@pytest.mark.unit
 @pytest.mark.parametrize(
     "name, index, sub, type_name, unit",
     [
@@ -53,6 +54,7 @@ def test_table_matches_contract(name, index, sub, type_name, unit):
         assert obj.unit == unit
 
 
+@pytest.mark.unit
 def test_encode_checks_type_and_limits():
     t = default_table()
     # REAL32 little-endian per CiA 301 (IEEE 754 single)
@@ -79,6 +81,7 @@ def test_encode_checks_type_and_limits():
 
 
 # ------------------------------------------------------------------ CiA 402 statusword table
+@pytest.mark.unit
 @pytest.mark.parametrize(
     "sw, state",
     [
@@ -136,6 +139,7 @@ def local_node():
     cli_bus.shutdown()
 
 
+@pytest.mark.unit
 def test_sdo_channel_read_write_and_abort_meaning(local_node):
     node, conn = local_node
     sdo = SdoChannel(conn.network, 5, 0x605, 0x585, timeout=0.3)
@@ -151,6 +155,7 @@ def test_sdo_channel_read_write_and_abort_meaning(local_node):
     assert ei.value.code == 0x06010002
 
 
+@pytest.mark.unit
 def test_sdo_channel_timeout_is_one_line_error(local_node):
     _, conn = local_node
     sdo = SdoChannel(conn.network, 9, 0x609, 0x589, timeout=0.05, retries=1)  # nobody is node 9
@@ -162,6 +167,7 @@ def test_sdo_channel_timeout_is_one_line_error(local_node):
     assert time.monotonic() - t0 < 1.0
 
 
+@pytest.mark.unit
 def test_sdo_channel_serialises_threads(local_node):
     """canopen's client has no lock; two threads on one channel must still both succeed."""
     node, conn = local_node
@@ -187,6 +193,7 @@ def test_sdo_channel_serialises_threads(local_node):
 
 
 # ------------------------------------------------------------------ TPDO decoding
+@pytest.mark.unit
 def test_live_streams_decode_rates_and_drops():
     ch = f"t-{uuid.uuid4().hex}"
     # The sender stamps each frame with its time on an exact 20 ms cadence (preserve_timestamps),
@@ -267,6 +274,7 @@ def test_live_streams_decode_rates_and_drops():
         rx.shutdown()
 
 
+@pytest.mark.unit
 @pytest.mark.parametrize(
     ("lost", "pause_s", "want"),
     [((), 0.0, 0), ((7, 8), 0.0, 2), ((), 3.0, 0), ((30,), 3.0, 1)],
@@ -306,6 +314,7 @@ def test_drop_estimate_ignores_jitter_and_pauses(lost, pause_s, want):
 
 
 # ------------------------------------------------------------ canopen RemoteNode on our channel
+@pytest.mark.unit
 def test_remote_node_shares_the_locked_channel_and_canopen_pieces_work(local_node):
     """drive_link._remote: canopen's TPDO.read(), NMT master and EMCY consumer on our channel,
     against canopen's own LocalNode (its OD and NMT state read in-process are the truth)."""

@@ -20,6 +20,8 @@ import pytest
 
 from firmware_protocol import cia301, emcy_codes, load_od
 
+pytestmark = pytest.mark.unit
+
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("firmware_protocol", "drive_link", "dashboard")
 HOST = ("drive_link", "dashboard")

@@ -14,7 +14,7 @@ import pytest
 
 from drive_link import Drive, steps
 
-pytestmark = pytest.mark.timeout(90)
+pytestmark = [pytest.mark.timeout(90), pytest.mark.unit]
 
 R, L, TS = 6.2e-3, 14.8e-6, 20e-6
 

@@ -186,6 +186,7 @@ def test_curses_view_quits_with_a_quick_stop(hub_drive, drive):
     assert float(drive.read("measurements.speed")) < 900
 
 
+@pytest.mark.unit
 def test_render_of_a_known_ramp_with_lost_frames():
     """A 1 kHz TPDO carrying a 0 → 1000 rpm ramp over 1 s, 10 frames left out: the panel's
     newest sample is top right, the oldest bottom left, every column at or above the one before,

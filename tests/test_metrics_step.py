@@ -11,7 +11,7 @@ import pytest
 from drive_link import design
 from drive_link.metrics import moving_average, step_metrics
 
-pytestmark = pytest.mark.timeout(60)
+pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 
 
 def _second_order(zeta: float, wn: float, T: float, n: int):

@@ -179,6 +179,7 @@ def _hb(tx: can.BusABC, state: int, node: int = 1) -> None:
     tx.send(can.Message(arbitration_id=0x700 + node, data=[state], is_extended_id=False))
 
 
+@pytest.mark.unit
 def test_first_heartbeat_is_awaited_per_producer_time(vbus):
     net, tx = vbus
     mon = HeartbeatMonitor(net, 1)
@@ -190,6 +191,7 @@ def test_first_heartbeat_is_awaited_per_producer_time(vbus):
     mon.close()
 
 
+@pytest.mark.unit
 def test_without_heartbeat_sdo_answer_means_pre_operational_and_tpdos_operational(vbus):
     net, tx = vbus
     mon = HeartbeatMonitor(net, 1)
@@ -226,6 +228,7 @@ def test_without_heartbeat_sdo_answer_means_pre_operational_and_tpdos_operationa
     mon2.close()
 
 
+@pytest.mark.unit
 def test_silent_node_is_offline_within_bounded_time(vbus):
     net, _ = vbus
     mon = HeartbeatMonitor(net, 1)
@@ -240,6 +243,7 @@ def test_silent_node_is_offline_within_bounded_time(vbus):
     mon.close()
 
 
+@pytest.mark.unit
 def test_heartbeat_gap_tolerated_up_to_period_plus_one_second(vbus):
     net, tx = vbus
     mon = HeartbeatMonitor(net, 1)

@@ -11,7 +11,7 @@ import pytest
 from conftest import RunQueueProbe
 from test_node_support import Bench, emcy_frames
 
-pytestmark = pytest.mark.timeout(60)
+pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 
 HOST = 0x7F
 CONSUMER_MS = 60

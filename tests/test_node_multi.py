@@ -105,6 +105,7 @@ def test_shared_connection_delivers_like_one_bus(hub):
         peer.shutdown()
 
 
+@pytest.mark.unit
 def test_parse_nodes_and_store_names():
     assert parse_nodes("1-4") == [1, 2, 3, 4]
     assert parse_nodes("1,3,5") == [1, 3, 5]
@@ -118,6 +119,7 @@ def test_parse_nodes_and_store_names():
     assert store_for(None, 1, True) is None
 
 
+@pytest.mark.unit
 def test_one_pacer_runs_several_runners_at_wall_clock_pace():
     """Two runners on one pacer both follow wall-clock time; a failing one stops alone."""
     samples = {"a": 0, "b": 0}

@@ -16,7 +16,7 @@ from canopen.sdo import SdoAbortedError, SdoCommunicationError
 from conftest import RunQueueProbe
 from test_node_support import SDO_TIMEOUT_S, Bench, emcy_frames
 
-pytestmark = pytest.mark.timeout(60)
+pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 
 
 def state_of(statusword: int) -> str:

@@ -19,6 +19,8 @@ from firmware_protocol import load_od
 from firmware_protocol.index_ranges import COMMUNICATION, PROFILE
 from virtual_drive.node import od_addresses, plant
 
+pytestmark = pytest.mark.unit
+
 NODE_DIR = Path(od_addresses.__file__).parent
 
 #: (module, literal): hex numbers in the index range that are not object indices.

@@ -13,7 +13,7 @@ import pytest
 from canopen.sdo import SdoAbortedError
 from test_node_support import Bench
 
-pytestmark = pytest.mark.timeout(60)
+pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 
 L = 14.8e-6
 

@@ -16,7 +16,7 @@ from test_node_support import Bench
 
 from virtual_drive.hub_protocol import SENDAT_MAX_BACKDATE_S
 
-pytestmark = pytest.mark.timeout(60)
+pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 
 
 @pytest.fixture

@@ -20,7 +20,7 @@ from virtual_drive.node.recorder import (
     TraceRecorder,
 )
 
-pytestmark = pytest.mark.timeout(60)
+pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 
 
 def signals(n: int, seed: int) -> dict[str, np.ndarray]:

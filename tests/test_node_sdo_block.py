@@ -19,7 +19,7 @@ from test_node_support import Bench
 
 from virtual_drive.node.sdo_block import BlockSdoServer
 
-pytestmark = pytest.mark.timeout(60)
+pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 
 L = 14.8e-6
 

@@ -13,7 +13,7 @@ import pytest
 from canopen.sdo import SdoAbortedError
 from test_node_support import Bench
 
-pytestmark = pytest.mark.timeout(60)
+pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 
 REF_I_P = 0x20400120
 REF_I_P_REF = 0x20400A20

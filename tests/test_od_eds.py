@@ -14,7 +14,7 @@ from canopen.objectdictionary import ODArray, ODRecord, ODVariable
 
 from firmware_protocol import EDS_PATH, load_od
 
-pytestmark = pytest.mark.timeout(60)
+pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 
 CONTRACTS = Path(__file__).resolve().parents[1] / "docs" / "contracts.md"
 

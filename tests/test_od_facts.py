@@ -19,6 +19,8 @@ from firmware_protocol import abort_codes, emcy_codes, paper
 from firmware_protocol.enums import CONTROLLER_NAMES, CONTROLLER_TYPES, ControllerType
 from firmware_protocol.od import EDS_PATH
 
+pytestmark = pytest.mark.unit
+
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("firmware_protocol", "virtual_drive", "drive_link", "dashboard")
 

@@ -162,6 +162,7 @@ def test_header_compiles_and_every_macro_equals_the_eds(gcc: str, tmp_path: Path
     assert run.returncode == 0, run.stdout[:3000]
 
 
+@pytest.mark.unit
 def test_header_has_no_8bit_types_and_no_double() -> None:
     text = HEADER.read_text()
     code = re.sub(r"/\*.*?\*/", "", text, flags=re.S)
@@ -176,6 +177,7 @@ def test_header_has_no_8bit_types_and_no_double() -> None:
     )
 
 
+@pytest.mark.unit
 def test_header_and_markdown_do_not_drift() -> None:
     view = load_od()
     assert HEADER.read_text(encoding="utf-8") == render_header(view), (
@@ -186,6 +188,7 @@ def test_header_and_markdown_do_not_drift() -> None:
     )
 
 
+@pytest.mark.unit
 def test_markdown_lists_every_object_once_with_its_attributes() -> None:
     text = MARKDOWN.read_text(encoding="utf-8")
     rows: dict[str, list[str]] = {}
@@ -242,6 +245,7 @@ def test_python_m_entry_point_checks_the_repo() -> None:
     assert result.returncode == 0, result.stderr
 
 
+@pytest.mark.unit
 def test_generate_check_passes_on_the_repo_and_fails_on_drift(tmp_path: Path) -> None:
     assert _generate("--check").returncode == 0
     # a hand edit of a generated file is drift
@@ -266,12 +270,14 @@ def test_generate_check_passes_on_the_repo_and_fails_on_drift(tmp_path: Path) ->
     assert (out / MARKDOWN.name).read_text() == MARKDOWN.read_text()
 
 
+@pytest.mark.unit
 def test_generate_bad_input_is_one_line_and_non_zero(tmp_path: Path) -> None:
     result = _generate("--check", "--eds", str(tmp_path / "missing.eds"))
     assert result.returncode != 0
     assert result.stderr.strip().count("\n") == 0 and "missing.eds" in result.stderr
 
 
+@pytest.mark.unit
 def test_strict_eds_export_keeps_the_od_and_only_cia306_keys(tmp_path: Path) -> None:
     out = tmp_path / "strict.eds"
     result = _generate("--check", "--strict-eds", str(out))
@@ -328,6 +334,7 @@ def test_strict_eds_export_keeps_the_od_and_only_cia306_keys(tmp_path: Path) -> 
     assert flat(strict) == flat(full)
 
 
+@pytest.mark.unit
 def test_generate_rejects_a_malformed_eds_in_one_line(tmp_path: Path) -> None:
     bad = tmp_path / "bad.eds"
     bad.write_text("[FileInfo]\nnot a key value line\n")

@@ -17,6 +17,8 @@ from firmware_protocol.od import EDS_PATH
 from virtual_drive.node import plant
 from virtual_drive.sim import params as sim_params
 
+pytestmark = pytest.mark.unit
+
 _SUB = re.compile(r"^([0-9A-Fa-f]{4})sub([0-9A-Fa-f]+)$")
 
 

@@ -15,7 +15,7 @@ import pytest
 from firmware_protocol import EDS_PATH, LimitError, load_od
 from firmware_protocol.enums import ENUM_OBJECTS, ControllerType, ModeOfOperation, TraceState
 
-pytestmark = pytest.mark.timeout(60)
+pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 
 TOO_HIGH, TOO_LOW, INVALID = 0x06090031, 0x06090032, 0x06090030
 TS = 20e-6  # s, fs = 50 kHz

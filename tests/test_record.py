@@ -221,6 +221,7 @@ def _segments(data: bytes) -> list[bytes]:
     return [data[i : i + 7] for i in range(0, len(data), 7)]
 
 
+@pytest.mark.unit
 def test_block_upload_reassembly_with_losses():
     """CiA 301 block upload built frame by frame: a segment the client lost (it acknowledges
     the last one in sequence, leftovers of the old sub-block follow, the server sends the rest

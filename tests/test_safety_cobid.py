@@ -17,7 +17,7 @@ import pytest
 from canopen.sdo import SdoAbortedError
 from test_node_support import Bench, emcy_frames
 
-pytestmark = pytest.mark.timeout(90)
+pytestmark = [pytest.mark.timeout(90), pytest.mark.unit]
 
 INVALID, INCOMPATIBLE, STATE = 0x06090030, 0x06040043, 0x08000022
 BIT31 = 0x80000000

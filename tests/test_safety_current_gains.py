@@ -28,7 +28,7 @@ from firmware_protocol.current_stability import (
 from firmware_protocol.entry import LimitError
 from firmware_protocol.stability import A_IDENTIFIED, B_IDENTIFIED, TAU_MAX
 
-pytestmark = pytest.mark.timeout(180)
+pytestmark = [pytest.mark.timeout(180), pytest.mark.unit]
 
 TS = 20e-6
 R, L = 0.0062, 14.8e-6

@@ -17,7 +17,7 @@ from test_node_support import Bench, emcy_frames
 
 from firmware_protocol import EDS_PATH
 
-pytestmark = pytest.mark.timeout(60)
+pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 
 HEADER = EDS_PATH.with_name("bldc_drive_od.h")
 OD_MD = EDS_PATH.with_name("OD.md")

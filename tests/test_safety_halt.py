@@ -18,7 +18,7 @@ import pytest
 from canopen.profiles.p402 import State402
 from test_node_support import Bench
 
-pytestmark = pytest.mark.timeout(120)
+pytestmark = [pytest.mark.timeout(120), pytest.mark.unit]
 
 HALT = 0x0100
 ENABLE = 0x000F

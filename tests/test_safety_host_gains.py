@@ -17,7 +17,7 @@ from canopen.sdo import SdoAbortedError, SdoClient
 
 from drive_link import Drive, InvalidValue
 
-pytestmark = pytest.mark.timeout(60)
+pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 
 
 def test_host_refuses_what_the_drive_refuses():

@@ -15,7 +15,7 @@ import pytest
 from drive_link import Drive
 from drive_link.drive import CONSUMER_MIN_MS
 
-pytestmark = pytest.mark.timeout(60)
+pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 
 
 @pytest.mark.parametrize(("producer_ms", "expected_ms"), [(100, 1000), (50, 1000), (500, 1500)])

@@ -29,7 +29,7 @@ from firmware_protocol.stability import (
     check_ip_speed_gains,
 )
 
-pytestmark = pytest.mark.timeout(120)
+pytestmark = [pytest.mark.timeout(120), pytest.mark.unit]
 
 TS = 20e-6
 R, L = 0.0062, 14.8e-6

@@ -15,7 +15,7 @@ import pytest
 from canopen.profiles.p402 import State402
 from test_node_support import Bench
 
-pytestmark = pytest.mark.timeout(90)
+pytestmark = [pytest.mark.timeout(90), pytest.mark.unit]
 
 SPIN_A = 50.0  #: pseudo-current that spins the default load to ~800 rpm (A)
 COAST_AFTER_S = 0.5  #: coasting from 400 rpm leaves > 200 rpm after this (J/B_tot ≈ 0.93 s)

@@ -21,7 +21,7 @@ from canopen.sdo import SdoAbortedError
 from conftest import RunQueueProbe, min_rate
 from test_node_support import Bench
 
-pytestmark = pytest.mark.timeout(60)
+pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 
 #: run-queue wait (s/s) below which a window shows the drive's own timing
 CLEAN_WAIT = 0.25

@@ -16,7 +16,7 @@ import pytest
 from canopen.profiles.p402 import State402
 from test_node_support import Bench, emcy_frames
 
-pytestmark = pytest.mark.timeout(60)
+pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 
 
 @pytest.fixture

@@ -35,6 +35,7 @@ def boot_then_emcy(b: Bench) -> tuple[float, list]:
     return boot[0], emcy_frames(b.log)
 
 
+@pytest.mark.unit
 def test_no_store_reports_defaults():
     b = Bench()
     try:
@@ -45,6 +46,7 @@ def test_no_store_reports_defaults():
         b.close()
 
 
+@pytest.mark.unit
 def test_saved_store_reports_ok_after_restart(tmp_path):
     path = tmp_path / "params.json"
     b = Bench(store_path=path)
@@ -65,6 +67,7 @@ def test_saved_store_reports_ok_after_restart(tmp_path):
         b.close()
 
 
+@pytest.mark.unit
 @pytest.mark.parametrize(
     ("damage", "status"),
     [("flip", 2), ("truncate", 2), ("garbage", 2), ("directory", 3)],
@@ -129,6 +132,7 @@ def temps(path: Path) -> list[str]:
     return sorted(n for n in os.listdir(path.parent) if n.startswith(f".{path.name}."))
 
 
+@pytest.mark.unit
 def test_stale_temporaries_removed_at_start(tmp_path):
     path = tmp_path / "params.json"
     for k in range(3):
@@ -142,6 +146,7 @@ def test_stale_temporaries_removed_at_start(tmp_path):
         b.close()
 
 
+@pytest.mark.unit
 def test_failed_store_leaves_no_temporary(tmp_path, monkeypatch):
     path = tmp_path / "params.json"
     b = Bench(store_path=path)
@@ -200,6 +205,7 @@ def test_kill_9_during_stores_never_tears_and_temps_are_cleaned(tmp_path):
     assert value > 0
 
 
+@pytest.mark.unit
 def test_stored_set_that_breaks_a_rule_is_not_applied(tmp_path):
     """A store written before a rule existed (R_c = 1 Ohm > 2 motor.R, inside the old static
     limits) passes its checksum but is not applied: defaults, status 2, EMCY 0x6310."""

@@ -30,7 +30,7 @@ from drive_link._sdo import SdoChannel
 from firmware_protocol import load_od
 from virtual_drive.node import VirtualDrive
 
-pytestmark = pytest.mark.timeout(120)
+pytestmark = [pytest.mark.timeout(120), pytest.mark.unit]
 
 L = 14.8e-6
 #: rule(direction "tx" (drive sends) | "rx" (drive receives), msg, n-th frame of that COB-ID

@@ -17,7 +17,7 @@ from canopen.sdo.exceptions import SdoAbortedError
 
 from drive_link import _sdo_segmented as sdo_segmented
 
-pytestmark = pytest.mark.timeout(30)
+pytestmark = [pytest.mark.timeout(30), pytest.mark.unit]
 
 IDX, SUB = 0x2000, 0x01  # motor.R
 ABORT_STATE = 0x08000022

@@ -18,7 +18,7 @@ from test_node_support import Bench
 
 from virtual_drive.node.sdo_block import BlockSdoServer
 
-pytestmark = pytest.mark.timeout(90)
+pytestmark = [pytest.mark.timeout(90), pytest.mark.unit]
 
 L = 14.8e-6
 TRACE = struct.pack("<HB", 0x2102, 0)

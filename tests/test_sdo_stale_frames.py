@@ -22,6 +22,8 @@ import pytest
 
 from drive_link._sdo import SdoChannel, stamps_host_time
 
+pytestmark = pytest.mark.unit
+
 NODE = 5
 INDEX, SUB = 0x2010, 1
 

@@ -17,7 +17,7 @@ from scipy import signal
 
 from virtual_drive.sim import CurrentControllerParams, MotorParams, Simulator
 
-pytestmark = pytest.mark.timeout(60)
+pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 
 R, L, Ts, VDC = 6.2e-3, 14.8e-6, 20e-6, 48.0
 

@@ -18,7 +18,7 @@ from virtual_drive.sim import (
     Simulator,
 )
 
-pytestmark = pytest.mark.timeout(60)
+pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 
 Ts = 20e-6
 

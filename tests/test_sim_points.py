@@ -11,6 +11,8 @@ import pytest
 from virtual_drive.sim import Simulator
 from virtual_drive.sim.signals import SIGNALS
 
+pytestmark = pytest.mark.unit
+
 
 def _driven() -> Simulator:
     sim = Simulator()

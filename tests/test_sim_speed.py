@@ -13,7 +13,7 @@ import pytest
 
 from virtual_drive.sim import Simulator
 
-pytestmark = pytest.mark.timeout(120)
+pytestmark = [pytest.mark.timeout(120), pytest.mark.unit]
 
 Ts = 20e-6
 A_ID, B_ID = 0.9999785, 3.33715e-4

@@ -27,7 +27,7 @@ from drive_link._bus_health import (
 )
 from drive_link._connection import PacedNetwork, queue_full
 
-pytestmark = pytest.mark.timeout(60)
+pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 
 
 class QueueBus(can.BusABC):

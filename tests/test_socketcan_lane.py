@@ -99,6 +99,7 @@ def test_socketcan_lane(record_property):
     assert res["rc"] == 0, lane.failure_message(output, f"SocketCAN lane (inside {kernel})")
 
 
+@pytest.mark.unit
 def test_lane_without_uml_says_so_in_one_line(monkeypatch):
     """No UML kernel (package missing): the runner returns one line, runs nothing."""
     monkeypatch.setattr(uml.kernels, "KERNELS", ("no-such-linux-uml",))

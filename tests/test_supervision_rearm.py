@@ -22,7 +22,7 @@ from drive_link import Drive
 from drive_link._sdo import SdoChannel
 from drive_link.supervision import SupervisionError
 
-pytestmark = pytest.mark.timeout(90)
+pytestmark = [pytest.mark.timeout(90), pytest.mark.unit]
 
 NODE = 5
 HOST = 0x7F

@@ -19,7 +19,7 @@ from canopen.sdo import SdoAbortedError
 from drive_link import Drive, cli
 from firmware_protocol import load_od
 
-pytestmark = pytest.mark.timeout(60)
+pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 
 NODE = 6
 LOSS_OF_PARAMETERS = 0x6310

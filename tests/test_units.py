@@ -15,6 +15,8 @@ from drive_link._objects import default_table
 from drive_link.errors import InvalidValue
 from drive_link.units import parse_for, parse_value
 
+pytestmark = pytest.mark.unit
+
 ureg = pint.UnitRegistry()
 
 

@@ -107,6 +107,7 @@ def test_message_is_one_line_then_a_bounded_excerpt(inner_output):
     assert len(excerpt) <= lane.EXCERPT_CHARS
 
 
+@pytest.mark.unit
 def test_without_a_summary_the_last_lines_are_the_reason():
     lane = _lane()
     out = "Traceback (most recent call last):\n" + "  frame\n" * 40 + "ImportError: no canopen\n"
