@@ -56,18 +56,23 @@ def item_as_found(d: Drive, opts: dict) -> str:
         raise CheckFailed("the drive's error state could not be read before the run")
     done = settle(d, found)
     now = take(d)
-    differ = [
-        f"{k} 0x{found[k]:X} → 0x{now[k]:X}"
-        for k in ("error_code", "error_register")
-        if now[k] != found[k]
+    # an error the run left behind is one the drive shows now and did not show at the start; an
+    # error it showed at the start and has since cleared (its cause ended: a heartbeat the
+    # drive missed before the run) is said, not failed
+    keys = ("error_code", "error_register")
+    differ = [f"{k} 0x{found[k]:X} → 0x{now[k]:X}" for k in keys if now[k] not in (0, found[k])]
+    cleared = [
+        f"{k} 0x{found[k]:X} found at the start has cleared"
+        for k in keys
+        if found[k] and not now[k]
     ]
-    kept = ""
+    kept = "; " + ", ".join(cleared) if cleared else ""
     if found["history"]:
         new = len(now["history"]) - len(found["history"])
         if now["history"][max(new, 0) :] != found["history"][: len(now["history"])]:
             differ.append("error history rewritten")
         elif new > 0:
-            kept = f"; {new} history entries added on top of the {len(found['history'])} found"
+            kept += f"; {new} history entries added on top of the {len(found['history'])} found"
     elif now["history"]:
         differ.append(f"error history {[hex(c) for c in now['history']]} not cleared")
     comm = opts.get(FOUND) or {}

@@ -39,6 +39,8 @@ from typing import Any
 
 import can
 
+from .od_addresses import IDENTITY_INDEX
+
 __all__ = ["BIT_TIMING_TABLE", "LSS_RX", "LSS_TX", "UNCONFIGURED", "LssSlave"]
 
 logger = logging.getLogger(__name__)
@@ -133,7 +135,7 @@ class LssSlave:
             self._notifier = None
         drive = self.make_drive(node_id)
         for sub, value in enumerate(self.identity, start=1):
-            drive.od[0x1018][sub].default = value
+            drive.od[IDENTITY_INDEX][sub].default = value
         drive.network.subscribe(LSS_RX, self.on_request)
         drive.network.subscribe(0x000, self._on_nmt)
         drive.start()

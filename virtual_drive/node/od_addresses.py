@@ -40,6 +40,7 @@ __all__ = [
     "GAIN_SET_APPLY_INDEX",
     "GAIN_SET_INDEX",
     "HALT_OPTION",
+    "IDENTITY_INDEX",
     "MAX_CURRENT",
     "MAX_CURRENT_INDEX",
     "MEASUREMENTS_INDEX",
@@ -161,6 +162,7 @@ CONSUMER_HEARTBEAT_COUNT = address("consumer_heartbeat_time.highest_sub_index")
 PRODUCER_HEARTBEAT = address("producer_heartbeat_time")
 PRODUCER_HEARTBEAT_INDEX = PRODUCER_HEARTBEAT[0]
 SDO_SERVER_2_INDEX = index_of("sdo_server_2")
+IDENTITY_INDEX = index_of("identity")
 SDO_SERVER_2_RX = address("sdo_server_2.cob_id_client_to_server")
 SDO_SERVER_2_TX = address("sdo_server_2.cob_id_server_to_client")
 N_RPDO = int(_OD.device_info["NrOfRXPDO"])
