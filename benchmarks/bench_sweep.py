@@ -6,7 +6,8 @@ the paper's gains) it prints, each with the load average beside it:
 1. one run in this process: wall and CPU time, runs/s and runs/hour per core;
 2. the fixed part per run: the intercept of the run's CPU time against its simulated length
    (0.1, 0.4, 1 s; least squares): building the validated parameters and the simulator, the
-   record's buffers, the metrics in numpy;
+   record's buffers, the metrics in numpy; and, measured directly, its first item (best and
+   median of 200 ``build_simulator`` calls);
 3. the simulation itself against the lean whole-loop C reference kernel of
    ``python -m virtual_drive.bench`` (``csrc/reference.c``, built with cffi into a temporary
    folder), both over 50,000 samples in alternating chunks, best of each: ``ratio_reference=``;
@@ -70,6 +71,20 @@ def fixed_part(repeats: int) -> tuple[float, float]:
     best = [one_run(repeats, d)[1] for d in ds]
     slope, intercept = np.polyfit(ds, best, 1)
     return float(intercept), float(slope)
+
+
+def build_cost(n: int = 200) -> tuple[float, float]:
+    """(best, median) CPU seconds of building one run's validated parameters and simulator
+    (``build_simulator``: every value checked against the EDS limits), over ``n`` runs."""
+    js = jobs(n)
+    build_simulator(js[0].inputs)
+    t = []
+    for j in js:
+        c0 = time.thread_time()
+        build_simulator(j.inputs)
+        t.append(time.thread_time() - c0)
+    t.sort()
+    return t[0], t[len(t) // 2]
 
 
 def one_run(repeats: int, duration: float = 1.0) -> tuple[float, float]:
@@ -186,6 +201,9 @@ def main(argv: list[str] | None = None) -> int:
     fixed, slope = fixed_part(args.repeats)
     print(f"fixed part per run: {fixed * 1e3:.2f} ms CPU ({100 * fixed / cpu:.0f} % of a "
           f"1-s run), then {slope * 1e3:.2f} ms per simulated second  ({load()})", flush=True)
+    b_best, b_med = build_cost()
+    print(f"of which parameters + simulator (build_simulator): {b_best * 1e3:.3f} ms best, "
+          f"{b_med * 1e3:.3f} ms median of 200  ({load()})", flush=True)  # fmt: skip
     js = jobs(args.runs)
     size = auto_batch(js, cores)
     batches = [js[i : i + size] for i in range(0, len(js), size)]
