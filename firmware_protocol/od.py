@@ -18,6 +18,7 @@ from __future__ import annotations
 import configparser
 import difflib
 import functools
+import os
 import re
 from collections.abc import Iterator, Mapping
 from pathlib import Path
@@ -57,6 +58,7 @@ __all__ = [
 
 EDS_PATH: Path = Path(__file__).with_name("bldc_drive.eds")
 """The EDS file shipped with the package."""
+_EDS_NAME = os.fspath(EDS_PATH)
 
 _SUB_SECTION = re.compile(r"^([0-9A-Fa-f]{4})[Ss]ub([0-9A-Fa-f]+)$")
 _OBJ_SECTION = re.compile(r"^([0-9A-Fa-f]{4})$")
@@ -272,22 +274,36 @@ def load_od(path: str | Path | None = None, node_id: int = 1) -> ObjectDictionar
     """Load the OD view from an EDS file (default: :data:`EDS_PATH`).
 
     ``node_id`` (1..127) resolves ``$NODEID`` in defaults such as COB-IDs. Views are cached
-    per file version and node-ID (they are immutable). Raises ``FileNotFoundError`` for a
-    missing file and ``ValueError`` for a file that is not a valid drive EDS (syntax, duplicate
-    names, a constraint naming a missing object).
+    per file version and node-ID (they are immutable: frozen entries and constraints, read-only
+    mappings, ``defaults()`` a new dict per call), so a repeated call costs one ``stat`` of the
+    file (a few us; a path is resolved once per spelling and file): a changed, replaced or
+    re-pointed file (other inode, mtime or size) is read again. Raises
+    ``FileNotFoundError`` for a missing file and ``ValueError`` for a file that is not a valid
+    drive EDS (syntax, duplicate names, a constraint naming a missing object).
     """
     if not 1 <= node_id <= 127:
         raise ValueError(f"node_id must be 1..127, got {node_id}")
-    eds_path = (Path(path) if path is not None else EDS_PATH).resolve()
-    stat = eds_path.stat()
+    name = _EDS_NAME if path is None else os.fspath(path)
+    st = os.stat(name)  # (follows symlinks: the version of the file that would be read)
+    cwd = "" if os.path.isabs(name) else os.getcwd()
+    eds_path = _resolved(name, cwd, st.st_dev, st.st_ino)
     try:
-        return _load_cached(eds_path, node_id, stat.st_mtime_ns, stat.st_size)
+        return _load_cached(eds_path, node_id, st.st_ino, st.st_mtime_ns, st.st_size)
     except (configparser.Error, KeyError, ValueError, TypeError) as exc:
         raise ValueError(f"{eds_path} is not a valid drive EDS: {exc}") from exc
 
 
+@functools.lru_cache(maxsize=64)
+def _resolved(name: str, cwd: str, dev: int, ino: int) -> Path:
+    """The absolute, symlink-free path of ``name`` (relative to ``cwd`` if not absolute),
+    resolved once per path as given and file it names (a re-pointed link names another)."""
+    return Path(cwd, name).resolve()
+
+
 @functools.lru_cache(maxsize=16)
-def _load_cached(eds_path: Path, node_id: int, mtime_ns: int, size: int) -> ObjectDictionaryView:
+def _load_cached(
+    eds_path: Path, node_id: int, ino: int, mtime_ns: int, size: int
+) -> ObjectDictionaryView:
     """Parse once per (file version, node-ID); the view is immutable so sharing it is safe."""
     od = canopen.import_od(str(eds_path), node_id)
     raw = configparser.RawConfigParser(inline_comment_prefixes=(";",))

@@ -328,15 +328,20 @@ int loop_run(loop_t *L, int n, float **sig, double *t_out)
     int k;
     plant_t *const p = &L->p;
     const double Ts = L->Ts;
-    float *sp[LOOP_NSIG];
-    int all_sig = (sig != NULL);
+    float *rec_ptr[LOOP_NSIG]; /* the recorded signals' buffers, */
+    int rec_sig[LOOP_NSIG];    /* their SIG_* indices */
+    int n_rec = 0, all_sig;
     double hw, inv2w, mid_gain;
     int six; /* the period's pattern is pattern_six_step's case whenever the bridge is on */
+    int emf_always; /* e_L and T_e at the sample are needed at every sample of this chunk */
     plant_update(p); /* R, L may have been changed between chunks */
-    for (k = 0; all_sig && k < LOOP_NSIG; ++k) {
-        sp[k] = sig[k];
-        all_sig = (sig[k] != NULL);
+    for (k = 0; sig != NULL && k < LOOP_NSIG; ++k) {
+        if (sig[k] != NULL) { /* (checked once per chunk, not per sample) */
+            rec_ptr[n_rec] = sig[k];
+            rec_sig[n_rec++] = k;
+        }
     }
+    all_sig = (n_rec == LOOP_NSIG);
     {
         /* constants of this chunk (the parameters change only between calls) */
         const double w = p->emf_rounding;
@@ -344,16 +349,22 @@ int loop_run(loop_t *L, int n, float **sig, double *t_out)
         inv2w = 0.5 / w;
         mid_gain = 0.5 * Ts * p->pole_pairs;
         six = (L->model == LOOP_MODEL_PWM && L->T_BT == 0.0 && L->os_n <= 0 && p->V_G == 0.0);
+        /* e_L feeds the current law only with the EMF feed-forward or the predictive law;
+         * otherwise e_L and T_e at the sample are only recorded (or start the controllers) */
+        emf_always = L->cc.emf_ff || L->cc.type == CC_PREDICTIVE
+                     || (sig != NULL && (sig[SIG_E_L] != NULL || sig[SIG_T_E] != NULL));
     }
     for (k = 0; k < n; ++k) {
         const double theta = p->theta_e, omega = p->omega;
         const int sec = plant_hall_sector_in(theta);
         const int last = (k == n - 1);
-        double e[3], e_L, i_p, speed, Te, i_ref = 0.0, w_ref = L->w_ref_set;
+        double e_L = 0.0, i_p, speed, Te = 0.0, i_ref = 0.0, w_ref = L->w_ref_set;
         float m = 0.0f;
         int on = 0;
-        {
-            double F[3], kw = p->k_e * omega;
+        if (emf_always || last || (L->mode != LOOP_OFF && L->fault_code == 0 && !L->active)) {
+            /* back-EMF e_x = k_e w F_x and torque T_e = k_e sum(F_x i_x) at the sample; not
+             * computed when nothing uses them (the values are the same either way) */
+            double e[3], F[3], kw = p->k_e * omega;
             plant_emf_shapes_in(theta, hw, inv2w, F);
             e[0] = kw * F[0];
             e[1] = kw * F[1];
@@ -363,8 +374,8 @@ int loop_run(loop_t *L, int n, float **sig, double *t_out)
             Te += F[1] * p->i[1];
             Te += F[2] * p->i[2];
             Te *= p->k_e;
+            e_L = e[sec_plus[sec]] - e[sec_minus[sec]];
         }
-        e_L = e[sec_plus[sec]] - e[sec_minus[sec]];
         i_p = pseudo_current(p->i, sec, omega);
         speed = omega * RPM_PER_RAD_S;
         /* protection */
@@ -443,15 +454,13 @@ int loop_run(loop_t *L, int n, float **sig, double *t_out)
             r[SIG_V_DC] = (float)p->V_dc;
             r[SIG_T_E] = (float)Te;
             r[SIG_THETA_E] = (float)p->theta_e;
-            if (all_sig) { /* every signal recorded (the common case): no test per signal */
+            if (all_sig) { /* every signal recorded: no index per signal */
                 for (j = 0; j < LOOP_NSIG; ++j) {
-                    sp[j][k] = r[j];
+                    rec_ptr[j][k] = r[j];
                 }
-            } else if (sig != NULL) {
-                for (j = 0; j < LOOP_NSIG; ++j) {
-                    if (sig[j] != NULL) {
-                        sig[j][k] = r[j];
-                    }
+            } else {
+                for (j = 0; j < n_rec; ++j) {
+                    rec_ptr[j][k] = r[rec_sig[j]];
                 }
             }
             if (last) {
