@@ -2919,12 +2919,8 @@
  *      abort code is TOO_HIGH for the bounded object, TOO_LOW for the bound) ---- */
 /* current_controller.L_c < 2 * motor.L - deadbeat loop stable for L_c < 2 L */
 #define OD_CURRENT_CONTROLLER__L_C_BOUND_FACTOR                  2.0f
-/* gain_set.L_c < 2 * motor.L - staged L_c, checked when it or motor.L is written and when applied (gain_set_apply) */
-#define OD_GAIN_SET__L_C_BOUND_FACTOR                            2.0f
 /* current_controller.R_c <= 2 * motor.R - deadbeat loop stable for R_c <= 2 R (with 0 < L_c < 2 L; larger R_c/R can be unstable, e.g. R_c > 107 R at L_c = L) */
 #define OD_CURRENT_CONTROLLER__R_C_BOUND_FACTOR                  2.0f
-/* gain_set.R_c <= 2 * motor.R - staged R_c, checked like gain_set.L_c */
-#define OD_GAIN_SET__R_C_BOUND_FACTOR                            2.0f
 /* |setpoints.i_p_ref| <= speed_controller.current_limit - pseudo-current reference within the current limit */
 #define OD_SETPOINTS__I_P_REF_BOUND_FACTOR                       1.0f
 /* |target_velocity| <= max_motor_speed - speed reference within 0x6080 */

@@ -18,7 +18,8 @@ import numpy as np
 from firmware_protocol import paper
 
 from .. import design, metrics, steps
-from ..restore import apply_gains_stepwise, leave_as_found
+from ..gains import apply_gains
+from ..restore import leave_as_found
 from ..trace import TS
 from ._base import Context, ExperimentResult, Metric, figure_png, new_figure, settling_samples
 
@@ -36,11 +37,13 @@ SIM_INVERTER = ("sim_inverter.T_BT", "sim_inverter.T_DD", "sim_inverter.T_SD",
 
 
 @contextlib.contextmanager
-def _with_gains(ctx: Context, settings: tuple[str, ...] = (), **gains: Any) -> Iterator[None]:
-    """Apply ``gains`` (one set) for the block; gains and ``settings`` are put back after."""
+def _with_gains(ctx: Context, settings: tuple[str, ...] = (), force: bool = False,
+                **gains: Any) -> Iterator[None]:
+    """Apply ``gains`` as one set (:func:`drive_link.gains.apply_gains`; ``force``: poor margins
+    wanted, e.g. L_c = 1.9 L) for the block; gains and ``settings`` are put back after."""
     with leave_as_found(ctx.drive, settings=settings, gains=True):
         if gains:
-            apply_gains_stepwise(ctx.drive, gains)
+            apply_gains(ctx.drive, gains, force=force)
         yield
 
 
@@ -149,7 +152,7 @@ def lc_sweep(ctx: Context) -> ExperimentResult:
     rows = []
     for j, ratio in enumerate(LC_RATIOS):
         lo = j / len(LC_RATIOS)
-        with _with_gains(ctx, type=0, L_c=ratio * L):
+        with _with_gains(ctx, force=ratio > 1.5, type=0, L_c=ratio * L):
             res = _step(ctx, I_FROM, I_TO, lo, lo + 1 / len(LC_RATIOS))
         t, y, p = _clean(res)
         key = f"overshoot_pct_{ratio:g}L"
