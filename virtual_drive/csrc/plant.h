@@ -58,6 +58,15 @@ typedef struct {
     double Te_int;       /* N m s */
     double i_abs_max;    /* A, largest |i_x| seen */
     int nonfinite;
+    /* the pseudo current w_ip . i over the current PWM period, at every sub-segment end (every
+     * switching edge, diode current zero and the period's end; plant_track_ip); the loop sets
+     * w_ip and resets the rest at each sample */
+    double w_ip[3];      /* 1, pseudo-current weight of each phase (+-1/2 or 0) */
+    double ip_min;       /* A, least value seen */
+    double ip_max;       /* A, largest value seen */
+    double ip_last;      /* A, last value that moved by more than PLANT_IP_STEP */
+    int ip_dir;          /* +1 rising, -1 falling, 0 not yet known (kept across periods) */
+    int ip_peaks;        /* local maxima seen (rising then falling) */
 } plant_t;
 
 /* Recompute the derived constants (r_over_l, inv_r) after R or L changed. */
@@ -164,6 +173,32 @@ static inline int plant_hall_sector_in(double theta_e)
     double u = plant_wrap_2pi(theta_e - PLANT_PI / 6.0);
     int s = (int)(u * (3.0 / PLANT_PI));
     return (s > 5) ? 6 : s + 1;
+}
+
+/* A change of the pseudo current smaller than this (A) does not count as a direction. */
+#define PLANT_IP_STEP 1e-6
+
+/* Track the pseudo current ip = w_ip . i (A) at a sub-segment end.  Within a sub-segment every
+ * phase current is i_inf + (i0 - i_inf) exp(-R t / L) (one time constant, constant inputs), so
+ * ip is monotonic there and the period's extremes are among these points. */
+static inline void plant_track_ip(plant_t *p, double ip)
+{
+    const double d = ip - p->ip_last;
+    if (ip < p->ip_min) {
+        p->ip_min = ip;
+    }
+    if (ip > p->ip_max) {
+        p->ip_max = ip;
+    }
+    if (d > PLANT_IP_STEP) {
+        p->ip_dir = 1;
+    } else if (d < -PLANT_IP_STEP) {
+        p->ip_peaks += (p->ip_dir > 0);
+        p->ip_dir = -1;
+    } else {
+        return;
+    }
+    p->ip_last = ip;
 }
 
 /* plant_mech_step's body. */
