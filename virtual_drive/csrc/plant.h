@@ -181,24 +181,23 @@ static inline int plant_hall_sector_in(double theta_e)
 /* Track the pseudo current ip = w_ip . i (A) at a sub-segment end.  Within a sub-segment every
  * phase current is i_inf + (i0 - i_inf) exp(-R t / L) (one time constant, constant inputs), so
  * ip is monotonic there and the period's extremes are among these points. */
+static inline void plant_track_ip_in(double ip, double *lo, double *hi, double *last, int *dir,
+                                     int *peaks)
+{
+    /* (branch-free: the direction alternates every sub-segment) */
+    const double d = ip - *last;
+    const int up = (d > PLANT_IP_STEP), down = (d < -PLANT_IP_STEP);
+    *lo = (ip < *lo) ? ip : *lo;
+    *hi = (ip > *hi) ? ip : *hi;
+    *peaks += down & (*dir > 0);
+    *dir = up ? 1 : (down ? -1 : *dir);
+    *last = (up | down) ? ip : *last;
+}
+
+/* plant_track_ip_in on the plant's own fields. */
 static inline void plant_track_ip(plant_t *p, double ip)
 {
-    const double d = ip - p->ip_last;
-    if (ip < p->ip_min) {
-        p->ip_min = ip;
-    }
-    if (ip > p->ip_max) {
-        p->ip_max = ip;
-    }
-    if (d > PLANT_IP_STEP) {
-        p->ip_dir = 1;
-    } else if (d < -PLANT_IP_STEP) {
-        p->ip_peaks += (p->ip_dir > 0);
-        p->ip_dir = -1;
-    } else {
-        return;
-    }
-    p->ip_last = ip;
+    plant_track_ip_in(ip, &p->ip_min, &p->ip_max, &p->ip_last, &p->ip_dir, &p->ip_peaks);
 }
 
 /* plant_mech_step's body. */
