@@ -551,7 +551,8 @@ class Drive:
             return self.read_gains()
         for k, v in changes.items():
             self.table[_GAIN_OBJECTS[k][2]].check(v)
-        self._check_rules({_GAIN_OBJECTS[k][2]: v for k, v in changes.items()})
+        # the staged set is checked as the objects it becomes (the drive checks it so at apply)
+        self._check_rules({_GAIN_OBJECTS[k][1]: v for k, v in changes.items()})
         sets = 0
         for k in changes:
             sets |= _GAIN_OBJECTS[k][0]

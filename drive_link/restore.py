@@ -11,7 +11,7 @@ power stage off, CiA 402 / 0x6060 abort 0x08000022 otherwise):
    (power stage off: a drive found off is stopped). A mode switch coasts (:func:`switch_mode`:
    0x605C = 0 for that one transition) instead of braking on the slow-down ramp at the
    current limit, unless ``brake`` is asked;
-2. the settings and gains are written back (gains as one set, :meth:`Drive.apply_gains`);
+2. the settings and gains are written back (gains as one set, :func:`drive_link.gains.apply_gains`);
 3. the setpoints are written back;
 4. the mode is selected again;
 5. the state is reached again: OPERATION ENABLED (the motor returns to the old setpoint),
@@ -45,7 +45,6 @@ __all__ = [
     "DISABLE_OPTION",
     "SETPOINTS",
     "Snapshot",
-    "apply_gains_stepwise",
     "leave_as_found",
     "restore",
     "snapshot",
@@ -111,34 +110,6 @@ def switch_mode(drive: Drive, mode: str, *, brake: bool = False, timeout: float 
     drive.enable(timeout=timeout)
 
 
-def apply_gains_stepwise(drive: Drive, changes: dict[str, Any]) -> None:
-    """:meth:`Drive.apply_gains` as one set; if the drive refuses the set (SDO abort), one gain
-    at a time in an order it accepts (each intermediate set admissible). The virtual drive checks
-    each staged value against the active set when 0x20F1 applies a set, so it refuses e.g.
-    predictive + feed-forward in one set from deadbeat without feed-forward (abort 0x06090030)
-    but takes emf_feedforward = 1 first, then type = 2."""
-    from .errors import SdoAbort
-
-    try:
-        drive.apply_gains(**changes)
-        return
-    except SdoAbort as exc:
-        last: SdoAbort = exc
-    pending = dict(changes)
-    while pending:
-        done = False
-        for k in list(pending):
-            try:
-                drive.apply_gains(**{k: pending[k]})
-            except SdoAbort as exc:
-                last = exc
-                continue
-            del pending[k]
-            done = True
-        if not done:
-            raise last
-
-
 def _coast_disable(drive: Drive, brake: bool, timeout: float) -> str:
     """Power stage off; coasting unless ``brake`` (see :func:`switch_mode`)."""
     if brake or DISABLE_OPTION not in drive.table:
@@ -169,7 +140,11 @@ def restore(drive: Drive, snap: Snapshot, timeout: float = 3.0, brake: bool = Fa
         now = drive.read_gains().to_dict()
         diff = {k: v for k, v in snap.gains.items() if now.get(k) != v}
         if diff:
-            apply_gains_stepwise(drive, diff)
+            from .gains import apply_gains
+
+            # the set found on the drive goes back as one set through the one policy path
+            # (forced: it was in use, poor margins or not)
+            apply_gains(drive, diff, force=True)
     for name, value in snap.setpoints.items():
         if drive.read(name) != value:
             drive.write(name, value)

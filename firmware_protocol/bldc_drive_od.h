@@ -1603,7 +1603,7 @@
 #define OD_MEASUREMENTS__HIGHEST_SUB_INDEX_CTYPE                 uint16_t
 #define OD_MEASUREMENTS__HIGHEST_SUB_INDEX_ACCESS                OD_ACCESS_CONST
 #define OD_MEASUREMENTS__HIGHEST_SUB_INDEX_PDO                   0u
-#define OD_MEASUREMENTS__HIGHEST_SUB_INDEX_DEFAULT               14u
+#define OD_MEASUREMENTS__HIGHEST_SUB_INDEX_DEFAULT               17u
 #define OD_MEASUREMENTS__HIGHEST_SUB_INDEX_REF                   0x20400008UL
 /* 0x2040:01 measurements.i_p REAL32 ro [A] - pseudo current (|i_a|+|i_b|+|i_c|)/2 with sign, limits are the measurement range */
 #define OD_MEASUREMENTS__I_P_INDEX                               0x2040u
@@ -1759,6 +1759,39 @@
 #define OD_MEASUREMENTS__THETA_E_MIN                             0.0f /* rad */
 #define OD_MEASUREMENTS__THETA_E_MAX                             6.2831855f /* rad */
 #define OD_MEASUREMENTS__THETA_E_REF                             0x20400E20UL
+/* 0x2040:0F measurements.i_p_min REAL32 ro [A] - least pseudo current over the PWM period before the sample: the firmware converts i_p at every PWM switching edge (ADC start of conversion on each compare event) and at the period boundary and keeps the minimum (the current is monotonic between edges, so this is the ripple trough), limits are the measurement range */
+#define OD_MEASUREMENTS__I_P_MIN_INDEX                           0x2040u
+#define OD_MEASUREMENTS__I_P_MIN_SUB                             0x0Fu
+#define OD_MEASUREMENTS__I_P_MIN_TYPE                            OD_TYPE_REAL32
+#define OD_MEASUREMENTS__I_P_MIN_CTYPE                           float
+#define OD_MEASUREMENTS__I_P_MIN_ACCESS                          OD_ACCESS_RO
+#define OD_MEASUREMENTS__I_P_MIN_PDO                             1u
+#define OD_MEASUREMENTS__I_P_MIN_DEFAULT                         0.0f /* A */
+#define OD_MEASUREMENTS__I_P_MIN_MIN                             (-1000.0f) /* A */
+#define OD_MEASUREMENTS__I_P_MIN_MAX                             1000.0f /* A */
+#define OD_MEASUREMENTS__I_P_MIN_REF                             0x20400F20UL
+/* 0x2040:10 measurements.i_p_max REAL32 ro [A] - largest pseudo current over the PWM period before the sample, from the same edge-triggered ADC conversions as i_p_min (the ripple peak; i_p_max - i_p_min is the ripple peak-to-peak), limits are the measurement range */
+#define OD_MEASUREMENTS__I_P_MAX_INDEX                           0x2040u
+#define OD_MEASUREMENTS__I_P_MAX_SUB                             0x10u
+#define OD_MEASUREMENTS__I_P_MAX_TYPE                            OD_TYPE_REAL32
+#define OD_MEASUREMENTS__I_P_MAX_CTYPE                           float
+#define OD_MEASUREMENTS__I_P_MAX_ACCESS                          OD_ACCESS_RO
+#define OD_MEASUREMENTS__I_P_MAX_PDO                             1u
+#define OD_MEASUREMENTS__I_P_MAX_DEFAULT                         0.0f /* A */
+#define OD_MEASUREMENTS__I_P_MAX_MIN                             (-1000.0f) /* A */
+#define OD_MEASUREMENTS__I_P_MAX_MAX                             1000.0f /* A */
+#define OD_MEASUREMENTS__I_P_MAX_REF                             0x20401020UL
+/* 0x2040:11 measurements.i_p_peaks REAL32 ro [1] - ripple cycles of i_p in the PWM period before the sample: local maxima (a rise then a fall) of the edge-triggered ADC conversions of i_p; the ripple frequency is i_p_peaks x f_s (2 for unipolar PWM) */
+#define OD_MEASUREMENTS__I_P_PEAKS_INDEX                         0x2040u
+#define OD_MEASUREMENTS__I_P_PEAKS_SUB                           0x11u
+#define OD_MEASUREMENTS__I_P_PEAKS_TYPE                          OD_TYPE_REAL32
+#define OD_MEASUREMENTS__I_P_PEAKS_CTYPE                         float
+#define OD_MEASUREMENTS__I_P_PEAKS_ACCESS                        OD_ACCESS_RO
+#define OD_MEASUREMENTS__I_P_PEAKS_PDO                           1u
+#define OD_MEASUREMENTS__I_P_PEAKS_DEFAULT                       0.0f /* 1 */
+#define OD_MEASUREMENTS__I_P_PEAKS_MIN                           0.0f /* 1 */
+#define OD_MEASUREMENTS__I_P_PEAKS_MAX                           16.0f /* 1 */
+#define OD_MEASUREMENTS__I_P_PEAKS_REF                           0x20401120UL
 
 /* ---- 0x2050 protection ---- */
 #define OD_PROTECTION_INDEX                                      0x2050u
@@ -2919,12 +2952,8 @@
  *      abort code is TOO_HIGH for the bounded object, TOO_LOW for the bound) ---- */
 /* current_controller.L_c < 2 * motor.L - deadbeat loop stable for L_c < 2 L */
 #define OD_CURRENT_CONTROLLER__L_C_BOUND_FACTOR                  2.0f
-/* gain_set.L_c < 2 * motor.L - staged L_c, checked when it or motor.L is written and when applied (gain_set_apply) */
-#define OD_GAIN_SET__L_C_BOUND_FACTOR                            2.0f
 /* current_controller.R_c <= 2 * motor.R - deadbeat loop stable for R_c <= 2 R (with 0 < L_c < 2 L; larger R_c/R can be unstable, e.g. R_c > 107 R at L_c = L) */
 #define OD_CURRENT_CONTROLLER__R_C_BOUND_FACTOR                  2.0f
-/* gain_set.R_c <= 2 * motor.R - staged R_c, checked like gain_set.L_c */
-#define OD_GAIN_SET__R_C_BOUND_FACTOR                            2.0f
 /* |setpoints.i_p_ref| <= speed_controller.current_limit - pseudo-current reference within the current limit */
 #define OD_SETPOINTS__I_P_REF_BOUND_FACTOR                       1.0f
 /* |target_velocity| <= max_motor_speed - speed reference within 0x6080 */

@@ -1,5 +1,9 @@
 """Cross-object rules of the OD that an EDS cannot express (e.g. 0 < L_c < 2 motor.L).
 
+The staged gain set (gain_set 0x20F0) is scratch space with no rule of its own: a staged value is
+checked against its own range when written, and the set as a whole against these rules (with the
+staged values in place of the active ones) when gain_set_apply (0x20F1) applies it.
+
 Both the drive (before storing a write) and the host (before sending one) enforce them, through
 :meth:`firmware_protocol.od.ObjectDictionaryView.check_constraints`.
 """
@@ -85,27 +89,12 @@ CONSTRAINTS: tuple[Constraint, ...] = (
         "current_controller.L_c", "<", 2, "motor.L", reason="deadbeat loop stable for L_c < 2 L"
     ),
     Constraint(
-        "gain_set.L_c",
-        "<",
-        2,
-        "motor.L",
-        reason="staged L_c, checked when it or motor.L is written and when applied "
-        "(gain_set_apply)",
-    ),
-    Constraint(
         "current_controller.R_c",
         "<=",
         2,
         "motor.R",
         reason="deadbeat loop stable for R_c <= 2 R (with 0 < L_c < 2 L; larger R_c/R can be "
         "unstable, e.g. R_c > 107 R at L_c = L)",
-    ),
-    Constraint(
-        "gain_set.R_c",
-        "<=",
-        2,
-        "motor.R",
-        reason="staged R_c, checked like gain_set.L_c",
     ),
     Constraint(
         "setpoints.i_p_ref",

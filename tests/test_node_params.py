@@ -92,9 +92,12 @@ def test_gain_set_refused_as_a_whole(bench):
     active = {k: bench.read(f"current_controller.{k}") for k in ("L_c", "k_p", "type")}
     bench.write("gain_set.type", 1)
     bench.write("gain_set.k_p", 0.3)
-    # a staged L_c >= 2 motor.L is refused on write already (OD.md: checked on write)
-    assert abort_code(bench, "gain_set.L_c", 2.5 * L) == 0x06090031
-    assert bench.read("gain_set.L_c") == pytest.approx(L)
+    # staging is scratch space (only the object's own range): a staged L_c >= 2 motor.L is
+    # taken, and the set is refused when applied (Valle et al. eq. 17: unstable for L_c >= 2L)
+    bench.write("gain_set.L_c", 2.5 * L)
+    assert abort_code(bench, "gain_set_apply", 1) == 0x06090031
+    assert {k: bench.read(f"current_controller.{k}") for k in active} == active
+    bench.write("gain_set.L_c", L)
     bench.write("gain_set.speed_k_i", 0.0)  # IP loop without integral action: checked at apply
     assert abort_code(bench, "gain_set_apply", 3) == 0x06090032
     assert {k: bench.read(f"current_controller.{k}") for k in active} == active

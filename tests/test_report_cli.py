@@ -171,3 +171,29 @@ def test_identify_electrical_finds_a_second_motor(hub, tmp_path):
         dl_in(hub, "disable")
         dl_in(hub, "write", "motor.R", repr(R0))
         dl_in(hub, "write", "motor.L", repr(L0))
+
+
+def test_pwm_ripple_measured_against_the_unipolar_formula(hub, tmp_path):
+    """pwm_ripple measures the ripple from the drive's edge-sampled i_p (0x2040 i_p_min,
+    i_p_max, i_p_peaks). Oracle: unipolar PWM switches the output at 2 f_sw (paper Sec. IV-B:
+    50 kHz per transistor, 100 kHz output); its peak-to-peak on the conducting pair (2 L in
+    series) is Δi = V_dc D (1 − D) T_s / (4 L) with the duty D from the steady state, the mean
+    line voltage D V_dc = K_rpm n + 2 R i_p (line back-EMF on the flat tops plus the drop)."""
+    assert dl_in(hub, "nmt", "start")[0] == 0
+    rc, out = dl_in(hub, "set-speed", "1000rpm", "--enable")
+    assert rc == 0, out
+    p = dl(hub, "report", "--only", "pwm_ripple", "--out", str(tmp_path), "--json")
+    assert p.returncode == 0, p.stdout + p.stderr
+    rep = json.loads(p.stdout)
+    f = _metric(rep, "pwm_ripple", "ripple_freq_Hz")
+    assert f["measured"] == pytest.approx(2 * 50e3) and f["verdict"] == "pass"
+    names = ("measurements.speed", "measurements.i_p", "measurements.V_dc")
+    reads = [read(hub, *names) for _ in range(5)]
+    n, i_p, V_dc = (float(np.mean([r[k] for r in reads])) for k in names)
+    m = read(hub, "motor.K_rpm", "motor.R", "motor.L")
+    assert n == pytest.approx(1000, abs=10)
+    D = (m["motor.K_rpm"] * n + 2 * m["motor.R"] * i_p) / V_dc
+    want = V_dc * D * (1 - D) * TS / (4 * m["motor.L"])
+    pp = _metric(rep, "pwm_ripple", "ripple_pp_A")
+    assert pp["measured"] == pytest.approx(want, rel=0.1), (pp, want, D)
+    assert pp["verdict"] == "pass"

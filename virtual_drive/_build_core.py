@@ -21,7 +21,7 @@ CDEF = """
 #define CC_DEADBEAT 0
 #define CC_PI 1
 #define CC_PREDICTIVE 2
-#define LOOP_NSIG 14
+#define LOOP_NSIG 17
 #define LOOP_OS_MAX 64
 
 typedef struct {
@@ -42,6 +42,7 @@ typedef struct {
     double i[3]; double omega; double theta_e;
     double e_seg[3]; double F_seg[3];
     double Te_int; double i_abs_max; int nonfinite;
+    double w_ip[3]; double ip_min; double ip_max; double ip_last; int ip_dir; int ip_peaks;
 } plant_t;
 
 typedef struct {
@@ -52,7 +53,7 @@ typedef struct {
     double oc_trip; double ov_trip; double uv_trip;
     int fault_code; int fault_reason; double fault_time; int inject;
     double t; long long k;
-    float last[14];
+    float last[17];
     long long segments;
     int os_n; double *os_buf; long long os_cap; long long os_len;
     ...;

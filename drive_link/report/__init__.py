@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 from ..errors import DriveError, InvalidValue
 from ..steps import Hooks
-from . import current, electrical, speed
+from . import current, electrical, ripple, speed
 from ._base import Context, ExperimentResult, is_virtual
 from .paper_checks import inconsistencies
 
@@ -37,7 +37,7 @@ EXPERIMENTS: dict[str, Callable[[Context], ExperimentResult]] = {
     "lc_sweep": current.lc_sweep,
     "current_step_pi": current.current_step_pi,
     "current_step_predictive": current.current_step_predictive,
-    "pwm_ripple": current.pwm_ripple,
+    "pwm_ripple": ripple.pwm_ripple,
     "identify_electrical": electrical.identify_electrical,
     "identify_speed_model": speed.identify_speed_model,
     "speed_step": speed.speed_step,

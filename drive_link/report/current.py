@@ -1,6 +1,6 @@
 """The current-loop experiments of the report (paper Sec. III-IV): the deadbeat step (Fig. 8,
 eq. 16), the L_c/L sweep (Table 1, Figs. 9-11), the PI step (Figs. 12-13, eq. 22), the
-predictive step with and without eq. (25) (Figs. 14-15) and the PWM ripple.
+predictive step with and without eq. (25) (Figs. 14-15); the PWM ripple is :mod:`.ripple`.
 
 Each step is :func:`drive_link.steps.current_step` (settled start, commutation retries, model
 prediction with the measured e_L, the drive left as found) run with the gains the experiment
@@ -18,12 +18,12 @@ import numpy as np
 from firmware_protocol import paper
 
 from .. import design, metrics, steps
-from ..restore import apply_gains_stepwise, leave_as_found
+from ..gains import apply_gains
+from ..restore import leave_as_found
 from ..trace import TS
 from ._base import Context, ExperimentResult, Metric, figure_png, new_figure, settling_samples
 
-__all__ = ["current_step_deadbeat", "current_step_pi", "current_step_predictive", "lc_sweep",
-           "pwm_ripple"]
+__all__ = ["current_step_deadbeat", "current_step_pi", "current_step_predictive", "lc_sweep"]
 
 I_FROM, I_TO = 15.0, 20.0  #: the paper's Fig. 13 step, A
 LC_RATIOS = (0.5, 1.0, 1.5, 1.9)  #: L_c/L of the sweep (Table 1 and the 1.9 L of Fig. 11)
@@ -36,11 +36,13 @@ SIM_INVERTER = ("sim_inverter.T_BT", "sim_inverter.T_DD", "sim_inverter.T_SD",
 
 
 @contextlib.contextmanager
-def _with_gains(ctx: Context, settings: tuple[str, ...] = (), **gains: Any) -> Iterator[None]:
-    """Apply ``gains`` (one set) for the block; gains and ``settings`` are put back after."""
+def _with_gains(ctx: Context, settings: tuple[str, ...] = (), force: bool = False,
+                **gains: Any) -> Iterator[None]:
+    """Apply ``gains`` as one set (:func:`drive_link.gains.apply_gains`; ``force``: poor margins
+    wanted, e.g. L_c = 1.9 L) for the block; gains and ``settings`` are put back after."""
     with leave_as_found(ctx.drive, settings=settings, gains=True):
         if gains:
-            apply_gains_stepwise(ctx.drive, gains)
+            apply_gains(ctx.drive, gains, force=force)
         yield
 
 
@@ -149,7 +151,7 @@ def lc_sweep(ctx: Context) -> ExperimentResult:
     rows = []
     for j, ratio in enumerate(LC_RATIOS):
         lo = j / len(LC_RATIOS)
-        with _with_gains(ctx, type=0, L_c=ratio * L):
+        with _with_gains(ctx, force=ratio > 1.5, type=0, L_c=ratio * L):
             res = _step(ctx, I_FROM, I_TO, lo, lo + 1 / len(LC_RATIOS))
         t, y, p = _clean(res)
         key = f"overshoot_pct_{ratio:g}L"
@@ -271,46 +273,4 @@ def current_step_predictive(ctx: Context) -> ExperimentResult:
     r.notes.append("With compensation the error left is the resistance the law neglects: "
                    "1/(1 + L f_s/(2R)) of the reference (1.65 % for Table 2's motor; eq. 23's "
                    "printed 0.83 % takes Γ = (1−Φ)/R): see the inconsistencies.")
-    return r
-
-
-def pwm_ripple(ctx: Context) -> ExperimentResult:
-    """The i_p ripple of unipolar PWM at i_p* = 20 A: frequency 2 f_s and peak-to-peak
-    V_dc m (1 − m) T_s / (4 L) from the recorded modulation index m and V_dc."""
-    r = ExperimentResult("pwm_ripple", "PWM ripple of i_p", "Sec. IV-B, unipolar PWM")
-    d = ctx.drive
-    L = float(d.read("motor.L"))
-    with leave_as_found(d):
-        steps._ensure_mode(d, "current")
-        d.set_current(20.0)
-        steps._require_enabled(d, True)
-        steps.wait_settled(d, "i_p", 20.0, 1.0, steps.Settle(0.05, 5.0), ctx.hooks, "A")
-        tr = steps.record(d, ["i_p", "m", "V_dc", "speed"], length=500,
-                          hooks=ctx.step_hooks(0.0, 1.0))
-    m = np.abs(np.asarray(tr.signals["measurements.m"], dtype=float))
-    vdc = np.asarray(tr.signals["measurements.V_dc"], dtype=float)
-    i_p = np.asarray(tr.signals["measurements.i_p"], dtype=float)
-    speed = float(np.mean(tr.signals["measurements.speed"]))
-    pp = float(np.mean(vdc * m * (1 - m))) * TS / (4 * L)
-    m_mean = float(np.mean(m))
-    pp_paper = paper.RATED_VOLTAGE * m_mean * (1 - m_mean) * TS / (4 * paper.L_TABLE2)
-    r.metrics["ripple_freq_Hz"] = Metric(None, 2.0 / TS, 100e3, "Hz", None)
-    r.metrics["ripple_pp_A"] = Metric(pp, pp_paper, None, "A", 0.3 * pp_paper + 0.05)
-    r.metrics["sampled_i_p_std_A"] = Metric(float(np.std(i_p)), None, None, "A", None)
-    r.conditions = (f"current mode, i_p* = 20 A at {speed:.0f} rpm, modulation index "
-                    f"{m_mean:.3f}, V_dc {np.mean(vdc):.1f} V, motor.L {L * 1e6:.2f} µH")
-    r.notes.append("The recorder samples i_p once per period at the PWM midpoint, where it "
-                   "equals the ripple's average: the 100 kHz ripple itself is in no record (a "
-                   "small spread of the samples shows it). Its peak-to-peak follows from the "
-                   "recorded m and V_dc; the model column is Table 2's L at 48 V.")
-    fig, (ax,) = new_figure(1, 2.6)
-    ax.plot(tr.t * 1e3, i_p, color="tab:blue", lw=1.5, label="i_p sampled (A)")
-    mid = float(np.mean(i_p))
-    ax.axhspan(mid - pp / 2, mid + pp / 2, color="tab:orange", alpha=0.2,
-               label=f"ripple band {pp:.2f} A p-p (100 kHz)")
-    ax.set_xlabel("time (ms)")
-    ax.set_ylabel("i_p (A)")
-    ax.legend(fontsize=8)
-    ax.grid(alpha=0.3)
-    r.figures.append(figure_png(fig))
     return r

@@ -62,6 +62,8 @@ void loop_init(loop_t *L)
     L->inject = 0;
     L->segments = 0;
     L->os_len = 0;
+    L->p.ip_min = L->p.ip_max = L->p.ip_last = 0.0;
+    L->p.ip_dir = L->p.ip_peaks = 0;
     cc_current_reset(&L->cc, 0.0f);
     cc_speed_reset(&L->sc, 0.0f, 0.0f);
     loop_update_mech(L);
@@ -411,6 +413,7 @@ int loop_run(loop_t *L, int n, float **sig, double *t_out)
             p->Te_int = 0.0;
             p->i_abs_max = 0.0;
             p->nonfinite = 0;
+            p->ip_min = p->ip_max = 0.0;
             i_p = e_L = Te = 0.0;
             speed = p->omega * RPM_PER_RAD_S;
         }
@@ -454,6 +457,9 @@ int loop_run(loop_t *L, int n, float **sig, double *t_out)
             r[SIG_V_DC] = (float)p->V_dc;
             r[SIG_T_E] = (float)Te;
             r[SIG_THETA_E] = (float)p->theta_e;
+            r[SIG_I_P_MIN] = (float)((p->ip_min < i_p) ? p->ip_min : i_p);
+            r[SIG_I_P_MAX] = (float)((p->ip_max > i_p) ? p->ip_max : i_p);
+            r[SIG_I_P_PEAKS] = (float)p->ip_peaks;
             if (all_sig) { /* every signal recorded: no index per signal */
                 for (j = 0; j < LOOP_NSIG; ++j) {
                     rec_ptr[j][k] = r[j];
@@ -474,6 +480,13 @@ int loop_run(loop_t *L, int n, float **sig, double *t_out)
         }
         if (L->os_n > 0) {
             os_record(L, L->t);
+        }
+        { /* i_p over the coming PWM period, tracked by the plant at every switching edge */
+            p->w_ip[sec_plus[sec]] = 0.5;
+            p->w_ip[sec_minus[sec]] = -0.5;
+            p->w_ip[sec_open[sec]] = 0.5 * open_sign[!(omega >= 0.0)][sec];
+            p->ip_min = p->ip_max = p->ip_last = i_p;
+            p->ip_peaks = 0;
         }
         /* advance the circuit over [t_k, t_k + Ts), back-EMF at the sample's mid-angle (as
          * plant_set_segment_emf) */

@@ -28,7 +28,7 @@
 #include "controllers.h"
 #include "plant.h"
 
-#define LOOP_NSIG 14
+#define LOOP_NSIG 17
 #define LOOP_OS_MAX 64
 
 enum {
@@ -45,7 +45,10 @@ enum {
     SIG_SPEED_REF,
     SIG_V_DC,
     SIG_T_E,
-    SIG_THETA_E
+    SIG_THETA_E,
+    SIG_I_P_MIN,  /* least i_p over the PWM period before the sample (at its switching edges) */
+    SIG_I_P_MAX,  /* largest i_p over that period */
+    SIG_I_P_PEAKS /* ripple maxima of i_p in that period (2 for unipolar PWM) */
 };
 
 #define LOOP_OFF 0

@@ -237,6 +237,8 @@ int plant_advance(plant_t *p, const int mode[3], const double v_drv[3], double d
                 }
             }
             p->Te_int += p->k_e * Tm * t_seg;
+            plant_track_ip(p, p->w_ip[0] * i_new[0] + p->w_ip[1] * i_new[1]
+                                  + p->w_ip[2] * i_new[2]);
         }
         remaining -= t_seg;
         ++nseg;
@@ -268,6 +270,9 @@ static int six_step_z(plant_t *p, const int z, const double *va_seg, const doubl
     const double e1 = (z == 1) ? ez : ((z == 0) ? ea : eb);
     const double e2 = (z == 2) ? ez : eb;
     const double Fa = p->F_seg[a], Fb = p->F_seg[b], Fz = p->F_seg[z];
+    const double wa = p->w_ip[a], wb = p->w_ip[b], wz = p->w_ip[z];
+    double ip_lo = p->ip_min, ip_hi = p->ip_max, ip_last = p->ip_last;
+    int ip_dir = p->ip_dir, ip_peaks = p->ip_peaks;
     double ia = p->i[a], ib = p->i[b], iz = p->i[z];
     double Te_int = p->Te_int, i_abs_max = p->i_abs_max;
     int nonfinite = 0, nseg = 0, s;
@@ -328,6 +333,8 @@ static int six_step_z(plant_t *p, const int z, const double *va_seg, const doubl
             ia = ia1;
             ib = ib1;
             iz = iz1;
+            plant_track_ip_in(wa * ia1 + wb * ib1 + wz * iz1, &ip_lo, &ip_hi, &ip_last, &ip_dir,
+                              &ip_peaks);
             if (ai > i_abs_max) {
                 i_abs_max = ai;
             }
@@ -344,6 +351,11 @@ static int six_step_z(plant_t *p, const int z, const double *va_seg, const doubl
     p->i[z] = iz;
     p->Te_int = Te_int;
     p->i_abs_max = i_abs_max;
+    p->ip_min = ip_lo;
+    p->ip_max = ip_hi;
+    p->ip_last = ip_last;
+    p->ip_dir = ip_dir;
+    p->ip_peaks = ip_peaks;
     if (nonfinite) {
         p->nonfinite = 1;
     }

@@ -58,6 +58,15 @@ typedef struct {
     double Te_int;       /* N m s */
     double i_abs_max;    /* A, largest |i_x| seen */
     int nonfinite;
+    /* the pseudo current w_ip . i over the current PWM period, at every sub-segment end (every
+     * switching edge, diode current zero and the period's end; plant_track_ip); the loop sets
+     * w_ip and resets the rest at each sample */
+    double w_ip[3];      /* 1, pseudo-current weight of each phase (+-1/2 or 0) */
+    double ip_min;       /* A, least value seen */
+    double ip_max;       /* A, largest value seen */
+    double ip_last;      /* A, last value that moved by more than PLANT_IP_STEP */
+    int ip_dir;          /* +1 rising, -1 falling, 0 not yet known (kept across periods) */
+    int ip_peaks;        /* local maxima seen (rising then falling) */
 } plant_t;
 
 /* Recompute the derived constants (r_over_l, inv_r) after R or L changed. */
@@ -164,6 +173,31 @@ static inline int plant_hall_sector_in(double theta_e)
     double u = plant_wrap_2pi(theta_e - PLANT_PI / 6.0);
     int s = (int)(u * (3.0 / PLANT_PI));
     return (s > 5) ? 6 : s + 1;
+}
+
+/* A change of the pseudo current smaller than this (A) does not count as a direction. */
+#define PLANT_IP_STEP 1e-6
+
+/* Track the pseudo current ip = w_ip . i (A) at a sub-segment end.  Within a sub-segment every
+ * phase current is i_inf + (i0 - i_inf) exp(-R t / L) (one time constant, constant inputs), so
+ * ip is monotonic there and the period's extremes are among these points. */
+static inline void plant_track_ip_in(double ip, double *lo, double *hi, double *last, int *dir,
+                                     int *peaks)
+{
+    /* (branch-free: the direction alternates every sub-segment) */
+    const double d = ip - *last;
+    const int up = (d > PLANT_IP_STEP), down = (d < -PLANT_IP_STEP);
+    *lo = (ip < *lo) ? ip : *lo;
+    *hi = (ip > *hi) ? ip : *hi;
+    *peaks += down & (*dir > 0);
+    *dir = up ? 1 : (down ? -1 : *dir);
+    *last = (up | down) ? ip : *last;
+}
+
+/* plant_track_ip_in on the plant's own fields. */
+static inline void plant_track_ip(plant_t *p, double ip)
+{
+    plant_track_ip_in(ip, &p->ip_min, &p->ip_max, &p->ip_last, &p->ip_dir, &p->ip_peaks);
 }
 
 /* plant_mech_step's body. */

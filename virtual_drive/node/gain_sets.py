@@ -1,7 +1,10 @@
 """Gain sets and current limits: the staged set 0x20F0 applied at one sample by 0x20F1.
 
-:func:`apply_gain_set` checks the staged values as the objects they become (limits, the
-cross-object rules, the IP and current-loop stability rules, the cascade), then applies the
+:func:`apply_gain_set` checks the staged set as a whole, against itself: each value in the range
+of the object it becomes, then the cross-object rules (e.g. L_c < 2 motor.L), the IP and
+current-loop admissibility rules and the cascade with all staged values in place (never one
+staged value against the other active ones, so e.g. predictive control with the back-EMF
+feed-forward is accepted as one set from deadbeat without it); then it applies the
 current and/or speed part to the simulator and the stored 0x2010/0x2020 values together (a
 refusal changes nothing). :func:`apply_current_limit` keeps the speed loop's i_p* limit at
 min(0x2020:3, 0x6073 x 0x6075).
@@ -90,14 +93,16 @@ def apply_gain_set(d: VirtualDrive, which: int) -> None:
         for key in plant.CURRENT_KW.values():
             current_kw[key] = staged[key]
             changes[f"current_controller.{key}"] = staged[key]
-        changes["gain_set.L_c"] = staged["L_c"]
     if which & 2:
         for sub, key in plant.GAIN_SET_SPEED_KW.items():
             speed_kw[key] = staged[_GAIN_SET_SUBS[sub]]
+            changes[f"speed_controller.{key}"] = speed_kw[key]
         changes["speed_controller.current_limit"] = staged["speed_current_limit"]
+    # the set as a whole, against itself: each value in the range of the object it becomes
+    # (never against the other active values: predictive + feed-forward is one set), then the
+    # cross-object rules and the loop rules with every staged value in place
     for name, value in changes.items():
-        e = d.view.entry(name)
-        d.checker.check(e.index, e.subindex, value)
+        d.checker.check_range(d.view.entry(name), value)
     d.checker.check_rules(changes, staged=True)
     speed_gains = staged["speed_k_p"], staged["speed_k_i"]
     if which & 2:

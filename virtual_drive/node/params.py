@@ -3,10 +3,10 @@
 Order: the object's own limits and type (:meth:`firmware_protocol.od.Entry.check`: NaN/inf and
 non-integral → 0x06090030, above → 0x06090031, below → 0x06090032), then the cross-object rules
 of :data:`firmware_protocol.od.CONSTRAINTS` with the other objects' present values (e.g.
-``current_controller.L_c < 2 motor.L``: the deadbeat loop is unstable for L_c ≥ 2L). The rules
-on the staged gain set (0x20F0) hold on every write of either side (a staged L_c ≥ 2 motor.L is
-refused when written, and so is a motor.L below half of an active or staged L_c) and the set is
-checked again as a whole when 0x20F1 is written. Speed-loop gains must form a stable IP loop
+``current_controller.L_c < 2 motor.L``: the deadbeat loop is unstable for L_c ≥ 2L). The staged
+gain set (0x20F0) is scratch space: a staged value is checked against its own range only (any
+order of staging works), and the set as a whole, against itself, when 0x20F1 applies it
+(:mod:`.gain_sets`). Speed-loop gains must form a stable IP loop
 (:func:`firmware_protocol.stability.check_ip_speed_gains`): a write of 0x2020:1/2 is checked with
 the other gain's present value, the staged pair 0x20F0:11/12 when it is applied. Current-loop
 gain sets must be admissible (:func:`firmware_protocol.current_stability.check_current_gains`:
@@ -31,7 +31,7 @@ from firmware_protocol.current_stability import (
 from firmware_protocol.od import Entry, LimitError, ObjectDictionaryView
 from firmware_protocol.stability import check_ip_speed_gains
 
-__all__ = ["ParamChecker"]
+__all__ = ["STAGED_SET", "ParamChecker"]
 
 Number = int | float
 
@@ -39,6 +39,8 @@ ABORT_INVALID_VALUE = abort_codes.INVALID_VALUE
 ABORT_VALUE_TOO_HIGH = abort_codes.VALUE_TOO_HIGH
 ABORT_VALUE_TOO_LOW = abort_codes.VALUE_TOO_LOW
 
+STAGED_SET = "gain_set"
+"""OD object of the staged gain set (0x20F0)."""
 _IP_GAINS = ("speed_controller.k_p", "speed_controller.k_i")
 _CURRENT = tuple(f"current_controller.{k}" for k in CURRENT_KEYS)
 _MOTOR = tuple(f"motor.{k}" for k in MOTOR_KEYS)
@@ -64,10 +66,9 @@ class ParamChecker:
         entry = self._by_index.get((index, subindex))
         if entry is None:
             return value
-        try:
-            value = entry.check(value)
-        except LimitError as exc:
-            raise SdoAbortedError(exc.abort_code) from exc
+        value = self.check_range(entry, value)
+        if entry.object_name == STAGED_SET:
+            return value  # scratch space: the set is checked as a whole when applied
         if isinstance(value, (int, float)):
             self.check_rules({entry.name: value}, staged=False)
             if entry.name in _IP_GAINS:
@@ -76,6 +77,15 @@ class ParamChecker:
             if entry.name in _CURRENT or entry.name in _MOTOR or entry.name in _IP_GAINS:
                 self.check_current_set({entry.name: value})
         return value
+
+    @staticmethod
+    def check_range(entry: Entry, value: object) -> object:
+        """``value`` against ``entry``'s own type and limits only (returned as stored), or
+        SdoAbortedError (0x06090030/31/32)."""
+        try:
+            return entry.check(value)
+        except LimitError as exc:
+            raise SdoAbortedError(exc.abort_code) from exc
 
     def check_current_set(
         self,

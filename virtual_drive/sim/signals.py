@@ -9,6 +9,11 @@ sector's "+" and "-" phases and the open phase signed as in the previous sector;
 eq. (1), (|i_a| + |i_b| + |i_c|) / 2, when motoring (i_p >= 0) and is negative when braking.
 Phase currents are positive into the motor.  v_L = m V_dc is the commanded line voltage
 between the sector's "+" and "-" phases; e_L the back-EMF between the same phases.
+
+i_p_min, i_p_max and i_p_peaks describe i_p over the PWM period that ends at t_k (the exact
+switching model's i_p at every switching edge, diode current zero and the period's ends, where
+its extremes lie): its least and largest value and the number of its local maxima (ripple
+cycles: 2 per period for unipolar PWM, i.e. 100 kHz). The averaged model has no ripple.
 """
 
 from __future__ import annotations
@@ -30,6 +35,9 @@ SIGNALS: tuple[str, ...] = (
     "V_dc",
     "T_e",
     "theta_e",
+    "i_p_min",
+    "i_p_max",
+    "i_p_peaks",
 )
 """Order matches the C loop's SIG_* indices (csrc/loop.h)."""
 
@@ -48,6 +56,9 @@ UNITS: dict[str, str] = {
     "V_dc": "V",
     "T_e": "N m",
     "theta_e": "rad",
+    "i_p_min": "A",
+    "i_p_max": "A",
+    "i_p_peaks": "1",
     "t": "s",
 }
 

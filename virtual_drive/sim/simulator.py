@@ -415,7 +415,7 @@ class Simulator:
             if record:
                 data = np.empty((len(SIGNALS), n), dtype=np.float32)
                 t = np.empty(n, dtype=np.float64)
-                ptrs = ffi.new("float *[14]")
+                ptrs = ffi.new(f"float *[{len(SIGNALS)}]")
                 for j in range(len(SIGNALS)):
                     ptrs[j] = ffi.cast("float *", data[j].ctypes.data)
                 t_ptr = ffi.cast("double *", t.ctypes.data)
@@ -524,7 +524,7 @@ class Simulator:
         n = int(n_samples)
         if n < 0 or n != n_samples or start < 0:
             raise ValueError(f"n_samples and start must be integers >= 0, got {n_samples!r}")
-        ptrs = ffi.new("float *[14]")
+        ptrs = ffi.new(f"float *[{len(SIGNALS)}]")
         for name, arr in out.items():
             if name not in SIGNALS:
                 raise ValueError(f"unknown signal {name!r} (known: {list(SIGNALS)})")
