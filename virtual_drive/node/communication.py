@@ -64,11 +64,13 @@ def bind_sdo2(d: VirtualDrive) -> None:
 def reset_communication(d: VirtualDrive) -> None:
     """NMT reset communication: 0x1000-0x1FFF back to stored values or defaults (CiA 301).
 
-    Exception: while the power stage is still on after the 0x6007 reaction (a stop ramp
-    still braking) the consumer heartbeat 0x1016 keeps its present value, so the master's
-    supervision is never dropped while the motor can turn.
+    Exception: wherever the drive can go back to OPERATION ENABLED without passing SWITCH ON
+    DISABLED after the 0x6007 reaction (READY TO SWITCH ON, SWITCHED ON, QUICK STOP ACTIVE held
+    or braking, a stop ramp still braking) the consumer heartbeat 0x1016 keeps its present value
+    and its monitoring goes on, so the master's supervision is never dropped while the motor
+    can turn or be made to turn by one controlword (node README, "Supervision by state").
     """
-    keep_1016 = d.cia402.torque_enabled
+    keep_1016 = d.cia402.can_reach_operation
     kept = dict(d.node.data_store.get(CONSUMER_HEARTBEAT_INDEX, {})) if keep_1016 else {}
     stored, _status, _error = storage.load_with_status(d.store_path)
     for index in [i for i in d.node.data_store if i < COMMUNICATION.stop]:

@@ -87,8 +87,8 @@ def before_write(
     if pre_check is not None:
         pre_check(d, sub, value)
     entry = d.checker.entry(index, sub)
-    if entry is not None and entry.config_only and d.cia402.torque_enabled:
-        raise SdoAbortedError(abort_codes.DEVICE_STATE)  # plant definition: power stage off only
+    if entry is not None and entry.config_only and d.cia402.drive_function_on:
+        raise SdoAbortedError(abort_codes.DEVICE_STATE)  # plant definition: drive function off
     if is_pdo_config(index):
         d.checker.check(index, sub, value)
         d.pdo.check_write(index, sub, value)
