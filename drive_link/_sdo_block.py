@@ -172,7 +172,7 @@ def _receive(
     while True:
         if deadline is not None and time.monotonic() > deadline:
             raise SdoCommunicationError("block upload did not finish in time")
-        frame = ex.next(wait if awaiting else silence_s)
+        frame = ex.next_or_gone(wait if awaiting else silence_s)  # NodeGone: heartbeat stopped
         if frame is None:
             if awaiting:  # the request or its whole answer was lost, or the server is slow
                 quiet += 1

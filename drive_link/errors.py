@@ -42,6 +42,12 @@ class DriveTimeout(DriveError):  # noqa: N818
     """The drive did not answer, or did not reach a requested state, in time."""
 
 
+class NodeGone(DriveTimeout):
+    """The drive's heartbeat stopped while a call waited for it: the node is gone (dead,
+    unpowered or cut off the bus). Raised within one producer heartbeat period plus one SDO
+    response timeout of the last heartbeat (:mod:`drive_link.supervision`)."""
+
+
 class SdoAbort(DriveError):  # noqa: N818
     """The drive aborted an SDO transfer (it refused a read or write).
 
