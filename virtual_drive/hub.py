@@ -113,11 +113,13 @@ class _Client:
         "errors",
         "events",
         "fd",
+        "held",
         "outbuf",
         "peer",
         "queue",
         "ready_at",
         "sock",
+        "spacing",
         "splitter",
         "state",
     )
@@ -135,6 +137,10 @@ class _Client:
         self.bus: _Bus | None = None
         self.bus_end = 0.0  # monotonic time its last frame left the bus
         self.errors = 0
+        #: CAN-ID -> (stated time, end on the bus, stated gap to the one before or None) of
+        #: this client's last frame with that ID: see :func:`_spacing_floor`
+        self.spacing: dict[int, tuple[float, float, float | None]] = {}
+        self.held: float | None = None  # stated time of a queue head moved later for spacing
 
 
 class _Bus:
@@ -186,6 +192,23 @@ def _idle_gap(bus: _Bus, t: float, duration: float) -> tuple[int, float] | None:
         t = ends[i]
         i += 1
     return None
+
+
+def _spacing_floor(client: _Client, head: tuple, bitrate: float) -> float:
+    """Earliest start (monotonic s) of ``client``'s queue head that keeps it as far after its
+    last frame with the same CAN-ID, end to end on the bus, as the smaller of the two last
+    stated gaps (its own and the previous one): a sender's spacing (a TPDO's inhibit time)
+    is not eaten by arbitration delays (a frame held back one frame time while the next one
+    goes on time). Both stated gaps are at least the sender's minimum, so their minimum is a
+    spacing it asked for; a longer gap (after a pause) lets a delay recover. 0: no earlier
+    frame with that ID. Plain ``send`` frames are stated at their arrival."""
+    last = client.spacing.get(head[3])
+    if last is None:
+        return 0.0
+    stated = head[0] if client.held is None else client.held
+    gap = stated - last[0]
+    keep = gap if last[2] is None or gap < last[2] else last[2]
+    return last[1] + keep - head[6] / bitrate
 
 
 def _head_arrival(client: _Client) -> float:
@@ -766,7 +789,16 @@ class Hub:
                     if arrival <= start and (best is None or (key, seq) < best):
                         best = (key, seq)
                         winner = c
+            head = winner.queue[0]
+            floor = _spacing_floor(winner, head, bitrate)
+            if start < floor - 1e-9:  # its spacing is not over: compete again from then
+                if winner.held is None:
+                    winner.held = head[0]
+                winner.queue[0] = (floor, *head[1:])
+                continue
             arrival, _, _, can_id, data, ext, bits = winner.queue.popleft()
+            stated = arrival if winner.held is None else winner.held
+            winner.held = None
             if not winner.queue:
                 senders.remove(winner)
             duration = bits / bitrate
@@ -788,6 +820,8 @@ class Hub:
                 bus.busy_start.append(start)
                 bus.busy_end.append(end)
             winner.bus_end = end
+            last = winner.spacing.get(can_id)
+            winner.spacing[can_id] = (stated, end, None if last is None else stated - last[0])
             self._busy_s += duration
             if self._drop_rate > 0.0 and self._rng.random() < self._drop_rate:
                 self._n_dropped += 1
