@@ -16,6 +16,7 @@ from firmware_protocol.index_ranges import COMMUNICATION
 from . import storage
 from .od_addresses import (
     COB_ID_EMCY,
+    COB_ID_SYNC,
     CONSUMER_HEARTBEAT_COUNT,
     CONSUMER_HEARTBEAT_INDEX,
     PRODUCER_HEARTBEAT,
@@ -27,7 +28,13 @@ from .sdo_block import BlockSdoServer
 if TYPE_CHECKING:
     from .drive_node import VirtualDrive
 
-__all__ = ["bind_sdo2", "configure_communication", "consumer_entries", "reset_communication"]
+__all__ = [
+    "bind_sdo2",
+    "bind_sync",
+    "configure_communication",
+    "consumer_entries",
+    "reset_communication",
+]
 
 
 def configure_communication(d: VirtualDrive) -> None:
@@ -37,7 +44,20 @@ def configure_communication(d: VirtualDrive) -> None:
     d.hb_consumer.configure(consumer_entries(d))
     d.emcy.set_cob_id(d._param(COB_ID_EMCY))
     bind_sdo2(d)
+    bind_sync(d)
     d.pdo.configure()
+
+
+def bind_sync(d: VirtualDrive, cob_id: int | None = None) -> None:
+    """Listen for SYNC on 0x1005's CAN-ID (``cob_id``: a value being written)."""
+    can_id = (d._param(COB_ID_SYNC) if cob_id is None else cob_id) & CAN_ID_MASK
+    old = getattr(d, "_sync_can_id", None)
+    if old == can_id:
+        return
+    if old is not None:
+        d.network.unsubscribe(old, d.pdo.on_sync)
+    d.network.subscribe(can_id, d.pdo.on_sync)
+    d._sync_can_id = can_id
 
 
 def consumer_entries(d: VirtualDrive, sub: int = 0, value: int = 0) -> list[int]:

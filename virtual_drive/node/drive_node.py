@@ -262,7 +262,7 @@ class VirtualDrive:
         # frames reach these only while start() has a Notifier running
         self.network.subscribe(0x000, self.nmt.on_command)
         self.network.subscribe(self.sdo.rx_cobid, self.sdo.on_request)
-        self.network.subscribe(0x080, self.pdo.on_sync)
+        communication.bind_sync(self)  # SYNC on 0x1005's CAN-ID
 
     # -- lifecycle ------------------------------------------------------------------------
     def start(self) -> VirtualDrive:
