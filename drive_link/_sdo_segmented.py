@@ -80,10 +80,11 @@ def check_gone(client: SdoClient) -> None:
         raise NodeGone(why() if why is not None else "heartbeat stopped")
 
 
-def wait_slice(client: SdoClient, left: float) -> float:
-    """``left`` s, or less if the node counts as gone sooner (to fail then, not later)."""
+def wait_slice(client: SdoClient, left: float, floor: float = 0.0) -> float:
+    """``left`` s, or less if the node counts as gone sooner (to fail then, not later), but
+    not before ``floor`` (monotonic s)."""
     at = _gone_at(client)
-    return left if at is None else max(0.0, min(left, at - time.monotonic()))
+    return left if at is None else max(0.0, min(left, max(at, floor) - time.monotonic()))
 
 
 class Exchange:
@@ -145,18 +146,20 @@ class Exchange:
                 continue  # the end of some other transfer
             return data
 
-    def next_or_gone(self, timeout: float) -> bytes | None:
+    def next_or_gone(self, timeout: float, floor: float = 0.0) -> bytes | None:
         """:meth:`next`, but raises :class:`NodeGone` as soon as the node's heartbeat watch
         says it is gone (one producer period plus one response timeout after its last
-        heartbeat), not only after ``timeout``."""
+        heartbeat), not only after ``timeout``; never before ``floor`` (monotonic s: a request
+        always gets one response timeout, so a node that just came back can answer)."""
         deadline = time.monotonic() + timeout
         while True:
             left = deadline - time.monotonic()
-            step = wait_slice(self.client, left)
+            step = wait_slice(self.client, left, floor)
             frame = self.next(step)
             if frame is not None:
                 return frame
-            check_gone(self.client)
+            if time.monotonic() >= floor:
+                check_gone(self.client)
             if step >= left or time.monotonic() >= deadline:
                 return None
 
@@ -173,13 +176,13 @@ class Exchange:
         ``resends`` times."""
         wait = timeout
         self.skipped = 0
-        check_gone(self.client)
         for sent in range(1, resends + 2):
             self.send(frame)
             deadline = time.monotonic() + wait
+            floor = time.monotonic() + timeout  # one response timeout, even for a gone node
             while (left := deadline - time.monotonic()) > 0:
                 try:
-                    resp = self.next_or_gone(left)
+                    resp = self.next_or_gone(left, floor)
                 except SdoAbortedError:  # ends the transfer
                     self._duplicates = self._owed(self.abort_frame, sent)
                     self.finish()

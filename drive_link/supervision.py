@@ -237,6 +237,7 @@ class Supervisor:
         self._producer_ms = 0
         self._expect_preop_until = 0.0
         self._silence_until = 0.0  # a reset this session sent: silence is expected until then
+        self._alive_at: float | None = None  # the node answered (attach): alive then
         self.boots_seen = 0
         self.rearmed_at: str | None = None
         self.last_report: RearmReport | None = None
@@ -255,6 +256,8 @@ class Supervisor:
         try:
             raw = SdoChannel.upload(sdo, PRODUCER_HEARTBEAT, 0)
             self._producer_ms = int.from_bytes(raw[:2], "little")
+            with self._lock:
+                self._alive_at = time.monotonic()  # it answered: a heartbeat is due from now
         except DriveError:
             self._producer_ms = 0
 
@@ -318,17 +321,20 @@ class Supervisor:
     def gone_at(self, grace: float) -> float | None:
         """Monotonic time (s) at which the node counts as gone: its last heartbeat plus one
         producer period (0x1017) plus ``grace`` (the SDO response timeout), so a call to a
-        node that died fails within one heartbeat period plus one SDO timeout. None while
-        nothing is watched (producer off, no heartbeat seen yet, supervisor closed)."""
+        node that died fails within one heartbeat period plus one SDO timeout (before the
+        first heartbeat: counted from the answer :meth:`attach` got). None while nothing is
+        watched (producer off, supervisor closed)."""
         with self._lock:
-            if self._closed or self._producer_ms <= 0 or self._last_hb is None:
+            seen = [t for t in (self._last_hb, self._alive_at) if t is not None]
+            if self._closed or self._producer_ms <= 0 or not seen:
                 return None
-            return max(self._last_hb + self._producer_ms / 1000.0, self._silence_until) + grace
+            return max(max(seen) + self._producer_ms / 1000.0, self._silence_until) + grace
 
     def gone_reason(self) -> str:
         """One line: since when the node's heartbeat is missing."""
         with self._lock:
-            last, period = self._last_hb, self._producer_ms
+            seen = [t for t in (self._last_hb, self._alive_at) if t is not None]
+            last, period = (max(seen) if seen else None), self._producer_ms
         silent = (time.monotonic() - last) * 1e3 if last is not None else float("nan")
         return (
             f"node {self.node_id} is gone: no heartbeat for {silent:.0f} ms "

@@ -51,6 +51,8 @@ from virtual_drive.hub_protocol import (
     parse_channel,
     parse_send_fields,
     parse_sendat_fields,
+    parse_sendrtr_fields,
+    rtr_line,
     scan_sendats,
     scan_sends,
 )
@@ -663,15 +665,18 @@ class Hub:
         seq = self._seq
         for arrival, can_id, data, ext in frames:
             seq += 1
+            rtr = data.__class__ is int  # a remote frame: data is its DLC
             queue.append(
                 (
                     arrival,
-                    arbitration_key(can_id, ext),
+                    # the RTR bit follows the identifier: recessive (1) in a remote frame, so a
+                    # data frame with the same identifier wins
+                    arbitration_key(can_id, ext) << 1 | rtr,
                     seq,
                     can_id,
                     data,
                     ext,
-                    frame_bits_fast(can_id, data, ext),
+                    frame_bits_fast(can_id, b"" if rtr else data, ext),
                 )
             )
         self._seq = seq
@@ -681,6 +686,8 @@ class Hub:
         cmd = words[0]
         if client.state == _RAW and cmd == "send":
             self._enqueue(client, [parse_send_fields(words)], now)
+        elif client.state == _RAW and cmd == "sendrtr":
+            self._enqueue(client, [parse_sendrtr_fields(words)], now)  # (id, DLC, ext)
         elif client.state == _RAW and cmd == "sendat":
             self._enqueue_timed(client, [parse_sendat_fields(words)], now)
         elif cmd == "echo":
@@ -835,7 +842,10 @@ class Hub:
         receivers = bus.receivers
         while deliveries and deliveries[0][0] <= now:
             due, sender, can_id, data, ext = deliveries.popleft()
-            line = frame_line(can_id, data, ext, due + wall_offset)
+            if data.__class__ is int:  # a remote frame (its DLC)
+                line = rtr_line(can_id, data, ext, due + wall_offset)
+            else:
+                line = frame_line(can_id, data, ext, due + wall_offset)
             for c in receivers:
                 if c is sender:
                     continue
