@@ -60,12 +60,14 @@ class CheckFailed(Exception):  # noqa: N818
 
 @dataclass
 class CheckResult:
-    """``name``, ``ok``, ``detail`` (one line), ``seconds`` taken."""
+    """``name``, ``ok``, ``detail`` (one line), ``seconds`` taken, ``evidence`` (what the item
+    sent and what came back, for ``--json``; empty for items that give none)."""
 
     name: str
     ok: bool
     detail: str
     seconds: float
+    evidence: dict | None = None
 
 
 def _expect(cond: bool, msg: str) -> None:
@@ -1081,12 +1083,20 @@ TIMING_ATTEMPTS = 3
 
 
 def _attempt(n: str, drive: Drive, opts: dict) -> tuple[bool, str]:
+    opts.pop(EVIDENCE, None)
     try:
-        return True, ITEMS[n](drive, opts)
+        out = ITEMS[n](drive, opts)
     except (CheckFailed, DriveError) as exc:
         return False, str(exc)
     except Exception as exc:  # an item must not stop the run
         return False, f"{type(exc).__name__}: {exc}"
+    if isinstance(out, tuple):  # (verdict, evidence)
+        out, opts[EVIDENCE] = out
+    return True, out
+
+
+#: opts key under which an item's evidence travels to its CheckResult
+EVIDENCE = "_evidence"
 
 
 def _run_item(n: str, drive: Drive, opts: dict) -> tuple[bool, str]:
@@ -1137,7 +1147,7 @@ def run_checks(
     for n in names:
         t0 = time.monotonic()
         ok, detail = _run_item(n, drive, opts)
-        r = CheckResult(n, ok, detail, time.monotonic() - t0)
+        r = CheckResult(n, ok, detail, time.monotonic() - t0, opts.pop(EVIDENCE, None))
         results.append(r)
         if on_result:
             on_result(r)
@@ -1146,3 +1156,10 @@ def run_checks(
     except DriveError:
         pass
     return results
+
+
+# the pre-certification families (issue 29): EDS, OD against the EDS, SDO aborts and transfers,
+# SYNC/PDO, EMCY; each returns (verdict, evidence)
+from .check_conformance import CONFORMANCE_ITEMS  # noqa: E402  (imports this module's helpers)
+
+ITEMS.update(CONFORMANCE_ITEMS)

@@ -612,6 +612,7 @@ def cmd_check(args: argparse.Namespace, d: Drive) -> int:
             json.dumps(
                 [
                     {"name": r.name, "ok": r.ok, "detail": r.detail, "seconds": r.seconds}
+                    | ({"evidence": r.evidence} if r.evidence else {})
                     for r in results
                 ]
             )
