@@ -49,6 +49,14 @@ LENGTH_CODES = (abort_codes.LENGTH, abort_codes.LENGTH_TOO_HIGH, abort_codes.LEN
 #: written by the range and length items beyond what they must refuse
 COMMANDS = {0x1003, 0x1010, 0x1011, 0x20F1, 0x5010}
 Evidence = dict[str, Any]
+#: SYNC frames sync_pdo sends, and the share of them that must bring their TPDO (a link that
+#: loses 5 % of frames each way keeps about 90 %)
+SYNCS = 20
+DOMAIN = 0x0F
+#: opts key: values od_vs_eds read, (index, sub) -> raw bytes (sdo_aborts puts a wrongly
+#: accepted write back to them without reading every object again)
+PRESENT = "_present"
+SYNC_MIN_SHARE = 0.75
 
 
 def _fmt(e: Entry) -> str | None:
@@ -170,6 +178,9 @@ def item_od_vs_eds(d: Drive, opts: dict) -> tuple[str, Evidence]:
             if not ok:
                 problems.append(f"{_where(e)} wo: read answered {_code(code)}")
             continue
+        if e.data_type == DOMAIN:  # its content (a 64 KiB trace) is the trace item's
+            ev["domain_not_read"] = ev.get("domain_not_read", 0) + 1
+            continue
         try:
             raw = d.sdo.upload(e.index, e.subindex, e.name)
         except SdoAbort as exc:
@@ -179,6 +190,7 @@ def item_od_vs_eds(d: Drive, opts: dict) -> tuple[str, Evidence]:
             problems.append(f"{_where(e)} {e.name}: read aborted 0x{exc.code:08X}")
             continue
         ev["read"] += 1
+        opts.setdefault(PRESENT, {})[(e.index, e.subindex)] = raw  # (sdo_aborts puts back)
         if fmt is not None:
             if len(raw) == struct.calcsize(fmt):
                 ev["length_ok"] += 1
@@ -245,7 +257,9 @@ def item_sdo_aborts(d: Drive, opts: dict) -> tuple[str, Evidence]:
         fmt = _fmt(e)
         if fmt is None or e.access not in ("rw", "wo", "rwr", "rww") or e.index in COMMANDS:
             continue
-        present = d.sdo.upload(e.index, e.subindex, e.name) if e.readable else None
+        present = opts.get(PRESENT, {}).get((e.index, e.subindex))
+        if present is None and e.readable:  # (od_vs_eds did not run first)
+            present = d.sdo.upload(e.index, e.subindex, e.name)
         size = struct.calcsize(fmt)
         wrong = (present or bytes(size))[: size - 1] if size > 1 else bytes(2)
         code = _abort_of(lambda e=e, w=wrong: d.sdo.download(e.index, e.subindex, w, e.name))
@@ -332,12 +346,16 @@ def item_sdo_transfers(d: Drive, opts: dict) -> tuple[str, Evidence]:
     with d.sdo.lock:  # drive_link's client stays silent on the channel meanwhile
         net.subscribe(client.tx_cobid, client.on_response)
         try:
-            client.download(hb.index, hb.subindex, present, force_segment=True)
+            _tries(lambda: client.download(hb.index, hb.subindex, present, force_segment=True))
             ev["segmented_download"] = len(present)
-            with client.open(
-                hb.index, hb.subindex, "wb", size=len(present), block_transfer=True
-            ) as f:
-                f.write(present)
+
+            def block() -> None:
+                with client.open(
+                    hb.index, hb.subindex, "wb", size=len(present), block_transfer=True
+                ) as f:
+                    f.write(present)
+
+            _tries(block)
             ev["block_download"] = len(present)
         except (SdoAbortedError, canopen.sdo.SdoCommunicationError) as exc:
             raise CheckFailed(f"download through canopen's client: {exc}") from None
@@ -349,6 +367,21 @@ def item_sdo_transfers(d: Drive, opts: dict) -> tuple[str, Evidence]:
     return "expedited, segmented and block transfers both ways: " + ", ".join(
         f"{k.replace('_', ' ')} {v} B" for k, v in ev.items()
     ), ev
+
+
+def _tries(fn: Callable[[], object], n: int = 4) -> None:
+    """canopen's client resends nothing: on a lossy link a transfer that timed out is started
+    again (an abort is an answer: raised at once)."""
+    for k in range(n):
+        try:
+            fn()
+            return
+        except SdoAbortedError:
+            raise
+        except canopen.sdo.SdoCommunicationError:
+            if k == n - 1:
+                raise
+            time.sleep(0.1)
 
 
 # -- sync_pdo -----------------------------------------------------------------------------------
@@ -372,17 +405,20 @@ def item_sync_pdo(d: Drive, opts: dict) -> tuple[str, Evidence]:
         net.subscribe(cob, on_tpdo)
         time.sleep(0.1)
         got.clear()
-        n = 5
+        n = SYNCS
         for _ in range(n):
             net.send_message(sync_id, b"")
             time.sleep(0.02)
-        time.sleep(0.1)
+        time.sleep(0.3)  # (a slow link's last answer)
         net.unsubscribe(cob, on_tpdo)
         rpdo = int(d.read("rpdo1_communication.cob_id")) & 0x7FF
         probe = target + 7
-        net.send_message(rpdo, struct.pack("<Hi", 0, probe))
-        time.sleep(0.05)
-        seen = int(d.read("target_velocity"))
+        for _ in range(3):  # an RPDO lost on a lossy link is sent again
+            net.send_message(rpdo, struct.pack("<Hi", 0, probe))
+            time.sleep(0.05)
+            seen = int(d.read("target_velocity"))
+            if seen == probe:
+                break
     finally:
         d.nmt("pre-operational")
         d.write("tpdo1_communication.transmission_type", ttype)
@@ -391,7 +427,11 @@ def item_sync_pdo(d: Drive, opts: dict) -> tuple[str, Evidence]:
     ev = {"sync_cob_id": f"0x{sync_id:03X}", "syncs": n, "tpdos": len(got),
           "rpdo_value": probe, "read_back": seen}  # fmt: skip
     opts["_evidence"] = ev  # kept with a failing verdict too
-    _expect(len(got) == n, f"{len(got)} TPDO1 for {n} SYNC on 0x{sync_id:03X}")
+    # one TPDO per SYNC, never more; a lossy link may lose a SYNC or a TPDO now and then, a
+    # drive deaf to SYNC (0) or counting every other one (n/2) fails
+    _expect(
+        SYNC_MIN_SHARE * n <= len(got) <= n, f"{len(got)} TPDO1 for {n} SYNC on 0x{sync_id:03X}"
+    )
     _expect(seen == probe, f"RPDO1 target_velocity {probe}, read back {seen}")
     return f"{n} SYNC on 0x{sync_id:03X} -> {len(got)} TPDO1; RPDO1 value in the OD", ev
 

@@ -118,7 +118,7 @@ def test_sync_pdo_fails_on_a_drive_deaf_to_sync(drive):
     vd, d = drive
     vd.network.unsubscribe(vd._sync_can_id, vd.pdo.on_sync)
     ok, detail = one(d, "sync_pdo")
-    assert not ok and "0 TPDO1 for 5 SYNC" in detail, detail
+    assert not ok and "0 TPDO1 for 20 SYNC" in detail, detail
 
 
 def test_sdo_transfers_fails_on_a_drive_without_block_download(drive, monkeypatch):
