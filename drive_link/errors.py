@@ -43,9 +43,9 @@ class DriveTimeout(DriveError):  # noqa: N818
 
 
 class NodeGone(DriveTimeout):
-    """The drive's heartbeat stopped while a call waited for it: the node is gone (dead,
-    unpowered or cut off the bus). Raised within one producer heartbeat period plus one SDO
-    response timeout of the last heartbeat (:mod:`drive_link.supervision`)."""
+    """The drive's heartbeat stopped for the host's consumer time (3 producer periods, at least
+    1 s): the node is gone (dead, unpowered or cut off the bus). A call to it fails after one SDO
+    response timeout (:mod:`drive_link.supervision`)."""
 
 
 class SdoAbort(DriveError):  # noqa: N818

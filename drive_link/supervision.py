@@ -16,9 +16,10 @@ the motor could then run with nobody watching the host. :class:`Supervisor`:
   the rest of the journal (PDOs by the CiA 301 procedure: COB-ID invalid, mapping count 0,
   entries, count, COB-ID), then opens the gate.
 
-A node whose heartbeat stops is gone: :meth:`Supervisor.gone_at` (last heartbeat + producer
-time + the SDO response timeout) lets a supervised channel fail a call then with
-:class:`~drive_link.errors.NodeGone` instead of resending for seconds (issue 29).
+A node whose heartbeat stops is gone once the host's consumer time (3 producer periods, at
+least 1 s) has passed (:meth:`Supervisor.gone_at`); a call to it then fails with
+:class:`~drive_link.errors.NodeGone` after one SDO response timeout (within one heartbeat
+period plus one SDO timeout) instead of resending for seconds (issue 29).
 
 Times: ``wait_timeout`` (s, default 15: a re-arm is several SDO writes, each with a ~5.7 s
 resend budget; 5 s ran out with the drive starved at run-queue wait 0.63 s/s) bounds how long a
@@ -48,6 +49,7 @@ from .errors import DriveError, StateError
 __all__ = [
     "ABORT_CONNECTION_OPTION",
     "CONSUMER_HEARTBEAT",
+    "CONSUMER_MIN_S",
     "NOT_JOURNALLED",
     "PRODUCER_HEARTBEAT",
     "RESET_SILENCE_S",
@@ -85,6 +87,9 @@ BOOT_UP = 0x00
 #: s a node may stay silent after a reset this session sent (a CiA 402 drive first brakes the
 #: motor; the virtual drive for at most 5 s) before a call counts it as gone
 RESET_SILENCE_S = 6.0
+#: shortest heartbeat consumer time (s) after which drive_link counts a node as gone (the same
+#: floor as the drive's consumer of the host, drive.CONSUMER_MIN_MS)
+CONSUMER_MIN_S = 1.0
 STOPPED = 0x04
 OPERATIONAL = 0x05
 PRE_OPERATIONAL = 0x7F
@@ -154,7 +159,7 @@ class SupervisedSdoChannel(SdoChannel):
 
     def _gone_at(self) -> float | None:
         sup = self.supervisor
-        return None if sup is None else sup.gone_at(self.client.RESPONSE_TIMEOUT)
+        return None if sup is None else sup.gone_at()
 
     def _gone_reason(self) -> str:
         sup = self.supervisor
@@ -318,17 +323,24 @@ class Supervisor:
                 self._silence_until = time.monotonic() + RESET_SILENCE_S
 
     # ------------------------------------------------------------------ dead node
-    def gone_at(self, grace: float) -> float | None:
-        """Monotonic time (s) at which the node counts as gone: its last heartbeat plus one
-        producer period (0x1017) plus ``grace`` (the SDO response timeout), so a call to a
-        node that died fails within one heartbeat period plus one SDO timeout (before the
-        first heartbeat: counted from the answer :meth:`attach` got). None while nothing is
-        watched (producer off, supervisor closed)."""
+    def gone_at(self, grace: float = 0.0) -> float | None:
+        """Monotonic time (s) at which the node counts as gone: its last heartbeat (before the
+        first one: the answer :meth:`attach` got) plus the host's consumer time
+        :meth:`consumer_s`. A call to a node that is gone gets one SDO response timeout (a node
+        back on the bus answers in it), then fails with NodeGone: within one heartbeat period
+        plus one SDO timeout. None while nothing is watched (producer off, supervisor
+        closed). ``grace`` (s) is added (0: the consumer time alone)."""
         with self._lock:
             seen = [t for t in (self._last_hb, self._alive_at) if t is not None]
             if self._closed or self._producer_ms <= 0 or not seen:
                 return None
-            return max(max(seen) + self._producer_ms / 1000.0, self._silence_until) + grace
+            return max(max(seen) + self.consumer_s(), self._silence_until) + grace
+
+    def consumer_s(self) -> float:
+        """The host's heartbeat consumer time (s) for this node: 3 producer periods, at least
+        :data:`CONSUMER_MIN_S` (CiA 301 leaves it to the consumer; a busy host or a starved
+        virtual drive on it can hold a heartbeat back by a few hundred ms, seen at load 7)."""
+        return max(CONSUMER_MIN_S, 3 * self._producer_ms / 1000.0)
 
     def gone_reason(self) -> str:
         """One line: since when the node's heartbeat is missing."""
