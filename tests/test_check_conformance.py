@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import json
 import struct
-import time
 import uuid
 
 import can
@@ -51,13 +50,13 @@ def drive(virtual_node):
     bus.shutdown()
 
 
-def test_whole_run_with_evidence_within_two_minutes(virtual_node, capsys):
+def test_family_items_pass_with_evidence(virtual_node, capsys):
+    """(The whole run's time, ≤ 2 minutes, is asserted in tests/test_link_check.py.)"""
     _, ch = virtual_node
-    t0 = time.monotonic()
-    cli.main(["check", "--interface", "virtual", "--channel", ch, "--node", "4", "--json"])
-    took = time.monotonic() - t0
+    argv = ["check", "--interface", "virtual", "--channel", ch, "--node", "4", "--json"]
+    cli.main([*argv, "--only", ",".join(NEW)])
     results = {r["name"]: r for r in json.loads(capsys.readouterr().out)}
-    assert took <= 120.0, took
+    assert list(results) == NEW
     for name in NEW:
         r = results[name]
         assert r["ok"], r

@@ -37,8 +37,11 @@ def test_check_passes_on_the_virtual_drive(virtual_node, capsys):
     RunQueueProbe over the whole run)."""
     _, ch = virtual_node
     probe = RunQueueProbe()
+    t0 = time.monotonic()
     rc = cli.main(["check", "--interface", "virtual", "--channel", ch, "--node", "4", "--json"])
+    took = time.monotonic() - t0
     wait = probe.stop()
+    assert took <= 120.0, took  # the whole pre-certification run (issue 29): 2 minutes at most
     out = capsys.readouterr()
     results = json.loads(out.out)
     failed = [r for r in results if not r["ok"]]
