@@ -115,7 +115,6 @@ class _Client:
         "errors",
         "events",
         "fd",
-        "held",
         "outbuf",
         "peer",
         "queue",
@@ -135,14 +134,14 @@ class _Client:
         self.splitter = CommandSplitter()
         self.outbuf = bytearray()
         self.ready_at = 0.0  # monotonic time before which frames are held back (see Hub)
-        self.queue: deque = deque()  # (arrival, key, seq, frame, bits) waiting for the bus
+        #: (arrival, key, seq, id, data, ext, bits, stated time) waiting for the bus
+        self.queue: deque = deque()
         self.bus: _Bus | None = None
         self.bus_end = 0.0  # monotonic time its last frame left the bus
         self.errors = 0
         #: CAN-ID -> (stated time, end on the bus, stated gap to the one before or None) of
         #: this client's last frame with that ID: see :func:`_spacing_floor`
         self.spacing: dict[int, tuple[float, float, float | None]] = {}
-        self.held: float | None = None  # stated time of a queue head moved later for spacing
 
 
 class _Bus:
@@ -201,14 +200,14 @@ def _spacing_floor(client: _Client, head: tuple, bitrate: float) -> float:
     last frame with the same CAN-ID, end to end on the bus, as the smaller of the two last
     stated gaps (its own and the previous one): a sender's spacing (a TPDO's inhibit time)
     is not eaten by arbitration delays (a frame held back one frame time while the next one
-    goes on time). Both stated gaps are at least the sender's minimum, so their minimum is a
-    spacing it asked for; a longer gap (after a pause) lets a delay recover. 0: no earlier
-    frame with that ID. Plain ``send`` frames are stated at their arrival."""
+    goes on time, or a late batch moved up to the backdate limit in one piece). Both stated
+    gaps are at least the sender's minimum, so their minimum is a spacing it asked for; a
+    longer gap (after a pause) lets a delay recover. 0: no earlier frame with that ID. Plain
+    ``send`` frames are stated at their arrival."""
     last = client.spacing.get(head[3])
     if last is None:
         return 0.0
-    stated = head[0] if client.held is None else client.held
-    gap = stated - last[0]
+    gap = head[7] - last[0]
     keep = gap if last[2] is None or gap < last[2] else last[2]
     return last[1] + keep - head[6] / bitrate
 
@@ -648,13 +647,13 @@ class Hub:
         mono_offset = self._mono0 - self._wall0
         timed = []
         for stamp, can_id, data, ext in frames:
-            arrival = stamp + mono_offset
+            stated = arrival = stamp + mono_offset
             if arrival < lo:
                 arrival = lo
             elif arrival > now:
                 arrival = now
             lo = arrival
-            timed.append((arrival, can_id, data, ext))
+            timed.append((arrival, can_id, data, ext, stated))
         self._queue(client, timed)
 
     def _queue(self, client: _Client, frames: list[tuple[float, int, bytes, bool]]) -> None:
@@ -663,7 +662,7 @@ class Hub:
         if not queue:
             client.bus.senders.append(client)
         seq = self._seq
-        for arrival, can_id, data, ext in frames:
+        for arrival, can_id, data, ext, *stated in frames:
             seq += 1
             rtr = data.__class__ is int  # a remote frame: data is its DLC
             queue.append(
@@ -677,6 +676,9 @@ class Hub:
                     data,
                     ext,
                     frame_bits_fast(can_id, b"" if rtr else data, ext),
+                    # the time its sender stated (a sendat moved up to the backdate limit
+                    # keeps it: its spacing to the next one is the sender's)
+                    stated[0] if stated else arrival,
                 )
             )
         self._seq = seq
@@ -799,13 +801,9 @@ class Hub:
             head = winner.queue[0]
             floor = _spacing_floor(winner, head, bitrate)
             if start < floor - 1e-9:  # its spacing is not over: compete again from then
-                if winner.held is None:
-                    winner.held = head[0]
                 winner.queue[0] = (floor, *head[1:])
                 continue
-            arrival, _, _, can_id, data, ext, bits = winner.queue.popleft()
-            stated = arrival if winner.held is None else winner.held
-            winner.held = None
+            arrival, _, _, can_id, data, ext, bits, stated = winner.queue.popleft()
             if not winner.queue:
                 senders.remove(winner)
             duration = bits / bitrate
