@@ -131,5 +131,6 @@ def test_rpdo_is_in_the_od_before_the_sync_that_follows_it(bench):
     )
     assert checked >= 0.9 * n, checked
     assert not stale, f"{len(stale)} of {checked} SYNC TPDOs showed an older target: {stale[:5]}"
-    # the SYNC followed its RPDO by about one frame time on the bus: the bound is "in order"
-    assert max(s[2] for s in syncs) < 1e-3
+    # the SYNC followed its RPDO closely on the bus (one frame time on an idle host; the
+    # master's two sends, a few ms at load 20): the bound is "in bus order", not a time
+    assert max(s[2] for s in syncs) < 5e-3

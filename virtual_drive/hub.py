@@ -195,6 +195,11 @@ def _idle_gap(bus: _Bus, t: float, duration: float) -> tuple[int, float] | None:
     return None
 
 
+#: longest a frame is held past its arrival to keep its sender's spacing (s): several frame
+#: times at 125 kbit/s, so arbitration delays never shorten a gap; no persistent lag
+SPACING_HOLD_S = 0.005
+
+
 def _spacing_floor(client: _Client, head: tuple, bitrate: float) -> float:
     """Earliest start (monotonic s) of ``client``'s queue head that keeps it as far after its
     last frame with the same CAN-ID, end to end on the bus, as the smaller of the two last
@@ -209,7 +214,11 @@ def _spacing_floor(client: _Client, head: tuple, bitrate: float) -> float:
         return 0.0
     gap = head[7] - last[0]
     keep = gap if last[2] is None or gap < last[2] else last[2]
-    return last[1] + keep - head[6] / bitrate
+    floor = last[1] + keep - head[6] / bitrate
+    # held back at most SPACING_HOLD_S past its arrival: an arbitration delay is a few frame
+    # times; a longer hold would stay with every later frame of a stream at its minimum
+    # spacing (and everything the sender queues behind it)
+    return floor if floor - head[0] <= SPACING_HOLD_S else 0.0
 
 
 def _head_arrival(client: _Client) -> float:
@@ -646,8 +655,12 @@ class Hub:
             lo = queue[-1][0]
         mono_offset = self._mono0 - self._wall0
         timed = []
+        # a batch stated before the backdate limit moves up as a whole, keeping its spacing
+        # (one frame at the limit, the rest after it as stated), not all onto the limit
+        shift = max(0.0, lo - (frames[0][0] + mono_offset)) if frames else 0.0
         for stamp, can_id, data, ext in frames:
-            stated = arrival = stamp + mono_offset
+            stated = stamp + mono_offset
+            arrival = stated + shift
             if arrival < lo:
                 arrival = lo
             elif arrival > now:
