@@ -131,6 +131,5 @@ def test_rpdo_is_in_the_od_before_the_sync_that_follows_it(bench):
     )
     assert checked >= 0.9 * n, checked
     assert not stale, f"{len(stale)} of {checked} SYNC TPDOs showed an older target: {stale[:5]}"
-    # the SYNC followed its RPDO closely on the bus (one frame time on an idle host; the
-    # master's two sends, a few ms at load 20): the bound is "in bus order", not a time
-    assert max(s[2] for s in syncs) < 5e-3
+    # (the SYNC follows its RPDO by one frame time on an idle host, by the master's own
+    # delays under load: the bound tested is "in bus order", whatever the distance)
