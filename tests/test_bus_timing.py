@@ -3,9 +3,10 @@
 Truths: CiA 301 §7.5.2.35: the inhibit time (sub 3, 100 µs units) is the minimum time between
 two transmissions of a TPDO, so on the bus no two frames of TPDO2 with inhibit 1.5 ms and
 event timer 1 ms are closer than 1.5 ms (frame end to frame end, as a receiver stamps them;
-the drive states and the hub stamps µs, hence 3 µs of tolerance). CiA 301 §7.2.2.4: a synchronous TPDO
-(transmission type 1) carries the values the node holds when it serves the SYNC; frames reach a
-node in bus order, so an RPDO that precedes the SYNC on the bus must be in those values.
+the drive states and the hub stamps µs, hence 3 µs of tolerance). CiA 301 §7.2.2.4: a
+synchronous TPDO (transmission type 1) carries the values the node holds when it serves the
+SYNC; frames reach a node in bus order, so an RPDO that precedes the SYNC on the bus must be
+in those values.
 Measured with stock canopen (RemoteNode/SdoClient) and a python-can socketcand sniffer on the
 loopback hub, whose time stamps are bus times; the drive is a ``virtual-drive run`` child.
 """
