@@ -38,8 +38,9 @@ from firmware_protocol import abort_codes
 
 from . import _sdo_segmented
 from ._sdo_block import block_upload
-from ._sdo_segmented import NoAnswer
+from ._sdo_segmented import NoAnswer, NodeGone
 from .errors import BusError, DriveTimeout, SdoAbort
+from .errors import NodeGone as NodeGoneError
 
 __all__ = [
     "PROTOCOL_ABORTS",
@@ -186,6 +187,8 @@ class SdoChannel:
                     self._restart(f"abort 0x{exc.code:08X}")
                     continue  # the transfer lost sync (lost frames): start it again
                 raise SdoAbort(exc.code, index, subindex, name, what) from None
+            except NodeGone as exc:  # its heartbeat stopped: no resend, no restart
+                raise NodeGoneError(f"{exc}; SDO {what} of {where} not answered") from None
             except NoAnswer as exc:
                 if not exc.initial and more:
                     self._restart(str(exc))

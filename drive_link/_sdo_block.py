@@ -11,20 +11,20 @@ An acknowledgement (or the start request) that gets no sub-block within ``ack_wa
 again, waiting twice as long each time (at most 2 s). The sub-block size is halved after a loss
 and doubled after a clean sub-block.
 
-Acknowledgement numbers (an extension in a reserved byte): CiA 301 gives sub-blocks no number,
-so a server that gets the same acknowledgement twice (the client resent it because the answer
-was late, not lost) takes the second one for the next sub-block and skips data. drive_link puts
-a number 1..255 into reserved byte 3 of each acknowledgement (a resend keeps its number); the
-drive ignores an acknowledgement with the number it has just answered, so resends are harmless
-and can be quick. Servers that do not know the extension ignore the byte (CiA 301: reserved). If
-a resent acknowledgement stays unanswered ``escalate_after`` times, the client asks for the
-whole sub-block again (``ackseq`` 0, new number): the answer itself was lost.
+Acknowledgements are CiA 301's own (bytes 3..7 reserved, sent as 0). CiA 301 gives sub-blocks
+no number, so a server that gets the same acknowledgement twice (the client resent it because
+the answer was late, not lost) takes the second one for the next sub-block and skips data: the
+length or CRC check below catches that and the upload restarts. So an acknowledgement is sent
+again only after ``ack_wait`` (0.3 s, doubling) without a segment. If a resent acknowledgement
+stays unanswered ``escalate_after`` times, the client asks for the whole sub-block again
+(``ackseq`` 0): the answer itself was lost. (Until issue 29 drive_link numbered its
+acknowledgements in reserved byte 3; CiA 301 marks the byte reserved, so no more.)
 
 Never accepts wrong data: the total length is checked against the size the server announced
 and, when the server supports it, the CRC-16/CCITT (``binascii.crc_hqx``, init 0) of the whole
-data. With a server without the extension a late answer can still make it skip a sub-block:
-the length or CRC check then fails with :class:`SdoCommunicationError` and the caller
-(:class:`drive_link._sdo.SdoChannel`) restarts the upload.
+data. A late answer can make the server skip a sub-block: the length or CRC check then fails
+with :class:`SdoCommunicationError` and the caller (:class:`drive_link._sdo.SdoChannel`)
+restarts the upload.
 
 A server without block transfer (abort 0x05040001 to the initiate) or one that switches
 protocol (a normal upload response) is read by segmented upload instead.
@@ -71,7 +71,7 @@ def block_upload(
     ack_resends: int = 8,
     silence_s: float = 0.25,
     deadline: float | None = None,
-    ack_wait: float = 0.1,
+    ack_wait: float = 0.3,
     escalate_after: int = 4,
 ) -> bytes:
     """Upload ``index``:``subindex`` by block transfer on ``client``'s COB-IDs.
@@ -140,13 +140,12 @@ def _receive(
     pending = bytes([CCS_BLOCK_UPLOAD | CS_START]) + bytes(7)  # sent again when unanswered
     wait = ack_wait
     quiet = 0
-    tag = 0  # number of the last acknowledgement (1..255, in reserved byte 3)
     prev = b""  # the previous frame (a duplicate of it is dropped)
 
     def send_ack(seq: int) -> None:
-        nonlocal pending, tag
-        tag = tag % 255 + 1
-        pending = bytes([CCS_BLOCK_UPLOAD | CS_ACK, seq, blk, tag, 0, 0, 0, 0])
+        nonlocal pending
+        # CiA 301 §7.2.4.3.14: ackseq, blksize, bytes 3..7 reserved (always 0)
+        pending = bytes([CCS_BLOCK_UPLOAD | CS_ACK, seq, blk, 0, 0, 0, 0, 0])
         ex.send(pending)
     ex.send(pending)
     if progress:
@@ -172,7 +171,7 @@ def _receive(
     while True:
         if deadline is not None and time.monotonic() > deadline:
             raise SdoCommunicationError("block upload did not finish in time")
-        frame = ex.next(wait if awaiting else silence_s)
+        frame = ex.next_or_gone(wait if awaiting else silence_s)  # NodeGone: heartbeat stopped
         if frame is None:
             if awaiting:  # the request or its whole answer was lost, or the server is slow
                 quiet += 1

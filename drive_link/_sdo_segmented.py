@@ -40,7 +40,8 @@ from canopen.sdo.exceptions import SdoAbortedError, SdoCommunicationError
 CLOCK_TOLERANCE_S = 0.002
 
 __all__ = [
-    "CLOCK_TOLERANCE_S", "Exchange", "NoAnswer", "continue_upload", "download", "upload",
+    "CLOCK_TOLERANCE_S", "Exchange", "NoAnswer", "NodeGone", "check_gone", "continue_upload",
+    "download", "upload", "wait_slice",
 ]  # fmt: skip
 
 ABORT = 0x80
@@ -58,6 +59,32 @@ class NoAnswer(SdoCommunicationError):  # noqa: N818 (named like canopen's error
         super().__init__(message)
         self.requests = requests
         self.initial = initial
+
+
+class NodeGone(SdoCommunicationError):  # noqa: N818
+    """The node's heartbeat stopped while a request waited (``client.gone_at`` said so)."""
+
+
+def _gone_at(client: SdoClient) -> float | None:
+    """Monotonic time at which the node counts as gone (``client.gone_at()``, set by a
+    supervised channel; None: no heartbeat watch)."""
+    fn = getattr(client, "gone_at", None)
+    return fn() if fn is not None else None
+
+
+def check_gone(client: SdoClient) -> None:
+    """Raise :class:`NodeGone` if the node's heartbeat watch says it is gone now."""
+    at = _gone_at(client)
+    if at is not None and time.monotonic() >= at - 0.001:  # (a wait may end a hair early)
+        why = getattr(client, "gone_reason", None)
+        raise NodeGone(why() if why is not None else "heartbeat stopped")
+
+
+def wait_slice(client: SdoClient, left: float, floor: float = 0.0) -> float:
+    """``left`` s, or less if the node counts as gone sooner (to fail then, not later), but
+    not before ``floor`` (monotonic s)."""
+    at = _gone_at(client)
+    return left if at is None else max(0.0, min(left, max(at, floor) - time.monotonic()))
 
 
 class Exchange:
@@ -119,6 +146,23 @@ class Exchange:
                 continue  # the end of some other transfer
             return data
 
+    def next_or_gone(self, timeout: float, floor: float = 0.0) -> bytes | None:
+        """:meth:`next`, but raises :class:`NodeGone` as soon as the node's heartbeat watch
+        says it is gone (one producer period plus one response timeout after its last
+        heartbeat), not only after ``timeout``; never before ``floor`` (monotonic s: a request
+        always gets one response timeout, so a node that just came back can answer)."""
+        deadline = time.monotonic() + timeout
+        while True:
+            left = deadline - time.monotonic()
+            step = wait_slice(self.client, left, floor)
+            frame = self.next(step)
+            if frame is not None:
+                return frame
+            if time.monotonic() >= floor:
+                check_gone(self.client)
+            if step >= left or time.monotonic() >= deadline:
+                return None
+
     def request(
         self,
         frame: bytes,
@@ -135,9 +179,10 @@ class Exchange:
         for sent in range(1, resends + 2):
             self.send(frame)
             deadline = time.monotonic() + wait
+            floor = time.monotonic() + timeout  # one response timeout, even for a gone node
             while (left := deadline - time.monotonic()) > 0:
                 try:
-                    resp = self.next(left)
+                    resp = self.next_or_gone(left, floor)
                 except SdoAbortedError:  # ends the transfer
                     self._duplicates = self._owed(self.abort_frame, sent)
                     self.finish()

@@ -659,6 +659,7 @@ def cmd_check(args: argparse.Namespace, d: Drive) -> int:
                         "detail": r.detail,
                         "seconds": r.seconds,
                     }
+                    | ({"evidence": r.evidence} if r.evidence else {})
                     for r in results
                 ]
             )

@@ -42,6 +42,12 @@ class DriveTimeout(DriveError):  # noqa: N818
     """The drive did not answer, or did not reach a requested state, in time."""
 
 
+class NodeGone(DriveTimeout):
+    """The drive's heartbeat stopped for the host's consumer time (3 producer periods, at least
+    1 s): the node is gone (dead, unpowered or cut off the bus). A call to it fails after one SDO
+    response timeout (:mod:`drive_link.supervision`)."""
+
+
 class SdoAbort(DriveError):  # noqa: N818
     """The drive aborted an SDO transfer (it refused a read or write).
 

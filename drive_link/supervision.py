@@ -16,6 +16,11 @@ the motor could then run with nobody watching the host. :class:`Supervisor`:
   the rest of the journal (PDOs by the CiA 301 procedure: COB-ID invalid, mapping count 0,
   entries, count, COB-ID), then opens the gate.
 
+A node whose heartbeat stops is gone once the host's consumer time (3 producer periods, at
+least 1 s) has passed (:meth:`Supervisor.gone_at`); a call to it then fails with
+:class:`~drive_link.errors.NodeGone` after one SDO response timeout (within one heartbeat
+period plus one SDO timeout) instead of resending for seconds (issue 29).
+
 Times: ``wait_timeout`` (s, default 15: a re-arm is several SDO writes, each with a ~5.7 s
 resend budget; 5 s ran out with the drive starved at run-queue wait 0.63 s/s) bounds how long a
 user command waits for a re-arm; after a failed
@@ -44,8 +49,10 @@ from .errors import DriveError, StateError
 __all__ = [
     "ABORT_CONNECTION_OPTION",
     "CONSUMER_HEARTBEAT",
+    "CONSUMER_MIN_S",
     "NOT_JOURNALLED",
     "PRODUCER_HEARTBEAT",
+    "RESET_SILENCE_S",
     "SUPERVISION_FIRST",
     "RearmReport",
     "SupervisedSdoChannel",
@@ -77,6 +84,12 @@ PRODUCER_HEARTBEAT = load_od().entry("producer_heartbeat_time").index
 SUPERVISION_FIRST = (ABORT_CONNECTION_OPTION, CONSUMER_HEARTBEAT, PRODUCER_HEARTBEAT)
 
 BOOT_UP = 0x00
+#: s a node may stay silent after a reset this session sent (a CiA 402 drive first brakes the
+#: motor; the virtual drive for at most 5 s) before a call counts it as gone
+RESET_SILENCE_S = 6.0
+#: shortest heartbeat consumer time (s) after which drive_link counts a node as gone (the same
+#: floor as the drive's consumer of the host, drive.CONSUMER_MIN_MS)
+CONSUMER_MIN_S = 1.0
 STOPPED = 0x04
 OPERATIONAL = 0x05
 PRE_OPERATIONAL = 0x7F
@@ -140,6 +153,17 @@ class SupervisedSdoChannel(SdoChannel):
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
         self._held = threading.local()  # depth > 0 while this thread holds it via patience()
+        # a request to a node whose heartbeat stopped fails then (NodeGone), not after resends
+        self.client.gone_at = self._gone_at  # type: ignore[attr-defined]
+        self.client.gone_reason = self._gone_reason  # type: ignore[attr-defined]
+
+    def _gone_at(self) -> float | None:
+        sup = self.supervisor
+        return None if sup is None else sup.gone_at()
+
+    def _gone_reason(self) -> str:
+        sup = self.supervisor
+        return "heartbeat stopped" if sup is None else sup.gone_reason()
 
     def _gate(self) -> None:
         # a thread already holding the channel lock (patience) must not wait: the re-arm
@@ -217,6 +241,8 @@ class Supervisor:
         self._last_stamp = 0.0
         self._producer_ms = 0
         self._expect_preop_until = 0.0
+        self._silence_until = 0.0  # a reset this session sent: silence is expected until then
+        self._alive_at: float | None = None  # the node answered (attach): alive then
         self.boots_seen = 0
         self.rearmed_at: str | None = None
         self.last_report: RearmReport | None = None
@@ -235,6 +261,8 @@ class Supervisor:
         try:
             raw = SdoChannel.upload(sdo, PRODUCER_HEARTBEAT, 0)
             self._producer_ms = int.from_bytes(raw[:2], "little")
+            with self._lock:
+                self._alive_at = time.monotonic()  # it answered: a heartbeat is due from now
         except DriveError:
             self._producer_ms = 0
 
@@ -285,9 +313,45 @@ class Supervisor:
             return dict(self._journal)
 
     def expect_nmt(self, command: str) -> None:
-        """The session sends NMT ``command``: a following PRE-OPERATIONAL is expected."""
+        """The session sends NMT ``command``: a following PRE-OPERATIONAL is expected; after a
+        reset the node may be silent (INITIALISING) until its boot-up message, for at most
+        :data:`RESET_SILENCE_S`."""
         if command in ("pre-operational", "reset node", "reset communication"):
             self._expect_preop_until = time.monotonic() + 2.0
+        if command in ("reset node", "reset communication"):
+            with self._lock:
+                self._silence_until = time.monotonic() + RESET_SILENCE_S
+
+    # ------------------------------------------------------------------ dead node
+    def gone_at(self, grace: float = 0.0) -> float | None:
+        """Monotonic time (s) at which the node counts as gone: its last heartbeat (before the
+        first one: the answer :meth:`attach` got) plus the host's consumer time
+        :meth:`consumer_s`. A call to a node that is gone gets one SDO response timeout (a node
+        back on the bus answers in it), then fails with NodeGone: within one heartbeat period
+        plus one SDO timeout. None while nothing is watched (producer off, supervisor
+        closed). ``grace`` (s) is added (0: the consumer time alone)."""
+        with self._lock:
+            seen = [t for t in (self._last_hb, self._alive_at) if t is not None]
+            if self._closed or self._producer_ms <= 0 or not seen:
+                return None
+            return max(max(seen) + self.consumer_s(), self._silence_until) + grace
+
+    def consumer_s(self) -> float:
+        """The host's heartbeat consumer time (s) for this node: 3 producer periods, at least
+        :data:`CONSUMER_MIN_S` (CiA 301 leaves it to the consumer; a busy host or a starved
+        virtual drive on it can hold a heartbeat back by a few hundred ms, seen at load 7)."""
+        return max(CONSUMER_MIN_S, 3 * self._producer_ms / 1000.0)
+
+    def gone_reason(self) -> str:
+        """One line: since when the node's heartbeat is missing."""
+        with self._lock:
+            seen = [t for t in (self._last_hb, self._alive_at) if t is not None]
+            last, period = (max(seen) if seen else None), self._producer_ms
+        silent = (time.monotonic() - last) * 1e3 if last is not None else float("nan")
+        return (
+            f"node {self.node_id} is gone: no heartbeat for {silent:.0f} ms "
+            f"(producer time {period} ms)"
+        )
 
     # ------------------------------------------------------------------ gate
     @property
@@ -339,6 +403,7 @@ class Supervisor:
             last_stamp = self._last_stamp
             self._last_hb, self._last_state, self._last_stamp = now, state, stamp
             if state == BOOT_UP:
+                self._silence_until = 0.0
                 boot = True
                 reason = "boot-up message"
             elif last_hb is not None and self._producer_ms > 0:

@@ -151,6 +151,17 @@
 #define OD_PRE_DEFINED_ERROR_FIELD__STANDARD_ERROR_FIELD_8_DEFAULT 0x00000000UL
 #define OD_PRE_DEFINED_ERROR_FIELD__STANDARD_ERROR_FIELD_8_REF   0x10030820UL
 
+/* ---- 0x1005 cob_id_sync ---- */
+/* 0x1005:00 cob_id_sync UNSIGNED32 rw - COB-ID of the SYNC message this node consumes (bits 10..0; bit 30 "generate" refused: the drive is no SYNC producer; bit 29 refused: 11-bit only; bit 31 ignored) */
+#define OD_COB_ID_SYNC_INDEX                                     0x1005u
+#define OD_COB_ID_SYNC_SUB                                       0x00u
+#define OD_COB_ID_SYNC_TYPE                                      OD_TYPE_U32
+#define OD_COB_ID_SYNC_CTYPE                                     uint32_t
+#define OD_COB_ID_SYNC_ACCESS                                    OD_ACCESS_RW
+#define OD_COB_ID_SYNC_PDO                                       0u
+#define OD_COB_ID_SYNC_DEFAULT                                   0x00000080UL
+#define OD_COB_ID_SYNC_REF                                       0x10050020UL
+
 /* ---- 0x1008 manufacturer_device_name ---- */
 /* 0x1008:00 manufacturer_device_name VISIBLE_STRING const */
 #define OD_MANUFACTURER_DEVICE_NAME_INDEX                        0x1008u

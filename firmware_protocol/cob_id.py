@@ -14,6 +14,10 @@ COB-ID layout (CiA 301 §7.5.2.17, .33, .35, .37): bit 31 = 1 "not valid" (objec
 - a new CAN-ID while the object is valid (switch it off first: write the old COB-ID with
   bit 31 set, then the new one).
 
+COB-ID SYNC 0x1005 (§7.5.2.5): bit 31 "do not care", bit 30 "gen" (1 = this node produces
+SYNC: refused, the drive is a SYNC consumer only), bit 29 frame (29-bit: refused), bits 10..0 the
+CAN-ID (restricted IDs refused); a consumer may change the CAN-ID at any time.
+
 Consumer heartbeat entry (§7.5.2.16): bits 31..24 reserved (0), node-ID in 23..16, time in ms
 in 15..0. An entry is off when its time is 0; node-ID 0 with a time, or a node-ID above 127, is
 refused with 0x06090030; two active entries for the same node with 0x06040043.
@@ -32,6 +36,7 @@ __all__ = [
     "RESTRICTED_CAN_IDS",
     "check_cob_id",
     "check_heartbeat_consumers",
+    "check_sync_cob_id",
     "is_restricted",
 ]
 
@@ -86,6 +91,19 @@ def check_cob_id(kind: str, new: int, old: int) -> None:
             f"CAN-ID of a valid object cannot change (0x{old & CAN_ID_MASK:03X} -> "
             f"0x{can_id:03X}): set bit 31 first",
         )
+
+
+def check_sync_cob_id(new: int) -> None:
+    """Raise :class:`LimitError` (0x06090030) unless ``new`` is a COB-ID SYNC a SYNC consumer
+    takes (see the module doc)."""
+    if new & COB_FRAME_29BIT:
+        raise LimitError(ABORT_INVALID_VALUE, f"0x{new:08X}: 29-bit identifiers not supported")
+    if new & COB_BIT30:
+        raise LimitError(ABORT_INVALID_VALUE, f"0x{new:08X}: this node generates no SYNC")
+    if new & 0x1FFFF800:
+        raise LimitError(ABORT_INVALID_VALUE, f"0x{new:08X}: bits 28..11 must be 0 (11-bit ID)")
+    if is_restricted(new & CAN_ID_MASK):
+        raise LimitError(ABORT_INVALID_VALUE, f"CAN-ID 0x{new & CAN_ID_MASK:03X} is restricted")
 
 
 def check_heartbeat_consumers(entries: Sequence[int], own_node_id: int | None = None) -> None:

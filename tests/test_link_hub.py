@@ -99,10 +99,11 @@ def test_heavy_loss_upload_ends_with_exact_data_or_clear_error(hub, drive):
 def test_dead_bus_fails_fast_with_clear_error(hub, drive):
     hub.set_faults(drop_rate=1.0)
     t0 = time.monotonic()
-    with pytest.raises(DriveTimeout, match="node 2 did not answer SDO read of statusword"):
+    # the drive's heartbeat is gone too: the call fails once the host's consumer time (1 s)
+    # is over, saying so (issue 29; resends alone took ~5.7 s)
+    with pytest.raises(DriveTimeout, match=r"node 2 is gone: .*SDO read of statusword"):
         drive.read("statusword")
-    # resends after 0.3, 0.6, then every 1.2 s (6 requests, ~5.7 s): bounded, with margin
-    assert time.monotonic() - t0 < 8.0
+    assert time.monotonic() - t0 < 2.5
     t0 = time.monotonic()
     with pytest.raises(DriveError):
         drive.enable(timeout=0.5)

@@ -51,6 +51,8 @@ from virtual_drive.hub_protocol import (
     parse_channel,
     parse_send_fields,
     parse_sendat_fields,
+    parse_sendrtr_fields,
+    rtr_line,
     scan_sendats,
     scan_sends,
 )
@@ -118,6 +120,7 @@ class _Client:
         "queue",
         "ready_at",
         "sock",
+        "spacing",
         "splitter",
         "state",
     )
@@ -131,10 +134,14 @@ class _Client:
         self.splitter = CommandSplitter()
         self.outbuf = bytearray()
         self.ready_at = 0.0  # monotonic time before which frames are held back (see Hub)
-        self.queue: deque = deque()  # (arrival, key, seq, frame, bits) waiting for the bus
+        #: (arrival, key, seq, id, data, ext, bits, stated time) waiting for the bus
+        self.queue: deque = deque()
         self.bus: _Bus | None = None
         self.bus_end = 0.0  # monotonic time its last frame left the bus
         self.errors = 0
+        #: CAN-ID -> (stated time, end on the bus, stated gap to the one before or None) of
+        #: this client's last frame with that ID: see :func:`_spacing_floor`
+        self.spacing: dict[int, tuple[float, float, float | None]] = {}
 
 
 class _Bus:
@@ -186,6 +193,32 @@ def _idle_gap(bus: _Bus, t: float, duration: float) -> tuple[int, float] | None:
         t = ends[i]
         i += 1
     return None
+
+
+#: longest a frame is held past its arrival to keep its sender's spacing (s): several frame
+#: times at 125 kbit/s, so arbitration delays never shorten a gap; no persistent lag
+SPACING_HOLD_S = 0.005
+
+
+def _spacing_floor(client: _Client, head: tuple, bitrate: float) -> float:
+    """Earliest start (monotonic s) of ``client``'s queue head that keeps it as far after its
+    last frame with the same CAN-ID, end to end on the bus, as the smaller of the two last
+    stated gaps (its own and the previous one): a sender's spacing (a TPDO's inhibit time)
+    is not eaten by arbitration delays (a frame held back one frame time while the next one
+    goes on time, or a late batch moved up to the backdate limit in one piece). Both stated
+    gaps are at least the sender's minimum, so their minimum is a spacing it asked for; a
+    longer gap (after a pause) lets a delay recover. 0: no earlier frame with that ID. Plain
+    ``send`` frames are stated at their arrival."""
+    last = client.spacing.get(head[3])
+    if last is None:
+        return 0.0
+    gap = head[7] - last[0]
+    keep = gap if last[2] is None or gap < last[2] else last[2]
+    floor = last[1] + keep - head[6] / bitrate
+    # held back at most SPACING_HOLD_S past its arrival: an arbitration delay is a few frame
+    # times; a longer hold would stay with every later frame of a stream at its minimum
+    # spacing (and everything the sender queues behind it)
+    return floor if floor - head[0] <= SPACING_HOLD_S else 0.0
 
 
 def _head_arrival(client: _Client) -> float:
@@ -622,14 +655,18 @@ class Hub:
             lo = queue[-1][0]
         mono_offset = self._mono0 - self._wall0
         timed = []
+        # a batch stated before the backdate limit moves up as a whole, keeping its spacing
+        # (one frame at the limit, the rest after it as stated), not all onto the limit
+        shift = max(0.0, lo - (frames[0][0] + mono_offset)) if frames else 0.0
         for stamp, can_id, data, ext in frames:
-            arrival = stamp + mono_offset
+            stated = stamp + mono_offset
+            arrival = stated + shift
             if arrival < lo:
                 arrival = lo
             elif arrival > now:
                 arrival = now
             lo = arrival
-            timed.append((arrival, can_id, data, ext))
+            timed.append((arrival, can_id, data, ext, stated))
         self._queue(client, timed)
 
     def _queue(self, client: _Client, frames: list[tuple[float, int, bytes, bool]]) -> None:
@@ -638,17 +675,23 @@ class Hub:
         if not queue:
             client.bus.senders.append(client)
         seq = self._seq
-        for arrival, can_id, data, ext in frames:
+        for arrival, can_id, data, ext, *stated in frames:
             seq += 1
+            rtr = data.__class__ is int  # a remote frame: data is its DLC
             queue.append(
                 (
                     arrival,
-                    arbitration_key(can_id, ext),
+                    # the RTR bit follows the identifier: recessive (1) in a remote frame, so a
+                    # data frame with the same identifier wins
+                    arbitration_key(can_id, ext) << 1 | rtr,
                     seq,
                     can_id,
                     data,
                     ext,
-                    frame_bits_fast(can_id, data, ext),
+                    frame_bits_fast(can_id, b"" if rtr else data, ext),
+                    # the time its sender stated (a sendat moved up to the backdate limit
+                    # keeps it: its spacing to the next one is the sender's)
+                    stated[0] if stated else arrival,
                 )
             )
         self._seq = seq
@@ -658,6 +701,8 @@ class Hub:
         cmd = words[0]
         if client.state == _RAW and cmd == "send":
             self._enqueue(client, [parse_send_fields(words)], now)
+        elif client.state == _RAW and cmd == "sendrtr":
+            self._enqueue(client, [parse_sendrtr_fields(words)], now)  # (id, DLC, ext)
         elif client.state == _RAW and cmd == "sendat":
             self._enqueue_timed(client, [parse_sendat_fields(words)], now)
         elif cmd == "echo":
@@ -766,7 +811,12 @@ class Hub:
                     if arrival <= start and (best is None or (key, seq) < best):
                         best = (key, seq)
                         winner = c
-            arrival, _, _, can_id, data, ext, bits = winner.queue.popleft()
+            head = winner.queue[0]
+            floor = _spacing_floor(winner, head, bitrate)
+            if start < floor - 1e-9:  # its spacing is not over: compete again from then
+                winner.queue[0] = (floor, *head[1:])
+                continue
+            arrival, _, _, can_id, data, ext, bits, stated = winner.queue.popleft()
             if not winner.queue:
                 senders.remove(winner)
             duration = bits / bitrate
@@ -788,6 +838,8 @@ class Hub:
                 bus.busy_start.append(start)
                 bus.busy_end.append(end)
             winner.bus_end = end
+            last = winner.spacing.get(can_id)
+            winner.spacing[can_id] = (stated, end, None if last is None else stated - last[0])
             self._busy_s += duration
             if self._drop_rate > 0.0 and self._rng.random() < self._drop_rate:
                 self._n_dropped += 1
@@ -801,7 +853,10 @@ class Hub:
         receivers = bus.receivers
         while deliveries and deliveries[0][0] <= now:
             due, sender, can_id, data, ext = deliveries.popleft()
-            line = frame_line(can_id, data, ext, due + wall_offset)
+            if data.__class__ is int:  # a remote frame (its DLC)
+                line = rtr_line(can_id, data, ext, due + wall_offset)
+            else:
+                line = frame_line(can_id, data, ext, due + wall_offset)
             for c in receivers:
                 if c is sender:
                     continue

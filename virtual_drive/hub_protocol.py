@@ -9,6 +9,8 @@ This is the protocol spoken by python-can's built-in ``socketcand`` interface
   extended), len in hex, each byte 1-2 hex digits
 * server -> client: ``< frame <id> <secs>.<usecs> <HEXDATA> >`` (id 3 or 8 hex digits, data one
   contiguous hex string) and ``< error <id> <secs>.<usecs> [text] >`` for error frames
+* remote frames (socketcand's doc/protocol.md): client ``< sendrtr <id> <dlc> >``, server
+  ``< rtr <id> <secs>.<usecs> <dlc> >`` (python-can's client sends none and skips the lines)
 
 Two elements are this hub's own (a socketcand daemon answers them with ``< error ... >``, and
 python-can's client never sends them):
@@ -47,6 +49,8 @@ __all__ = [
     "parse_send",
     "parse_send_fields",
     "parse_sendat_fields",
+    "parse_sendrtr_fields",
+    "rtr_line",
     "scan_sendats",
     "scan_sends",
 ]
@@ -219,6 +223,19 @@ def parse_send_fields(words: list[str]) -> tuple[int, bytes, bool]:
     return frame.arbitration_id, frame.data, frame.is_extended
 
 
+def parse_sendrtr_fields(words: list[str]) -> tuple[int, int, bool]:
+    """The words of a ``sendrtr`` element (``["sendrtr", id, dlc]``) as ``(id, dlc,
+    is_extended)``; ProtocolError for a malformed id (as :func:`parse_send`) or a DLC that is
+    not one hex digit 0..8."""
+    if len(words) != 3:
+        raise ProtocolError("sendrtr needs an id and a DLC")
+    frame = parse_send(["send", words[1], "0"])
+    dlc = _hex_value(words[2], "DLC")
+    if dlc > 8:
+        raise ProtocolError(f"DLC {dlc} above 8")
+    return frame.arbitration_id, dlc, frame.is_extended
+
+
 # One ``send`` element exactly as python-can's client writes it: 3- or 8-digit id, one-digit
 # length, 1-2 digit bytes, one or two spaces before ">" (two when there is no data).
 _SEND_ELEMENT = re.compile(
@@ -340,6 +357,15 @@ def frame_line(arbitration_id: int, data: bytes, is_extended: bool, timestamp: f
     )
     usecs = round(timestamp * 1e6)
     body = b"%s%d.%06d %s" % (prefix, usecs // 1_000_000, usecs % 1_000_000, b2a_hex(data).upper())
+    return body + b" " * (-(len(body) + 2) % LINE_BYTES) + b" >"
+
+
+def rtr_line(arbitration_id: int, dlc: int, is_extended: bool, timestamp: float) -> bytes:
+    """``< rtr <id> <secs>.<usecs> <dlc> >`` (a remote frame, socketcand), padded as
+    :func:`frame_line`."""
+    ident = f"{arbitration_id:08X}" if is_extended else f"{arbitration_id:03X}"
+    usecs = round(timestamp * 1e6)
+    body = b"< rtr %s %d.%06d %d" % (ident.encode(), usecs // 1_000_000, usecs % 1_000_000, dlc)
     return body + b" " * (-(len(body) + 2) % LINE_BYTES) + b" >"
 
 

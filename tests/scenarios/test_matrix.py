@@ -410,7 +410,8 @@ def _explained(name: str, detail: str, wait: float) -> bool:
 
 def test_drive_link_check_all_items(bench):
     probe = RunQueueProbe(bench.proc.proc.pid)  # what the machine gave the drive meanwhile
-    r = bench.cli("check", "--json", timeout=120.0)
+    # (the pre-certification items of issue 29 take ~20 s more under 5 % loss: 115 s in all)
+    r = bench.cli("check", "--json", timeout=200.0)
     wait = probe.stop()
     try:
         results = json.loads(r.stdout)

@@ -71,6 +71,14 @@ RAMP_SLOW = "slow"  # profile deceleration 0x6084
 RAMP_QUICK = "quick"  # quick stop deceleration 0x6085
 
 
+#: states with the drive function enabled (CiA 402 Table 26 "power enabled" column)
+_DRIVE_FUNCTION_ON = frozenset({OPERATION_ENABLED, QUICK_STOP_ACTIVE, FAULT_REACTION_ACTIVE})
+#: states from which one controlword (transitions 3+4, 4, 16) enables operation
+_REACH_OPERATION = frozenset(
+    {READY_TO_SWITCH_ON, SWITCHED_ON, OPERATION_ENABLED, QUICK_STOP_ACTIVE}
+)
+
+
 def decode_command(controlword: int) -> str:
     """Device control command of a controlword (bit 7, fault reset, handled separately)."""
     if not controlword & CW_ENABLE_VOLTAGE:
@@ -123,6 +131,22 @@ class Cia402StateMachine:
     @property
     def operation_enabled(self) -> bool:
         return self.state == OPERATION_ENABLED and self.ramp is None
+
+    @property
+    def drive_function_on(self) -> bool:
+        """True where CiA 402 has the drive function enabled (OPERATION ENABLED, QUICK STOP
+        ACTIVE, held or braking, FAULT REACTION ACTIVE) or a stop ramp brakes: the plant and
+        protection definition (``ConfigOnly`` objects) may not change here. A held quick stop
+        stands with the bridge off on the virtual drive, but one controlword (0x000F,
+        transition 16) runs the motor again, so it counts as "on"."""
+        return self.state in _DRIVE_FUNCTION_ON or self.ramp is not None
+
+    @property
+    def can_reach_operation(self) -> bool:
+        """True where OPERATION ENABLED is one controlword away without passing SWITCH ON
+        DISABLED (READY TO SWITCH ON, SWITCHED ON, OPERATION ENABLED, QUICK STOP ACTIVE) or a
+        stop ramp still brakes: supervision (0x1016) must survive a reset communication here."""
+        return self.state in _REACH_OPERATION or self.ramp is not None
 
     def statusword(
         self,

@@ -16,6 +16,7 @@ from firmware_protocol.index_ranges import COMMUNICATION
 from . import storage
 from .od_addresses import (
     COB_ID_EMCY,
+    COB_ID_SYNC,
     CONSUMER_HEARTBEAT_COUNT,
     CONSUMER_HEARTBEAT_INDEX,
     PRODUCER_HEARTBEAT,
@@ -27,7 +28,13 @@ from .sdo_block import BlockSdoServer
 if TYPE_CHECKING:
     from .drive_node import VirtualDrive
 
-__all__ = ["bind_sdo2", "configure_communication", "consumer_entries", "reset_communication"]
+__all__ = [
+    "bind_sdo2",
+    "bind_sync",
+    "configure_communication",
+    "consumer_entries",
+    "reset_communication",
+]
 
 
 def configure_communication(d: VirtualDrive) -> None:
@@ -37,7 +44,20 @@ def configure_communication(d: VirtualDrive) -> None:
     d.hb_consumer.configure(consumer_entries(d))
     d.emcy.set_cob_id(d._param(COB_ID_EMCY))
     bind_sdo2(d)
+    bind_sync(d)
     d.pdo.configure()
+
+
+def bind_sync(d: VirtualDrive, cob_id: int | None = None) -> None:
+    """Listen for SYNC on 0x1005's CAN-ID (``cob_id``: a value being written)."""
+    can_id = (d._param(COB_ID_SYNC) if cob_id is None else cob_id) & CAN_ID_MASK
+    old = getattr(d, "_sync_can_id", None)
+    if old == can_id:
+        return
+    if old is not None:
+        d.network.unsubscribe(old, d.pdo.on_sync)
+    d.network.subscribe(can_id, d.pdo.on_sync)
+    d._sync_can_id = can_id
 
 
 def consumer_entries(d: VirtualDrive, sub: int = 0, value: int = 0) -> list[int]:
@@ -64,11 +84,13 @@ def bind_sdo2(d: VirtualDrive) -> None:
 def reset_communication(d: VirtualDrive) -> None:
     """NMT reset communication: 0x1000-0x1FFF back to stored values or defaults (CiA 301).
 
-    Exception: while the power stage is still on after the 0x6007 reaction (a stop ramp
-    still braking) the consumer heartbeat 0x1016 keeps its present value, so the master's
-    supervision is never dropped while the motor can turn.
+    Exception: wherever the drive can go back to OPERATION ENABLED without passing SWITCH ON
+    DISABLED after the 0x6007 reaction (READY TO SWITCH ON, SWITCHED ON, QUICK STOP ACTIVE held
+    or braking, a stop ramp still braking) the consumer heartbeat 0x1016 keeps its present value
+    and its monitoring goes on, so the master's supervision is never dropped while the motor
+    can turn or be made to turn by one controlword (node README, "Supervision by state").
     """
-    keep_1016 = d.cia402.torque_enabled
+    keep_1016 = d.cia402.can_reach_operation
     kept = dict(d.node.data_store.get(CONSUMER_HEARTBEAT_INDEX, {})) if keep_1016 else {}
     stored, _status, _error = storage.load_with_status(d.store_path)
     for index in [i for i in d.node.data_store if i < COMMUNICATION.stop]:

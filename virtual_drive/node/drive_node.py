@@ -77,6 +77,7 @@ from .params import ParamChecker
 from .pdo import PdoEngine
 from .reads import make_live_getters
 from .recorder import ARMED, RECORDING, TraceRecorder
+from .remote import RemoteRequests
 from .runner import TS, Runner
 from .sdo_block import BlockSdoServer
 from .tx import make_send_many
@@ -262,7 +263,7 @@ class VirtualDrive:
         # frames reach these only while start() has a Notifier running
         self.network.subscribe(0x000, self.nmt.on_command)
         self.network.subscribe(self.sdo.rx_cobid, self.sdo.on_request)
-        self.network.subscribe(0x080, self.pdo.on_sync)
+        communication.bind_sync(self)  # SYNC on 0x1005's CAN-ID
 
     # -- lifecycle ------------------------------------------------------------------------
     def start(self) -> VirtualDrive:
@@ -270,7 +271,10 @@ class VirtualDrive:
         if self._started:
             return self
         self._started = True
-        self.network.notifier = can.Notifier(self.bus, self.network.listeners, 0.2)
+        self.remote = RemoteRequests(self.pdo.on_remote)  # RTR: TPDOs; no node guarding
+        self.network.notifier = can.Notifier(
+            self.bus, [*self.network.listeners, self.remote], 0.2
+        )
         self.nmt.boot()
         self.runner.start()
         logger.info(

@@ -214,8 +214,15 @@ class HubBus(can.BusABC):
 
     # -- sending ----------------------------------------------------------------------------
     def send(self, msg: can.Message, timeout: float | None = None) -> None:
-        """Send one frame (``timeout`` is ignored, as in python-can's socketcand)."""
-        line = format_send(msg.arbitration_id, bytes(msg.data), msg.is_extended_id)
+        """Send one frame (``timeout`` is ignored, as in python-can's socketcand); a remote
+        frame as socketcand's ``< sendrtr <id> <dlc> >``."""
+        if msg.is_remote_frame:
+            ident = b"%08X" % msg.arbitration_id if msg.is_extended_id else b"%03X" % (
+                msg.arbitration_id
+            )
+            line = b"< sendrtr %s %d >" % (ident, msg.dlc)
+        else:
+            line = format_send(msg.arbitration_id, bytes(msg.data), msg.is_extended_id)
         with self._send_lock:
             self._sock.sendall(line)
 
@@ -324,6 +331,22 @@ class HubBus(can.BusABC):
                         arbitration_id=can_id,
                         data=data,
                         is_extended_id=len(ident) != 3,
+                        is_rx=True,
+                        channel=channel,
+                    )
+                )
+            elif kind == b"rtr":  # a remote frame (socketcand): rare, never filtered
+                try:
+                    can_id, stamp, dlc = int(words[2], 16), float(words[3]), int(words[4])
+                except (IndexError, ValueError):
+                    continue
+                queue.append(
+                    can.Message(
+                        timestamp=stamp,
+                        arbitration_id=can_id,
+                        is_remote_frame=True,
+                        dlc=dlc,
+                        is_extended_id=len(words[2]) != 3,
                         is_rx=True,
                         channel=channel,
                     )
@@ -482,7 +505,12 @@ class HubConnection:
             cob_id = msg.arbitration_id
             for p in self._ports:
                 wanted = p.rx_wanted
-                if wanted is None or cob_id in wanted or msg.is_error_frame:
+                if (
+                    wanted is None
+                    or cob_id in wanted
+                    or msg.is_error_frame
+                    or msg.is_remote_frame
+                ):
                     p._deliver(msg)
 
     def lost(self) -> str | None:

@@ -23,6 +23,8 @@ __all__ = [
     "ABORT_CONNECTION_OPTION",
     "COB_ID_EMCY",
     "COB_ID_EMCY_INDEX",
+    "COB_ID_SYNC",
+    "COB_ID_SYNC_INDEX",
     "CONSUMER_HEARTBEAT_COUNT",
     "CONSUMER_HEARTBEAT_INDEX",
     "CONTROLWORD_INDEX",
@@ -157,6 +159,8 @@ STORE_PARAMETERS_INDEX = index_of("store_parameters")
 RESTORE_DEFAULTS_INDEX = index_of("restore_default_parameters")
 COB_ID_EMCY = address("cob_id_emcy")
 COB_ID_EMCY_INDEX = COB_ID_EMCY[0]
+COB_ID_SYNC = address("cob_id_sync")
+COB_ID_SYNC_INDEX = COB_ID_SYNC[0]
 CONSUMER_HEARTBEAT_INDEX = index_of("consumer_heartbeat_time")
 CONSUMER_HEARTBEAT_COUNT = address("consumer_heartbeat_time.highest_sub_index")
 PRODUCER_HEARTBEAT = address("producer_heartbeat_time")

@@ -45,7 +45,7 @@ from canopen import objectdictionary as odm
 from canopen.sdo import SdoAbortedError
 
 from firmware_protocol import abort_codes
-from firmware_protocol.cob_id import CAN_ID_MASK, COB_INVALID, check_cob_id
+from firmware_protocol.cob_id import CAN_ID_MASK, COB_BIT30, COB_INVALID, check_cob_id
 from firmware_protocol.emcy_codes import RPDO_LENGTH, RPDO_VALUE
 from firmware_protocol.entry import LimitError
 from firmware_protocol.index_ranges import RPDO_COMM, RPDO_MAP, TPDO_COMM, TPDO_MAP
@@ -113,6 +113,7 @@ class _Tpdo:
     next_due: float = 0.0  # monotonic time of the next transmission (event-driven types)
     last_sent: float = -1e9
     sync_count: int = 0
+    rtr: bool = False  #: COB-ID bit 30 = 0: a remote request (RTR) makes it send now
 
 
 def _next_after(t: _Tpdo, at: float) -> float:
@@ -256,6 +257,7 @@ class PdoEngine:
                     live=live,
                     pick=None if live is None else operator.itemgetter(*(n for _, n in items)),
                     next_due=self._align(now + event_ms / 1000.0),
+                    rtr=not cob & COB_BIT30,
                 )
             )
         self.tpdos = tpdos
@@ -495,6 +497,21 @@ class PdoEngine:
                 if t.sync_count >= t.trans_type:
                     t.sync_count = 0
                     self._send_tpdo(t, now)
+
+    def on_remote(self, can_id: int) -> bool:
+        """A remote frame (RTR) on ``can_id``: a TPDO with that COB-ID whose bit 30 allows RTR
+        is sent now (NMT OPERATIONAL only, never within its inhibit time, CiA 301
+        §7.2.2.2); returns whether one was sent."""
+        if not self._allowed():
+            return False
+        now = time.monotonic()
+        for t in self.tpdos:
+            if t.cob_id == can_id and t.rtr:
+                if now - t.last_sent < t.inhibit_s:
+                    return False
+                self._send_tpdo(t, now)
+                return True
+        return False
 
     def _payload(self, t: _Tpdo) -> bytes | None:
         try:

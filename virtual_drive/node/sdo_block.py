@@ -26,9 +26,15 @@ acknowledgement while the upload-end response is out makes the server send that 
 a repeated client "end" is ignored. A repeated block-upload *acknowledgement* of a sub-block the
 server already answered cannot be told from the acknowledgement of the next sub-block (CiA 301
 gives sub-blocks no number): a standard client's repeat is taken as the next acknowledgement and
-the CRC of the end response exposes the damage to the client. drive_link's client numbers its
-acknowledgements 1..255 in reserved byte 3 (standard clients send 0 there, and other servers
-ignore it); an acknowledgement with the number of the one just answered is ignored.
+the CRC of the end response exposes the damage to the client. Reserved bytes of requests are
+not interpreted (CiA 301); the server's own reserved bytes are 0.
+
+Frames that are not SDO requests: a frame on the request COB-ID with fewer than 8 data bytes is
+ignored and counted in :attr:`BlockSdoServer.short_frames` (CiA 301 §7.2.4.3: every SDO frame
+carries 8 bytes; CANopenNode's server drops other lengths the same way). An abort is not sent:
+a 1-byte frame carries no multiplexer the abort could name, and it is a damaged or foreign
+frame, not a request. A request with an invalid command specifier is aborted with 0x05040001
+naming its own index/sub-index (bytes 1..3), not an earlier transfer's.
 
 Timeout (:attr:`BlockSdoServer.timeout`, 10 s): an open transfer (segmented or block) that gets
 no client frame for that long is aborted with 0x05040000 (SDO protocol timed out) and forgotten.
@@ -132,6 +138,8 @@ class BlockSdoServer(SdoServer):
         self._subindex = 0
         #: transfers the server aborted because the client went silent (for tests/benchmarks)
         self.timeouts = 0
+        #: frames on the request COB-ID with other than 8 data bytes (ignored)
+        self.short_frames = 0
         self._reset()
 
     # -- state -------------------------------------------------------------------------------
@@ -146,7 +154,6 @@ class BlockSdoServer(SdoServer):
         self._blksize = 0
         self._sent = 0  # block upload: segments sent in the current sub-block
         self._acks = 0  # block upload: acknowledgements received
-        self._last_tag = 0  # block upload: number of the last acknowledgement (0 = none)
         self._end_frame = b""  # block upload: the end response (sent again on a repeated ack)
         self._crc_on = False
         self._chunks: list[bytes] = []
@@ -209,8 +216,9 @@ class BlockSdoServer(SdoServer):
         if not self._allowed():
             return
         data = bytes(data)
-        if len(data) < 8:
-            data += bytes(8 - len(data))
+        if len(data) != 8:  # not an SDO frame (CiA 301: 8 bytes): ignored, counted
+            self.short_frames += 1
+            return
         with self._lock:
             now = time.monotonic()
             if self._mode is not None and now - self._last_rx > self.timeout:
@@ -256,7 +264,8 @@ class BlockSdoServer(SdoServer):
             self._block_upload(data)
         elif ccs == _CCS_BLOCK_DOWN:
             self._block_download(data)
-        else:
+        else:  # the abort names this request's own multiplexer (bytes 1..3)
+            self._index, self._subindex = SDO_STRUCT.unpack_from(data)[1:]
             raise SdoAbortedError(ABORT_INVALID_COMMAND_SPECIFIER)
 
     def send_response(self, response: bytes) -> None:
@@ -393,16 +402,10 @@ class BlockSdoServer(SdoServer):
             else:
                 raise self._no_transfer()
         elif cs == _CS_ACK:
-            ackseq, blksize, tag = req[1], req[2], req[3]
+            ackseq, blksize = req[1], req[2]  # bytes 3..7 reserved (CiA 301)
             if self._mode == "up_end":
                 self.send_response(self._end_frame)  # the client did not get the end
                 return
-            if tag and tag == self._last_tag and self._mode == "up":
-                # drive_link numbers its acknowledgements in reserved byte 3: this one was
-                # answered already (the client was impatient); its sub-block is on its way
-                logger.debug("repeated block upload ack %d ignored", tag)
-                return
-            self._last_tag = tag
             if self._mode == "up_init":
                 self._mode = "up"  # the start request was lost: ackseq 0 acts as start
             elif self._mode != "up":

@@ -27,13 +27,14 @@ from canopen.sdo import SdoAbortedError
 
 from firmware_protocol import abort_codes
 from firmware_protocol.cia402 import OPERATION_ENABLED
-from firmware_protocol.cob_id import check_cob_id, check_heartbeat_consumers
+from firmware_protocol.cob_id import check_cob_id, check_heartbeat_consumers, check_sync_cob_id
 from firmware_protocol.entry import LimitError
 
 from . import communication, gain_sets, parameters, plant, storage
 from .od_addresses import (
     COB_ID_EMCY,
     COB_ID_EMCY_INDEX,
+    COB_ID_SYNC_INDEX,
     CONSUMER_HEARTBEAT_INDEX,
     CONTROLWORD_INDEX,
     ERROR_HISTORY_INDEX,
@@ -87,8 +88,8 @@ def before_write(
     if pre_check is not None:
         pre_check(d, sub, value)
     entry = d.checker.entry(index, sub)
-    if entry is not None and entry.config_only and d.cia402.torque_enabled:
-        raise SdoAbortedError(abort_codes.DEVICE_STATE)  # plant definition: power stage off only
+    if entry is not None and entry.config_only and d.cia402.drive_function_on:
+        raise SdoAbortedError(abort_codes.DEVICE_STATE)  # plant definition: drive function off
     if is_pdo_config(index):
         d.checker.check(index, sub, value)
         d.pdo.check_write(index, sub, value)
@@ -181,6 +182,12 @@ def _emcy_cob_id(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
     return True, lambda: d.emcy.set_cob_id(value)
 
 
+def _sync_cob_id(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+    """0x1005: the SYNC this node consumes (:func:`firmware_protocol.cob_id.check_sync_cob_id`)."""
+    _limit_error_to_abort(lambda: check_sync_cob_id(value))
+    return True, lambda: communication.bind_sync(d, value)
+
+
 def _sdo_server2(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
     """0x1201: the second SDO server's COB-IDs; rebinds it."""
     if (SDO_SERVER_2_INDEX, sub) in (SDO_SERVER_2_RX, SDO_SERVER_2_TX):
@@ -263,6 +270,7 @@ def _sim_info(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
 HANDLERS: Mapping[int, Handler] = {
     **{index: _plant(index) for index in plant.SETTERS},
     COB_ID_EMCY_INDEX: _emcy_cob_id,
+    COB_ID_SYNC_INDEX: _sync_cob_id,
     CONSUMER_HEARTBEAT_INDEX: _heartbeat_consumers,
     PRODUCER_HEARTBEAT_INDEX: _heartbeat_producer,
     SDO_SERVER_2_INDEX: _sdo_server2,

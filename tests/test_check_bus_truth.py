@@ -1,0 +1,86 @@
+"""``check`` judges timing from the bus (issue 29, item 6).
+
+Truths: CiA 301 §7.5.2.35: an event-driven TPDO is transmitted every event time, so the bus
+carries 1/event-time frames per second; what the drive counts as missed (0x2070) does not put
+frames on the bus. A host stall (the process not run for tens of ms) is made here by a thread
+that keeps the interpreter's lock 0.25 s: every thread of the process, the drive's and the
+checker's, waits, as they would for a CPU on a starved machine.
+"""
+
+from __future__ import annotations
+
+import sys
+import threading
+import time
+import uuid
+
+import can
+import pytest
+
+from drive_link import Drive
+from drive_link.check import run_checks
+
+pytestmark = pytest.mark.timeout(90)
+
+
+@pytest.fixture
+def parts():
+    from virtual_drive.node import VirtualDrive
+
+    ch = f"truth-{uuid.uuid4().hex}"
+    b_drive = can.Bus(interface="virtual", channel=ch)
+    b_host = can.Bus(interface="virtual", channel=ch)
+    vd = VirtualDrive(b_drive, node_id=4).start()
+    d = Drive.connect(bus=b_host, node_id=4, heartbeat_ms=None)
+    yield d, vd
+    d.close()
+    vd.stop()
+    b_drive.shutdown()
+    b_host.shutdown()
+
+
+def test_pdo_rates_fails_a_drive_that_drops_periods_and_counts_them(parts):
+    """The drive's transmit path is held 15 ms of every 20 ms: it sends about a quarter of
+    its 1 kHz TPDO2 periods and counts the rest in 0x2070 (as a drive with a full transmit
+    queue would). The bus shows the shortfall; the item fails and says what the drive counted."""
+    d, vd = parts
+    stop = threading.Event()
+
+    def choke() -> None:
+        while not stop.is_set():
+            with vd._send_lock:
+                time.sleep(0.015)
+            time.sleep(0.005)
+
+    t = threading.Thread(target=choke, daemon=True)
+    t.start()
+    try:
+        (r,) = run_checks(d, only=["pdo_rates"])
+    finally:
+        stop.set()
+        t.join()
+    assert not r.ok, r.detail
+    assert "missed)" in r.detail, r.detail  # the drive's own count, shown
+
+
+def test_a_host_stall_repeats_the_timing_item_and_says_so(parts):
+    d, _vd = parts
+    old = sys.getswitchinterval()
+
+    def stall() -> None:
+        time.sleep(0.5)  # inside the first window
+        sys.setswitchinterval(1.0)
+        try:
+            end = time.perf_counter() + 0.25
+            while time.perf_counter() < end:  # holds the interpreter lock throughout
+                pass
+        finally:
+            sys.setswitchinterval(old)
+
+    t = threading.Thread(target=stall, daemon=True)
+    t.start()
+    (r,) = run_checks(d, only=["pdo_rates"])
+    t.join()
+    assert "measured again after host stalls of" in r.detail, r.detail
+    assert r.ok, r.detail
+    assert "bus time stamps" in r.detail  # what it judged

@@ -1,0 +1,81 @@
+"""A dead drive fails a call fast (issue 29, item 2).
+
+Truth: CiA 301 §7.2.8.3.2: a heartbeat consumer that receives no heartbeat within its time
+counts the producer as gone. With drive_link watching the drive's heartbeat (0x1017 = 100 ms by
+default), a node whose heartbeat stayed away for the host's consumer time (3 periods, at least
+1 s) is gone: a call to it fails within one producer period plus one SDO response timeout
+(0.3 s), saying so, instead of resending for seconds (5.7 s); a call made as the node died
+fails when that consumer time is over. The last heartbeat's time is taken by a sniffer on the bus
+(its own python-can ``virtual`` bus), not from drive_link.
+"""
+
+from __future__ import annotations
+
+import time
+import uuid
+
+import can
+import pytest
+
+from drive_link import Drive
+from drive_link.errors import NodeGone
+
+pytestmark = pytest.mark.timeout(60)
+
+SLACK_S = 0.15  #: scheduling slack on a loaded 2-core host (s)
+
+
+@pytest.fixture
+def parts():
+    from virtual_drive.node import VirtualDrive
+
+    ch = f"dead-{uuid.uuid4().hex}"
+    b_drive = can.Bus(interface="virtual", channel=ch)
+    b_host = can.Bus(interface="virtual", channel=ch)
+    b_sniff = can.Bus(interface="virtual", channel=ch)
+    vd = VirtualDrive(b_drive, node_id=4).start()
+    d = Drive.connect(bus=b_host, node_id=4, heartbeat_ms=100)
+    yield d, vd, b_sniff
+    d.close()
+    vd.stop()
+    for b in (b_drive, b_host, b_sniff):
+        b.shutdown()
+
+
+def last_heartbeat(sniff: can.BusABC) -> float:
+    """Monotonic time of the last 0x704 frame the sniffer received (drained now)."""
+    last = None
+    while (msg := sniff.recv(0)) is not None:
+        if msg.arbitration_id == 0x704:
+            last = msg.timestamp
+    assert last is not None, "no heartbeat on the bus"
+    return last - time.time() + time.monotonic()  # (virtual bus stamps with time.time())
+
+
+def test_a_dead_drive_fails_calls_fast_saying_the_node_is_gone(parts):
+    d, vd, sniff = parts
+    producer_s = int(d.read("producer_heartbeat_time")) / 1000.0
+    assert producer_s == pytest.approx(0.1)
+    timeout_s = d.sdo.client.RESPONSE_TIMEOUT
+    consumer_s = d.supervisor.consumer_s()  # the host's consumer time: 3 periods, >= 1 s
+    time.sleep(0.25)
+    vd.stop()  # frozen: no heartbeat, no SDO answer
+    t_last = last_heartbeat(sniff)
+    # a call at the moment of death fails once the consumer time is over (was ~5.7 s)
+    t0 = time.monotonic()
+    with pytest.raises(NodeGone, match=r"node 4 is gone: no heartbeat for \d+ ms"):
+        d.read("statusword")
+    t_fail = time.monotonic()
+    assert t_fail <= t_last + consumer_s + timeout_s + SLACK_S, (
+        f"failed {t_fail - t_last:.3f} s after the last heartbeat (call {t_fail - t0:.3f} s)"
+    )
+    # the node is gone: a call fails within one heartbeat period plus one SDO timeout, after
+    # one request (a node back on the bus would answer it), without resends
+    while sniff.recv(0) is not None:
+        pass
+    t1 = time.monotonic()
+    with pytest.raises(NodeGone):
+        d.write("target_velocity", 10)
+    assert time.monotonic() - t1 <= producer_s + timeout_s + SLACK_S
+    requests = [m for m in iter(lambda: sniff.recv(0), None) if m.arbitration_id == 0x604]
+    assert len(requests) == 1
