@@ -72,15 +72,15 @@ def get_bench(
         Query(ge=1, le=127, description="node-ID of the drive (default: the bench's --node)"),
     ] = None,
 ) -> Bench:
-    """The bench of ``?node=N`` (opened on first use: 404 if no drive answers as N), else
-    the bench's own node."""
+    """The bench of ``?node=N`` (opened on first use; 404 for a node not seen on the bus or
+    that does not answer), else the bench's own node."""
     nodes = getattr(request.app.state, "nodes", None)
     if nodes is None or node is None:
         return request.app.state.bench
     try:
         return nodes.get(node)
     except NodeNotFound as exc:
-        raise HTTPException(404, f"no drive answers as node {node}: {exc}") from exc
+        raise HTTPException(404, str(exc)) from exc
     except Exception as exc:
         raise http_error(exc) from exc
 

@@ -110,7 +110,8 @@ class Nodes:
     # ---------------------------------------------------------------- benches
     def get(self, node: int | None) -> Bench:
         """The bench of ``node`` (None: the default), opened on first use; raises
-        NodeNotFound when nobody answers as that node, ValueError outside 1..127."""
+        NodeNotFound for a node not seen (heartbeat or :meth:`scan`) or that does not answer,
+        ValueError outside 1..127."""
         if node is None or node == self.default.node_id:
             return self.default
         if not 1 <= int(node) <= 127:
@@ -119,6 +120,10 @@ class Nodes:
             raise ValueError(f"node-ID {node} is this host's own heartbeat ID")
         with self._lock:
             bench = self._benches.get(node)
+            if bench is None and node not in self._heard and node not in self._scanned:
+                raise NodeNotFound(
+                    f"node {node} not seen on the bus (no heartbeat; a scan probes every ID)"
+                )
             if bench is None:
                 bench = self._open(node)
                 self._benches[node] = bench
