@@ -69,13 +69,25 @@ def bench() -> Iterator[tuple[str, str, int]]:
         stop_process(proc)
 
 
+def trace_channel(net: canopen.Network, node_id: int) -> canopen.sdo.SdoClient:
+    """canopen's SDO client on the drive's second SDO server (0x1201: 0x680 + N / 0x6B0 + N,
+    the EDS defaults): the dashboard's own reads use the first server, and two clients on one
+    SDO channel would take each other's answers."""
+    node = canopen.RemoteNode(node_id, canopen.import_od(str(EDS_PATH), node_id))
+    sdo = node.add_sdo(0x680 + node_id, 0x6B0 + node_id)  # before add_node (canopen)
+    net.add_node(node)
+    sdo.network = net  # canopen leaves it unset on an added client
+    sdo.RESPONSE_TIMEOUT = 2.0
+    return sdo
+
+
 @pytest.fixture(scope="module")
-def master(bench) -> Iterator[dict[int, canopen.RemoteNode]]:
+def master(bench) -> Iterator[dict[int, canopen.sdo.SdoClient]]:
     """canopen's own master on its own connection to the hub: nodes 1 and 2."""
     net = canopen.Network()
     net.connect(interface="socketcand", host="127.0.0.1", port=bench[2], channel="vcan0")
     try:
-        yield {n: net.add_node(n, canopen.import_od(str(EDS_PATH), n)) for n in (1, 2)}
+        yield {n: trace_channel(net, n) for n in (1, 2)}
     finally:
         net.disconnect()
 
@@ -160,8 +172,8 @@ def test_two_browsers_control_two_drives_each_gets_only_its_setpoint(bench, page
     wait_text(a, r"In control: browser #\d+ \(you\)")
     wait_text(a, r"\(set 1000\)")
     # the truth, by canopen's own SDO client: each drive got only its own setpoint
-    assert master[1].sdo["target_velocity"].raw == 1000
-    assert master[2].sdo["target_velocity"].raw == -500
+    assert master[1]["target_velocity"].raw == 1000
+    assert master[2]["target_velocity"].raw == -500
 
     # REST per node: the same picture, and node 2's lease is B's
     rows = {r["node_id"]: r for r in httpx.get(f"{api}/api/nodes").json()}
@@ -185,8 +197,8 @@ def test_two_browsers_control_two_drives_each_gets_only_its_setpoint(bench, page
     click(b, b.get_by_role("button", name="+ step"))
     wait_text(b, r"controls the bench")
     time.sleep(0.5)
-    assert master[1].sdo["target_velocity"].raw == 1000
-    assert master[2].sdo["target_velocity"].raw == -500
+    assert master[1]["target_velocity"].raw == 1000
+    assert master[2]["target_velocity"].raw == -500
     with contextlib.suppress(Exception):
         out = Path(__file__).resolve().parents[1] / "artifacts"
         out.mkdir(exist_ok=True)
