@@ -271,10 +271,10 @@ class BenchGui:
 
     def _on_lease_change(self, old: Any, new: Any, bench: Bench | None = None) -> None:
         if new is not None and old is not None and old.token != new.token:
-            node = f" of node {bench.node_id}" if bench is not None else ""
+            node = f" (node {bench.node_id})" if bench is not None else ""
             for p in self.panel_list():
                 if p.token == old.token:
-                    p.notice(p.control_md, f"{new.client} took control{node} from you", "info")
+                    p.notice(p.control_md, f"{new.client} took control from you{node}", "info")
         self.refresh_status()
 
     # ------------------------------------------------------------------ bench events
