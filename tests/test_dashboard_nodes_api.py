@@ -5,6 +5,7 @@ target_velocity of each drive, CiA 402)."""
 
 from __future__ import annotations
 
+import json
 import time
 
 import canopen
@@ -100,3 +101,13 @@ def test_unknown_and_invalid_nodes(client):
     assert time.monotonic() - t0 < 1.0  # not seen on the bus: no SDO probe to wait for
     for bad in ("0", "128", "x"):
         assert client.get(f"/api/state?node={bad}").status_code == 422
+
+
+def test_stream_of_one_node(client):
+    """``/api/stream?node=2``: the state messages are node 2's."""
+    with client.websocket_connect("ws://127.0.0.1:8000/api/stream?node=2") as ws:
+        for _ in range(200):
+            msg = json.loads(ws.receive_text())
+            if msg["type"] == "state":
+                break
+        assert msg["type"] == "state" and msg["node_id"] == 2, msg
