@@ -6,7 +6,7 @@ import json
 from collections.abc import Callable
 from typing import Annotated, Any, TypeVar
 
-from fastapi import APIRouter, Depends, Header, HTTPException, Request, Response
+from fastapi import APIRouter, Depends, Header, HTTPException, Query, Request, Response
 
 from dashboard import _experiments as experiments
 from dashboard import _tuning as tuning
@@ -31,6 +31,7 @@ from dashboard._models import (
 )
 from dashboard._security import LeaseError
 from drive_link import jsonable
+from drive_link.errors import NodeNotFound
 
 __all__ = ["router"]
 
@@ -64,8 +65,24 @@ async def unique_keys(request: Request) -> None:
 router = APIRouter(prefix="/api", dependencies=[Depends(unique_keys)])
 
 
-def get_bench(request: Request) -> Bench:
-    return request.app.state.bench
+def get_bench(
+    request: Request,
+    node: Annotated[
+        int | None,
+        Query(ge=1, le=127, description="node-ID of the drive (default: the bench's --node)"),
+    ] = None,
+) -> Bench:
+    """The bench of ``?node=N`` (opened on first use; 404 for a node not seen on the bus or
+    that does not answer), else the bench's own node."""
+    nodes = getattr(request.app.state, "nodes", None)
+    if nodes is None or node is None:
+        return request.app.state.bench
+    try:
+        return nodes.get(node)
+    except NodeNotFound as exc:
+        raise HTTPException(404, str(exc)) from exc
+    except Exception as exc:
+        raise http_error(exc) from exc
 
 
 BenchDep = Annotated[Bench, Depends(get_bench)]
@@ -106,6 +123,24 @@ def run(fn: Callable[[], T]) -> T:
         raise
     except Exception as exc:
         raise http_error(exc) from exc
+
+
+# ------------------------------------------------------------------ nodes
+@router.get("/nodes", tags=["nodes"], summary="The nodes seen on the bus (heartbeat, scan)")
+def get_nodes(request: Request) -> list[dict[str, Any]]:
+    """Every other route takes ``?node=N`` (default: the bench's own node); each node has its
+    own state, captures and control lease."""
+    return jsonable(request.app.state.nodes.listing())
+
+
+@router.post(
+    "/nodes/scan",
+    tags=["nodes"],
+    summary="Probe every node-ID by SDO (0x1000), then list the nodes",
+    dependencies=[NoBody],
+)
+def post_nodes_scan(request: Request) -> list[dict[str, Any]]:
+    return jsonable(run(lambda: request.app.state.nodes.scan()))
 
 
 # ------------------------------------------------------------------ state and control

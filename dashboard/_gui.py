@@ -46,6 +46,7 @@ from dashboard._gui_scene import RotorScene
 from dashboard._gui_scene import background as scene_background
 from dashboard._gui_status import DROP_WINDOW_S, controller_text, legend, status_html
 from dashboard._gui_statusbar import badges_html, fresh_badge, readout_html
+from dashboard._nodes import Nodes
 from dashboard._security import LeaseError, allowed_hosts, allowed_origins
 from dashboard.config import BenchConfig
 
@@ -77,9 +78,11 @@ __all__ = ["LEASE_GRACE_S", "BenchGui", "min_span_envelope"]
 class BenchGui:
     """One viser server showing one :class:`Bench` to any number of browsers."""
 
-    def __init__(self, bench: Bench, config: BenchConfig) -> None:
-        self.bench = bench
+    def __init__(self, bench: Bench, config: BenchConfig, nodes: Nodes | None = None) -> None:
+        self.bench = bench  # the bench's own node (--node): a new page shows it
         self.config = config
+        self.nodes = nodes  # the other nodes on the bus (a page's node selector), if any
+        self._listeners: dict[int, Any] = {}  # id(bench) → its event listener
         self.server: viser.ViserServer | None = None
         self.port = 0
         self.origins: set[str] = set()
@@ -88,6 +91,7 @@ class BenchGui:
         self._stop = threading.Event()
         self._wake = threading.Event()  # a setpoint changed: plot now, not at the next tick
         self._wake_target: tuple[str, float] | None = None  # (live signal, commanded value)
+        self._wake_bench: Bench | None = None  # whose setpoint changed
         self._threads: dict[str, threading.Thread] = {}
         self._plot_generation = 0
         self._plot_beat = time.monotonic()  # the plot loop's last heartbeat
@@ -100,6 +104,7 @@ class BenchGui:
         self.last_live: dict[str, np.ndarray] = {}
         self._gone: dict[str, float] = {}  # lease token → time.monotonic() its browser left
         self._drops: list[tuple[float, int]] = []  # (monotonic, dropped total)
+        self._drops_by: dict[int, list[tuple[float, int]]] = {}  # the other nodes' (id(bench))
         self._tick = 0  # status ticks sent (makes each tick's bar differ: page-side staleness)
         self.scene: RotorScene | None = None
 
@@ -138,8 +143,9 @@ class BenchGui:
             self.server.scene.set_background_image(scene_background())
         else:  # θ_e by SDO in the drive watch's worker, never in the status loop
             self.bench.watch.hooks.append(self.scene.maybe_anchor)
-        self.bench.lease.on_change(self._on_lease_change)
-        self.bench.listeners.append(self._on_bench_event)
+        self._attach(self.bench)
+        if self.nodes is not None:
+            self.nodes.on_new.append(self._attach)
         self._start_plot_thread()
         th = threading.Thread(target=self._status_loop, name="gui-status", daemon=True)
         th.start()
@@ -150,8 +156,9 @@ class BenchGui:
         self._wake.set()
         for th in list(self._threads.values()):
             th.join(timeout=2.0)
-        with contextlib.suppress(ValueError):
-            self.bench.listeners.remove(self._on_bench_event)
+        for bench in self._benches():
+            with contextlib.suppress(ValueError, KeyError):
+                bench.listeners.remove(self._listeners[id(bench)])
         if self.server is not None:
             self.server.stop()
 
@@ -164,6 +171,37 @@ class BenchGui:
         )
         th.start()
         self._threads["plots"] = th
+
+    # ------------------------------------------------------------------ nodes
+    def _attach(self, bench: Bench) -> None:
+        """Follow ``bench``'s lease and events (once per bench)."""
+        if id(bench) in self._listeners:
+            return
+
+        def on_event(kind: str, data: dict) -> None:
+            self._on_bench_event(kind, data, bench)
+
+        self._listeners[id(bench)] = on_event
+        bench.lease.on_change(lambda old, new: self._on_lease_change(old, new, bench))
+        bench.listeners.append(on_event)
+
+    def _benches(self) -> list[Bench]:
+        return self.nodes.benches() if self.nodes is not None else [self.bench]
+
+    def bench_for(self, node: int) -> Bench:
+        """The bench of ``node`` (opened on first use; see :class:`dashboard._nodes.Nodes`)."""
+        if self.nodes is None:
+            if node != self.bench.node_id:
+                raise ValueError(f"this bench has node {self.bench.node_id} only")
+            return self.bench
+        return self.nodes.get(node)
+
+    def _groups(self, panels: list[Panel]) -> list[tuple[Bench, list[Panel]]]:
+        """The panels by the bench (node) each one shows, the bench's own node first."""
+        groups: dict[int, tuple[Bench, list[Panel]]] = {id(self.bench): (self.bench, [])}
+        for p in panels:
+            groups.setdefault(id(p.bench), (p.bench, []))[1].append(p)
+        return [g for g in groups.values() if g[1]]
 
     # ------------------------------------------------------------------ clients and control
     def _on_connect(self, client: viser.ClientHandle) -> None:
@@ -186,7 +224,14 @@ class BenchGui:
             self.scene.detach(client.client_id)
         with self._panels_lock:
             panel = self.panels.pop(client.client_id, None)
-        if panel is not None and panel.token is not None and panel.holds_control():
+        if (
+            panel is not None
+            and panel.token is not None
+            and any(
+                b.lease.holder is not None and b.lease.holder.token == panel.token
+                for b in self._benches()
+            )
+        ):  # the leases it holds (on any node) expire after LEASE_GRACE_S
             self._gone[panel.token] = time.monotonic()
             self.refresh_status()
 
@@ -211,32 +256,38 @@ class BenchGui:
             return list(self.panels.values())
 
     def _expire_leases(self) -> None:
-        """Release the lease of a browser gone for more than LEASE_GRACE_S."""
-        holder = self.bench.lease.holder
+        """Release the leases (on every node) of a browser gone for more than LEASE_GRACE_S."""
         now = time.monotonic()
+        benches = self._benches()
         for token, since in list(self._gone.items()):
-            if holder is None or holder.token != token:
+            held = [b for b in benches if b.lease.holder and b.lease.holder.token == token]
+            if not held:
                 self._gone.pop(token, None)
             elif now - since >= LEASE_GRACE_S:
                 self._gone.pop(token, None)
-                with contextlib.suppress(LeaseError):
-                    self.bench.lease.release(token)
+                for b in held:
+                    with contextlib.suppress(LeaseError):
+                        b.lease.release(token)
 
-    def _on_lease_change(self, old: Any, new: Any) -> None:
+    def _on_lease_change(self, old: Any, new: Any, bench: Bench | None = None) -> None:
         if new is not None and old is not None and old.token != new.token:
+            node = f" (node {bench.node_id})" if bench is not None else ""
             for p in self.panel_list():
                 if p.token == old.token:
-                    p.notice(p.control_md, f"{new.client} took control from you", "info")
+                    p.notice(p.control_md, f"{new.client} took control from you{node}", "info")
         self.refresh_status()
 
     # ------------------------------------------------------------------ bench events
-    def _on_bench_event(self, kind: str, data: dict) -> None:
+    def _on_bench_event(self, kind: str, data: dict, bench: Bench | None = None) -> None:
+        """An event of ``bench`` (None: the bench's own node) for the pages that show it."""
+        bench = bench or self.bench
+        panels = [p for p in self.panel_list() if p.bench is bench]
         if kind == "capture":
-            for p in self.panel_list():
+            for p in panels:
                 with contextlib.suppress(Exception):
                     p.show_captures()
         elif kind == "gains":
-            for p in self.panel_list():
+            for p in panels:
                 with contextlib.suppress(Exception):
                     p.show_readback(data)
                     p.gains = data
@@ -246,9 +297,10 @@ class BenchGui:
                 self._wake_target = ("measurements.speed_ref", float(data["rpm"]))
             elif "i_p_ref" in data:
                 self._wake_target = ("measurements.i_p_ref", float(data["i_p_ref"]))
+            self._wake_bench = bench
             self._wake.set()
         elif kind == "error":
-            for p in self.panel_list():
+            for p in panels:
                 with contextlib.suppress(Exception):
                     p.notice(p.control_md, data.get("message", ""))
 
@@ -285,7 +337,7 @@ class BenchGui:
         streams it back within a few ms), at most WAKE_TIMEOUT_S after the setpoint change."""
         target = self._wake_target
         deadline = time.monotonic() + WAKE_TIMEOUT_S
-        live = self.bench.drive.live
+        live = (self._wake_bench or self.bench).drive.live
         while target is not None and time.monotonic() < deadline and not self._stop.is_set():
             # the newest value first (cheap), the whole window only once it is there
             if abs(live.latest().get(target[0], float("nan")) - target[1]) <= 1e-3:
@@ -299,13 +351,28 @@ class BenchGui:
         (:mod:`dashboard._gui_pace`: a page behind gets the newest window once it caught up,
         never a backlog); with ``require`` = (signal, value) only if the window's last sample
         of that signal equals value. A panel gets only new data (nothing when no sample arrived
-        since its last push). Returns whether the data was current enough (see ``require``)."""
+        since its last push). Returns whether the data was current enough (see ``require``).
+        Each page gets the plots of the node it shows; with ``require``, only the pages of the
+        node whose setpoint changed are served."""
         ready = [p for p in self.panel_list() if p.pace.ready()]
         if not ready:
             self.last_push = time.monotonic()  # the loop is alive; the pages are behind
             return True  # nobody to send to: no work
+        if require is not None:
+            target = self._wake_bench or self.bench
+            return self._push_group(target, [p for p in ready if p.bench is target], require)
+        for bench, panels in self._groups(ready):
+            self._push_group(bench, panels, None)
+        return True
+
+    def _push_group(
+        self, bench: Bench, ready: list[Panel], require: tuple[str, float] | None
+    ) -> bool:
+        """:meth:`push_plots` for the pages ``ready`` that show ``bench``."""
+        if not ready:
+            return True
         names = list(LIVE_SIGNALS)
-        w = self.bench.drive.live.window(self.config.live_window_s, names)
+        w = bench.drive.live.window(self.config.live_window_s, names)
         t = np.asarray(w["t"], dtype=np.float64)
         cols = [np.asarray(w[n], dtype=np.float64) for n in names]
         ok = np.isfinite(t)
@@ -350,6 +417,8 @@ class BenchGui:
                 self.stream_errors += 1
                 self.last_stream_error = f"{type(exc).__name__}: {exc}"
         self.frames_sent += 1
+        if bench is not self.bench:
+            return True  # the 3D rotor and the freshness below follow the bench's own node
         self.last_live = w
         if self.scene is not None and (self.newest_t is None or newest > self.newest_t):
             with contextlib.suppress(Exception):
@@ -392,7 +461,7 @@ class BenchGui:
         push_age = time.monotonic() - self.last_push if self.last_push else None
         return live_plot.freshness_text(age, push_age)
 
-    def _drop_rate(self, dropped: Any) -> float | None:
+    def _drop_rate(self, dropped: Any, bench: Bench | None = None) -> float | None:
         """Dropped TPDO frames per second over the last DROP_WINDOW_S, never negative: the
         drive_link total is an estimate from the TPDO cadence that can step back (a late frame
         arrives, a pause closes a count window, the counters are reset); a total below the
@@ -402,11 +471,17 @@ class BenchGui:
         except (TypeError, ValueError):
             return None
         now = time.monotonic()
-        if self._drops and total < self._drops[-1][1]:
-            self._drops = []  # the counter stepped back: a new window
-        self._drops.append((now, total))
-        self._drops = [(t, d) for t, d in self._drops if now - t <= DROP_WINDOW_S]
-        t0, d0 = self._drops[0]
+        key = id(bench) if bench is not None and bench is not self.bench else None
+        drops = self._drops if key is None else self._drops_by.get(key, [])
+        if drops and total < drops[-1][1]:
+            drops = []  # the counter stepped back: a new window
+        drops.append((now, total))
+        drops = [(t, d) for t, d in drops if now - t <= DROP_WINDOW_S]
+        if key is None:
+            self._drops = drops
+        else:
+            self._drops_by[key] = drops
+        t0, d0 = drops[0]
         return max(0.0, (total - d0) / (now - t0)) if now - t0 > 0.5 else 0.0
 
     def refresh_status(self) -> None:
@@ -419,8 +494,18 @@ class BenchGui:
         if not panels:
             return
         self._tick += 1
+        if self.nodes is not None:
+            rows = self.nodes.listing()
+            for p in panels:
+                with contextlib.suppress(Exception):
+                    p.show_nodes(rows)
+        for bench, group in self._groups(panels):
+            self._refresh_group(bench, group)
+
+    def _refresh_group(self, bench: Bench, panels: list[Panel]) -> None:
+        """:meth:`refresh_status` for the pages that show ``bench``."""
         try:
-            s = self.bench.state()
+            s = bench.state()
         except Exception as exc:
             for p in panels:
                 p.show_status(f"<b>state unavailable:</b> {html.escape(str(exc))}")
@@ -430,9 +515,9 @@ class BenchGui:
         bar = f"<div class='bench-statusbar'>{badges_html(s)} {fresh}</div>"
         latest: dict = {}
         with contextlib.suppress(Exception):
-            latest = self.bench.drive.live.latest()
+            latest = bench.drive.live.latest()
         readout = readout_html(s, latest)
-        rate = self._drop_rate((s.get("live") or {}).get("dropped"))
+        rate = self._drop_rate((s.get("live") or {}).get("dropped"), bench)
         stream = (self.stream_errors, self.plot_restarts, self.last_stream_error)
         status = status_html(s, latest, rate, stale, fresh_txt, stream)
         legends = (
@@ -441,7 +526,7 @@ class BenchGui:
         )
         ctl = s.get("controller")
         gone = None
-        holder = self.bench.lease.holder
+        holder = bench.lease.holder
         if holder is not None and holder.token in self._gone:
             gone = LEASE_GRACE_S - (time.monotonic() - self._gone[holder.token])
         for p in panels:
@@ -459,7 +544,7 @@ class BenchGui:
                 p.pace.sent_update()
             except Exception as exc:
                 log.warning("status for browser #%s failed: %s", p.cid, exc)
-        if self.scene is not None:
+        if self.scene is not None and bench is self.bench:
             self.scene.show_status(
                 f"{_fmt(latest.get('measurements.speed'), '.0f')} rpm · {s.get('state')} · "
                 f"i_p {_fmt(latest.get('measurements.i_p'), '.1f')} A"

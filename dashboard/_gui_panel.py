@@ -27,6 +27,7 @@ import viser
 
 from dashboard._fields import FieldError
 from dashboard._gui_field import CURRENT_COLORS, SPEED_COLORS, Field, fmt
+from dashboard._gui_nodes import NodeSelect
 from dashboard._gui_pace import PagePace
 from dashboard._gui_statusbar import BAR_CSS, notices_css
 from dashboard._gui_tabs import (
@@ -67,12 +68,13 @@ class Panel(
     ConfigTab,
     BusTab,
     ReportTab,
+    NodeSelect,
 ):
     """The GUI of one connected browser."""
 
     def __init__(self, owner: BenchGui, client: viser.ClientHandle) -> None:
         self.owner = owner
-        self.bench = owner.bench
+        self.bench = owner.bench  # the node this page shows (its node selector changes it)
         self.config = owner.config
         self.client = client
         self.cid = client.client_id
@@ -160,6 +162,7 @@ class Panel(
         # the status bar: pinned at the top of the panel (BAR_CSS), however far it scrolls
         with gui.add_folder("State", expand_by_default=True):
             self.bar_html = gui.add_html("<div class='bench-statusbar'>connecting …</div>")
+            self._build_node_selector()
             self.quick_btn = gui.add_button(
                 "Quick stop", color="red", hint="CiA 402 quick stop: the drive brakes and halts"
             )

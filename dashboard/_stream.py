@@ -54,6 +54,13 @@ async def stream(ws: WebSocket) -> None:
         await ws.close(code=1008, reason="access token required (first message)")
         return
     bench: Bench = app.state.bench
+    node = ws.query_params.get("node")
+    if node is not None:  # ?node=N: that drive's stream (opened on first use)
+        try:
+            bench = await run_in_threadpool(app.state.nodes.get, int(node))
+        except Exception as exc:
+            await ws.close(code=1008, reason=f"node {node}: {exc}"[:120])
+            return
     period = 1.0 / config.stream_rate_hz
     per_state = max(1, round(1.0 / period))
     last_t = -np.inf

@@ -16,6 +16,7 @@ from starlette.concurrency import run_in_threadpool
 from dashboard import _api as api
 from dashboard import _stream as stream
 from dashboard._bench import Bench
+from dashboard._nodes import Nodes
 from dashboard._security import allowed_hosts, allowed_origins, bearer, host_ok, token_ok
 from dashboard.config import BenchConfig
 from drive_link import jsonable
@@ -52,11 +53,13 @@ def create_app(
                 raise
             stack.callback(bench.close)
             app.state.bench = bench
+            app.state.nodes = Nodes(bench)  # the other nodes' benches, opened on first use
+            stack.callback(app.state.nodes.close)
             app.state.gui = None
             if gui:
                 from dashboard._gui import BenchGui
 
-                g = BenchGui(bench, config)
+                g = BenchGui(bench, config, nodes=app.state.nodes)
                 await run_in_threadpool(g.start)
                 stack.callback(g.stop)
                 app.state.gui = g

@@ -8,7 +8,9 @@ as written (the ``sudo``/``modprobe`` set-up lines are what init.sh does with ``
 a vcan named can0, which has no bit timing, so ``ip link set can0 type can bitrate ...`` is the
 one README line left out), the virtual drive on vcan0 driven through NMT, CiA 402 and a speed
 setpoint by the library, the NMT state in one-shot calls, error frames and bus-off reported by
-``status``, and a full transmit queue (vcan1: 10 frames, ENOBUFS) met by a 127-probe scan and a
+``status``, two more drives (nodes 2 and 3) found by ``scan`` and a setpoint reaching only its
+node, two unconfigured drives given distinct node-IDs by LSS, and a full transmit queue
+(vcan1: 10 frames, ENOBUFS) met by a 127-probe scan and a
 block upload.
 
 TPDO rates: UML spends about 38 µs per system call, so the whole kernel moves about 800 frames/s;
@@ -245,6 +247,81 @@ def test_error_frames_and_bus_off_reported_on_vcan0(vcan0_drive):
                 assert (st["bus_state"], st["bus_error_frames"]) == (want, n)
     finally:
         ctrl.shutdown()
+
+
+# --------------------------------------------------------------------------- two drives
+def scan_lines(out: str) -> dict[int, str]:
+    """``drive-link scan`` text output → {node-ID: the rest of its line}."""
+    found = {}
+    for ln in out.splitlines():
+        m = re.match(r"node\s+(\d+):\s*(.*)", ln)
+        if m:
+            found[int(m.group(1))] = m.group(2)
+    return found
+
+
+def test_two_drives_on_vcan0_scan_and_a_setpoint_to_one(vcan0_drive):
+    """One more ``virtual-drive`` process serving nodes 2 and 3 beside the README's node 1 on
+    vcan0 (they stay PRE-OPERATIONAL: no TPDOs, UML keeps up): ``drive-link scan`` lists every
+    node with its state, and ``--node 3 set-speed 700 --enable`` reaches node 3 only. Truth:
+    canopen's own SDO client on a socket of its own (0x60FF target_velocity, CiA 402 statusword
+    0x6041 of each node)."""
+    import canopen
+
+    from firmware_protocol import EDS_PATH
+
+    bus = ["--interface", "socketcan", "--channel", "vcan0"]
+    p = start(["virtual-drive", "run", *bus, "--nodes", "2,3"], "ready")
+    net = canopen.Network()
+    net.connect(interface="socketcan", channel="vcan0")
+    try:
+        nodes = {n: net.add_node(n, canopen.import_od(str(EDS_PATH), n)) for n in (1, 2, 3)}
+        for node in nodes.values():
+            node.sdo.RESPONSE_TIMEOUT = 5.0  # UML on a busy host
+        before = int(nodes[1].sdo["target_velocity"].raw)
+        r = run(["drive-link", *bus, "scan"])
+        assert r.returncode == 0, r.stderr
+        found = scan_lines(r.stdout)
+        assert {1, 2, 3} <= set(found), r.stdout
+        for n in (2, 3):
+            assert "CiA 402" in found[n] and "PRE-OPERATIONAL" in found[n], r.stdout
+        r = run(["drive-link", *bus, "--node", "3", "set-speed", "700", "--enable"])
+        assert r.returncode == 0, r.stderr
+        assert int(nodes[3].sdo["target_velocity"].raw) == 700
+        assert int(nodes[3].sdo["statusword"].raw) & 0x6F == 0x27  # OPERATION ENABLED
+        assert int(nodes[2].sdo["target_velocity"].raw) == 0
+        assert int(nodes[2].sdo["statusword"].raw) & 0x6F != 0x27
+        assert int(nodes[1].sdo["target_velocity"].raw) == before
+    finally:
+        net.disconnect()
+        stop(p)
+
+
+def test_lss_gives_two_unconfigured_drives_distinct_ids_on_vcan0():
+    """Two drives without a node-ID (``virtual-drive run --unconfigured 2``): ``drive-link lss``
+    finds them by LSS fast scan (CiA 305) and gives each its own node-ID. Truth: canopen's SDO
+    client reads the identity serial number (0x1018:4) at each new node-ID."""
+    import canopen
+
+    bus = ["--interface", "socketcan", "--channel", "vcan0"]
+    p = start(["virtual-drive", "run", *bus, "--unconfigured", "2", "--serial-base", "100"],
+              "ready")  # fmt: skip
+    net = canopen.Network()
+    net.connect(interface="socketcan", channel="vcan0")
+    try:
+        r = run(["drive-link", *bus, "lss", "--first-id", "20", "--lss-timeout", "0.2"])
+        assert r.returncode == 0, r.stderr
+        got = {int(n): int(s, 16) for n, s in re.findall(r"node (\d+): serial 0x([0-9A-Fa-f]+)",
+                                                         r.stdout)}  # fmt: skip
+        assert sorted(got.values()) == [100, 101] and len(got) == 2, r.stdout
+        assert all(20 <= n <= 127 for n in got), r.stdout
+        for n, serial in got.items():
+            node = net.add_node(n)
+            node.sdo.RESPONSE_TIMEOUT = 5.0
+            assert int.from_bytes(node.sdo.upload(0x1018, 4), "little") == serial
+    finally:
+        net.disconnect()
+        stop(p)
 
 
 # --------------------------------------------------------------------------- vcan1: full queue
