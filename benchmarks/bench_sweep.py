@@ -181,7 +181,7 @@ def dask_throughput(batches: list) -> tuple[float, float]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0], allow_abbrev=False)
     ap.add_argument("--runs", type=int, default=200, help="runs per throughput figure")
     ap.add_argument("--repeats", type=int, default=7, help="repeats of the single-run figures")
     ap.add_argument("--no-dask", action="store_true", help="skip the Dask figure")

@@ -27,6 +27,7 @@ import time
 
 import httpx
 import pytest
+from conftest import RunQueueProbe
 
 from dashboard.browser import CHROMIUM, launch, open_bench, run_dashboard
 from virtual_drive.launch import virtual_bench
@@ -114,18 +115,50 @@ def state_calls(api_url: str, n: int = 6) -> tuple[list[float], dict]:
     return took, last
 
 
-def check_frozen(page, api_url: str, pid: int, what: str) -> None:
+def _renderer_pids(page) -> list[int]:
+    """The renderer processes of the browser that shows ``page`` (Chromium's own list)."""
+    cdp = page.context.browser.new_browser_cdp_session()
+    try:
+        info = cdp.send("SystemInfo.getProcessInfo")["processInfo"]
+    finally:
+        cdp.detach()
+    return [p["id"] for p in info if p["type"] == "renderer"]
+
+
+class HostDelay:
+    """What the host, not the product, added to a wait: the run-queue time of the processes
+    that must act for the page to change (the dashboard's and the page's renderer's), each
+    counted at most once per second of the window (a process with several threads waiting at
+    once is late by the longest wait, not their sum). ``allowance()`` → seconds."""
+
+    def __init__(self, page, *pids: int) -> None:
+        self.probes = [RunQueueProbe(p) for p in (*pids, *_renderer_pids(page))]
+        self.t0 = time.monotonic()
+
+    def allowance(self) -> float:
+        window = time.monotonic() - self.t0
+        return sum(window * min(1.0, p.stop()) for p in self.probes)
+
+    def __repr__(self) -> str:
+        return "; ".join(repr(p) for p in self.probes)
+
+
+def check_frozen(page, api_url: str, pid: int, what: str, dash_pid: int) -> None:
+    host = HostDelay(page, dash_pid)
     with frozen(pid) as t_stop:
         waited = page_waits(page, BAR_STALE, 20.0)
         shown = time.monotonic() - t_stop
+        extra = host.allowance()
         page.wait_for_function(PLOTS_STALE, polling=20, timeout=20_000)
         took, s = state_calls(api_url)
         time.sleep(max(0.0, FREEZE_S - (time.monotonic() - t_stop)))
         text = page.inner_text(".bench-statusbar")
     load = os.getloadavg()[0]
-    assert shown <= SHOWN_WITHIN_S + 0.25, (
+    # the product's part: 1 s (+ 0.25 s for the page's 20 ms polling and the SIGSTOP itself);
+    # the host's part: the time the dashboard and the renderer sat in the run queue
+    assert shown <= SHOWN_WITHIN_S + 0.25 + extra, (
         f"{what} frozen: the page showed STALE {shown:.2f} s after (waited {waited:.2f} s; "
-        f"load {load:.1f})"
+        f"host run-queue allowance {extra:.2f} s: {host!r}; load {load:.1f})"
     )
     assert "STALE" in text and " s old" in text, text
     assert statistics.median(took) <= 0.100, f"/api/state took {took} s (load {load:.1f})"
@@ -159,12 +192,12 @@ def test_a_frozen_drive_is_stale_within_a_second(rig):
     page.wait_for_function(
         "() => /● live · data/.test(document.body.innerText)", timeout=60_000
     )
-    check_frozen(page, dash.api_url, bus.drives[1].pid, "drive")
+    check_frozen(page, dash.api_url, bus.drives[1].pid, "drive", dash.proc.pid)
 
 
 def test_a_frozen_hub_is_stale_within_a_second(rig):
     bus, dash, page = rig
-    check_frozen(page, dash.api_url, bus.hub_process.pid, "hub")
+    check_frozen(page, dash.api_url, bus.hub_process.pid, "hub", dash.proc.pid)
 
 
 def test_a_stopped_bus_node_is_stale_within_a_second_while_its_heartbeat_goes_on(rig):
@@ -176,11 +209,13 @@ def test_a_stopped_bus_node_is_stale_within_a_second_while_its_heartbeat_goes_on
     bus, dash, page = rig
     page.wait_for_function(BAR_LIVE, timeout=60_000)
     with Drive.connect(host="127.0.0.1", port=bus.port, node_id=1, heartbeat_ms=None) as d:
+        host = HostDelay(page, dash.proc.pid)
         d.nmt("stop")
         t_stop = time.monotonic()
         try:
             page_waits(page, BAR_STALE, 20.0)
             shown = time.monotonic() - t_stop
+            extra = host.allowance()
             page.wait_for_function(
                 "() => /NMT STOPPED/.test(document.querySelector('.bench-statusbar').innerText)",
                 polling=20, timeout=20_000,
@@ -190,7 +225,9 @@ def test_a_stopped_bus_node_is_stale_within_a_second_while_its_heartbeat_goes_on
             d.nmt("start")
     load = os.getloadavg()[0]
     # nmt() returns once a heartbeat confirmed STOPPED: up to a producer period after the stop
-    assert shown <= SHOWN_WITHIN_S + 0.25, f"the page showed STALE {shown:.2f} s after"
+    assert shown <= SHOWN_WITHIN_S + 0.25 + extra, (
+        f"the page showed STALE {shown:.2f} s after (host allowance {extra:.2f} s: {host!r})"
+    )
     assert statistics.median(took) <= 0.100, f"/api/state took {took} s (load {load:.1f})"
     assert max(took) < 1.0, f"/api/state took {took} s: it waited on an SDO timeout"
     assert s["nmt_state"] == "STOPPED" and "live" in s["stale"], s
@@ -202,9 +239,11 @@ def test_a_frozen_dashboard_is_stale_on_the_page_by_itself(rig):
     """The dashboard's own loops stopped (its whole process): nothing reaches the page, which
     shows the stale state by itself and counts the seconds."""
     _, dash, page = rig
+    host = HostDelay(page)  # the dashboard is frozen: only the page's renderer must act
     with frozen(dash.proc.pid) as t_stop:
         page_waits(page, PAGE_STALE, 20.0)
         shown = time.monotonic() - t_stop
+        extra = host.allowance()
         page.wait_for_function(PLOTS_STALE, polling=20, timeout=20_000)
         time.sleep(max(0.0, FREEZE_S - (time.monotonic() - t_stop)))
         counted = page.evaluate(
@@ -212,8 +251,9 @@ def test_a_frozen_dashboard_is_stale_on_the_page_by_itself(rig):
                 '.bench-statusbar .bench-dead')).getPropertyValue('--bench-s')"""
         )
     load = os.getloadavg()[0]
-    assert shown <= SHOWN_WITHIN_S + 0.25, (
-        f"dashboard frozen: the page showed stale {shown:.2f} s after (load {load:.1f})"
+    assert shown <= SHOWN_WITHIN_S + 0.25 + extra, (
+        f"dashboard frozen: the page showed stale {shown:.2f} s after (host allowance "
+        f"{extra:.2f} s: {host!r}; load {load:.1f})"
     )
     assert int(counted) >= 1, f"the page counted {counted!r} s"
     page_waits(page, BAR_LIVE, 30.0)
