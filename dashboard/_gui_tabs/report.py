@@ -17,7 +17,7 @@ __all__ = ["REPORT_IDS", "ReportTab"]
 REPORT_DEADLINE_S = 600.0  #: the whole report gives up (and puts the drive back) after this, s
 #: drive_link.report.EXPERIMENTS' ids in their order (a unit test keeps them equal): the tab is
 #: built without importing drive_link.report, whose scipy imports cost 2-6 s of CPU on a loaded
-#: host and held up the first page's plots; it is imported when a report runs
+#: host and held up the first page's plots (the GUI imports it when it starts: BenchGui.start)
 REPORT_IDS = (
     "current_step_deadbeat",
     "lc_sweep",
