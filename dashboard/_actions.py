@@ -46,6 +46,7 @@ class LongAction:
     text: str = "starting"
     cancel_event: threading.Event = field(default_factory=threading.Event)
     found: Found | None = None  #: the drive as the action found it (set by the bench)
+    quick_stopped: bool = False  #: cancelled by a quick stop: the drive is not enabled again
 
     def progress(self, fraction: float, text: str) -> None:
         """Report progress (0..1) and a short text; raises when cancelled or past the deadline."""

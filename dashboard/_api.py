@@ -173,10 +173,34 @@ def delete_control(
     return ControlOut(client=None)
 
 
-@router.post("/command", tags=["drive"], summary="enable / disable / quick_stop / fault_reset")
-def post_command(body: CommandIn, bench: ControlDep) -> dict[str, Any]:
+@router.post(
+    "/command",
+    tags=["drive"],
+    summary="enable / disable / quick_stop / fault_reset (quick_stop: any client, at once)",
+)
+def post_command(
+    body: CommandIn,
+    bench: BenchDep,
+    x_control_token: Annotated[
+        str | None, Header(description="token from POST /api/control (not for quick_stop)")
+    ] = None,
+) -> dict[str, Any]:
+    if body.command == "quick_stop":  # a safety control: never lease-gated, never waits
+        return {"state": run(bench.quick_stop)}
+    require_control(bench, x_control_token)
     run(lambda: bench.command(body.command))
     return {"state": bench.drive.state}
+
+
+@router.post(
+    "/quick_stop",
+    tags=["drive"],
+    summary="Quick stop at once, from any client (no control lease needed): cancels the long "
+    "action under way, which does not enable the drive again",
+    dependencies=[NoBody],
+)
+def post_quick_stop(bench: BenchDep) -> dict[str, Any]:
+    return {"state": run(bench.quick_stop)}
 
 
 @router.put("/mode", tags=["drive"], summary="Operating mode: speed (IP loop) or current (i_p*)")

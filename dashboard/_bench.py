@@ -235,22 +235,40 @@ class Bench:
 
     # ---------------------------------------------------------------- commands
     def command(self, name: str) -> None:
-        """enable / disable / quick_stop / fault_reset (CiA 402)."""
+        """enable / disable / quick_stop / fault_reset (CiA 402); quick_stop never waits for
+        the bench lock (:meth:`quick_stop`)."""
+        if name == "quick_stop":
+            self.quick_stop()
+            return
         with self.lock:
             if name == "enable":
                 self.drive.enable(timeout=2.0)
             elif name == "disable":
                 self.stop_sequence()
                 self.drive.disable()
-            elif name == "quick_stop":
-                self.stop_sequence()
-                self.drive.quick_stop()
             elif name == "fault_reset":
                 self.drive.fault_reset()
             else:
                 raise ValueError(f"unknown command {name!r}")
         self.watch.poke()
         self.emit("state")
+
+    def quick_stop(self) -> str:
+        """CiA 402 quick stop, at once: without the bench lock (a long action holds it for up
+        to a minute), cancelling the long action and the sequence under way; they put back
+        what they changed but do not enable the drive again (a quick stop wins over "as
+        found": :mod:`drive_link._stop_guard`). Returns the state reached."""
+        act = self.action
+        if act is not None:
+            act.quick_stopped = True
+            act.cancel_event.set()
+        self._sequence_stop.set()
+        try:
+            return self.drive.quick_stop()
+        finally:
+            self.stop_sequence()
+            self.watch.poke()
+            self.emit("state")
 
     def set_mode(self, mode: str, setpoint: Callable[[], None] | None = None) -> None:
         """Switch to "speed" or "current" mode.
@@ -319,7 +337,7 @@ class Bench:
         if self.action is not None or self.busy:
             raise RuntimeError(f"busy: {self.busy or self.action.what} under way")
         act = LongAction(what, time.monotonic() + deadline_s)
-        with self.lock:
+        with self.lock, self._stop_watch():
             if self.action is not None:
                 raise RuntimeError(f"busy: {self.action.what} under way")
             found = self._found()
@@ -331,6 +349,10 @@ class Bench:
             except BaseException as exc:
                 undone = self.restore(found)
                 note = "drive put back as found" if not undone else "NOT put back: " + undone
+                if act.quick_stopped:
+                    note = "quick stop: the drive stays stopped, " + (
+                        "settings put back" if not undone else "NOT put back: " + undone
+                    )
                 self.emit("error", {"message": f"{what}: {exc} ({note})"})
                 if isinstance(exc, Exception):
                     try:
@@ -342,6 +364,11 @@ class Bench:
             finally:
                 self.action, self.busy = None, None
                 self.emit("busy", {"what": None})
+
+    def _stop_watch(self) -> contextlib.AbstractContextManager:
+        """The block in which a quick stop forbids enabling the drive (this thread)."""
+        stops = getattr(self.drive, "stops", None)
+        return stops.watch() if stops is not None else contextlib.nullcontext()
 
     def cancel_action(self) -> bool:
         """Cancel the long action under way (True if there was one)."""
@@ -396,6 +423,10 @@ class Bench:
         found = self._found()
 
         def run() -> None:
+            with self._stop_watch():
+                steps_run()
+
+        def steps_run() -> None:
             t0 = time.monotonic()
             total = steps[-1][0] if steps else 0.0
             for k, (at_s, rpm) in enumerate(steps):

@@ -110,6 +110,16 @@ class BenchGui:
 
     # ------------------------------------------------------------------ lifecycle
     def start(self) -> None:
+        # the Report tab's experiments (scipy: 1-6 s of CPU) are imported now, before any page
+        # connects: not in a page's first build (its plots waited) nor when a report starts
+        # (the status and the API answered slowly meanwhile)
+        import matplotlib
+
+        matplotlib.use("Agg", force=False)  # the report's figures: no display
+        import matplotlib.pyplot
+
+        import drive_link.report  # noqa: F401
+
         install_send_lock()
         install_fast_cast()  # viser's per-assignment cast without rebuilding its type hints
         # viser has no authentication: the GUI stays on loopback even when the API is remote

@@ -177,8 +177,10 @@ class Panel(
             )
             gui.add_button("Sign in").on_click(lambda e: self._sign_in())
         self.drive_btns = gui.add_button_group("Drive", ("Enable", "Disable", "Fault reset"))
+        # a safety control: any connected browser may press it (not only the one in control),
+        # and it never waits for a long action (Bench.quick_stop)
         self.quick_btn.on_click(
-            self.action(lambda e: self.bench.command("quick_stop"), self.control_md)
+            self.action(self._quick_stop, self.control_md, needs_control=False)
         )
         self.take_btn.on_click(
             self.action(self._take_control, self.control_md, needs_control=False)
@@ -230,6 +232,9 @@ class Panel(
             "Fault reset": "fault_reset",
         }[event.target.value]
         self.bench.command(cmd)
+
+    def _quick_stop(self, event: Any) -> str:
+        return f"quick stop: {self.bench.quick_stop()}"
 
     def _cancel(self, event: Any) -> str:
         return "cancelling …" if self.bench.cancel_action() else "no action under way"

@@ -41,6 +41,7 @@ from ._nmt import HeartbeatMonitor, HeartbeatProducer, send_command
 from ._objects import ObjectInfo, ObjectTable, default_table
 from ._remote import remote_node
 from ._sdo import SdoChannel
+from ._stop_guard import StopGuard
 from .errors import DriveError, DriveTimeout, InvalidValue, NodeNotFound, StateError
 from .supervision import SupervisedSdoChannel, Supervisor
 from .trace import Recorder
@@ -161,8 +162,11 @@ class Drive:
         self._gains_lock = threading.RLock()  # stage + apply + read back as one operation
         self._closed = False
         self.host_id: int | None = None
+        #: quick stops sent and the blocks they forbid re-enabling in (drive_link._stop_guard)
+        self.stops = StopGuard()
         self.sm = cia402.StateMachine(
-            lambda: int(self.read("statusword")), lambda cw: self.write("controlword", cw)
+            lambda: int(self.read("statusword")),
+            lambda cw: self.stops.write_controlword(lambda c: self.write("controlword", c), cw),
         )
         self.trace = Recorder(self)
         conn.active_nodes[node_id] = None
@@ -494,7 +498,9 @@ class Drive:
         return self.sm.disable(timeout)
 
     def quick_stop(self, timeout: float = cia402.STATE_TIMEOUT_S) -> str:
-        """Quick stop (ramp down per quick_stop_option_code)."""
+        """Quick stop (ramp down per quick_stop_option_code). Counted first: an experiment
+        running in another thread does not enable the drive again (:attr:`stops`)."""
+        self.stops.note_quick_stop()
         return self.sm.quick_stop(timeout)
 
     def fault_reset(self, timeout: float = cia402.STATE_TIMEOUT_S) -> str:

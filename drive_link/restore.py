@@ -19,6 +19,12 @@ power stage off, CiA 402 / 0x6060 abort 0x08000022 otherwise):
 
 A drive in FAULT is left there (the fault is reported by the caller's error). A second Ctrl-C
 while restoring is held back until the restore is done (main thread only).
+
+A quick stop wins over "as found": after a quick stop sent by this host since the snapshot
+(:attr:`Drive.stops <drive_link.drive.Drive.stops>`), or with the drive in QUICK STOP ACTIVE,
+steps 2-4 are still done but step 5 is not: the drive stays stopped (QUICK STOP ACTIVE or
+SWITCH ON DISABLED) until the user enables it; and inside :func:`leave_as_found` the block
+itself cannot enable the drive again after such a quick stop (:mod:`drive_link._stop_guard`).
 """
 
 from __future__ import annotations
@@ -34,6 +40,7 @@ from .cia402 import (
     FAULT,
     FAULT_REACTION_ACTIVE,
     OPERATION_ENABLED,
+    QUICK_STOP_ACTIVE,
     SWITCH_ON_DISABLED,
 )
 from .errors import DriveError
@@ -72,6 +79,7 @@ class Snapshot:
     setpoints: dict[str, Any] = field(default_factory=dict)
     settings: dict[str, Any] = field(default_factory=dict)
     gains: dict[str, Any] | None = None
+    quick_stops: int = 0  #: the host's quick stops counted when the snapshot was taken
 
     def describe(self) -> str:
         """One line: what the drive is put back to (state, mode, setpoint in use)."""
@@ -91,7 +99,21 @@ def snapshot(
     names = (DISABLE_OPTION, *settings)
     extra = {n: drive.read(n) for n in dict.fromkeys(names) if n in drive.table}
     g = drive.read_gains().to_dict() if gains else None
-    return Snapshot(drive.state, drive.mode, values, extra, g)
+    return Snapshot(drive.state, drive.mode, values, extra, g, _stop_count(drive))
+
+
+def _stop_count(drive: Drive) -> int:
+    stops = getattr(drive, "stops", None)
+    return int(stops.count) if stops is not None else 0
+
+
+def quick_stopped(drive: Drive, snap: Snapshot, state: str) -> bool:
+    """Whether a quick stop came since ``snap`` (this host's, counted; or any, seen as the
+    drive's ``state`` QUICK STOP ACTIVE): then :func:`restore` does not enable the drive."""
+    stops = getattr(drive, "stops", None)
+    if stops is not None and (stops.stopped() or stops.count != snap.quick_stops):
+        return True
+    return state == QUICK_STOP_ACTIVE
 
 
 def switch_mode(drive: Drive, mode: str, *, brake: bool = False, timeout: float = 3.0) -> None:
@@ -130,6 +152,7 @@ def restore(drive: Drive, snap: Snapshot, timeout: float = 3.0, brake: bool = Fa
     state = drive.state
     if state in (FAULT, FAULT_REACTION_ACTIVE):
         return state
+    stopped = quick_stopped(drive, snap, state)
     mode_changed = drive.mode != snap.mode
     if state == OPERATION_ENABLED and (snap.state != OPERATION_ENABLED or mode_changed):
         state = _coast_disable(drive, brake, timeout)
@@ -150,6 +173,8 @@ def restore(drive: Drive, snap: Snapshot, timeout: float = 3.0, brake: bool = Fa
             drive.write(name, value)
     if mode_changed:
         drive.set_mode(snap.mode, timeout=max(0.5, timeout / 3))
+    if stopped:  # a quick stop wins: the user enables the drive again, nobody else
+        return drive.state
     if snap.state == OPERATION_ENABLED:
         if drive.state != OPERATION_ENABLED:
             return drive.enable(timeout=timeout)
@@ -206,15 +231,17 @@ def leave_as_found(
     If the block failed and the restore fails too, one :class:`DriveError` names both.
     """
     snap = found if found is not None else snapshot(drive, settings, gains)
-    try:
-        yield snap
-    except BaseException as exc:
+    stops = getattr(drive, "stops", None)
+    with stops.watch() if stops is not None else contextlib.nullcontext():
         try:
-            with _sigint_held():
-                restore(drive, snap, timeout, brake)
-        except (DriveError, KeyboardInterrupt) as rexc:
-            what = "interrupted" if isinstance(exc, KeyboardInterrupt) else str(exc)
-            raise DriveError(f"{what}; restoring the drive failed too: {rexc}") from exc
-        raise
-    with _sigint_held():
-        restore(drive, snap, timeout, brake)
+            yield snap
+        except BaseException as exc:
+            try:
+                with _sigint_held():
+                    restore(drive, snap, timeout, brake)
+            except (DriveError, KeyboardInterrupt) as rexc:
+                what = "interrupted" if isinstance(exc, KeyboardInterrupt) else str(exc)
+                raise DriveError(f"{what}; restoring the drive failed too: {rexc}") from exc
+            raise
+        with _sigint_held():
+            restore(drive, snap, timeout, brake)

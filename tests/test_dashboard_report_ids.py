@@ -1,0 +1,41 @@
+"""The Report tab lists drive_link.report's experiments without importing it (its scipy imports
+held up the first page for 2-6 s): its copy of the ids must be the report's, in its order."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+
+def test_report_tab_ids_are_the_reports():
+    from dashboard._gui_tabs.report import REPORT_IDS
+    from drive_link.report import EXPERIMENTS
+
+    assert REPORT_IDS == tuple(EXPERIMENTS)
+
+
+BUILD_TAB = """
+import sys, contextlib, io, viser
+from dashboard._gui_tabs.report import ReportTab
+with contextlib.redirect_stdout(io.StringIO()):
+    srv = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+
+class Tab(ReportTab):
+    gui = srv.gui
+    def action(self, fn, md, needs_control=True):
+        return lambda event: None
+    def md(self):
+        return srv.gui.add_markdown("", visible=False)
+
+Tab()._build_report_tab()
+print("IMPORTED", "drive_link.report" in sys.modules, "scipy.optimize" in sys.modules)
+srv.stop()
+"""
+
+
+def test_building_the_report_tab_does_not_import_the_report():
+    """In a process of its own: the Report tab built on a real viser server."""
+    out = subprocess.run([sys.executable, "-c", BUILD_TAB], capture_output=True, text=True,
+                         timeout=120)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert "IMPORTED False False" in out.stdout, out.stdout
