@@ -129,6 +129,10 @@ class VirtualDrive:
     :param sim: a ready :class:`virtual_drive.sim.Simulator` (default: a new one, PWM-exact).
     """
 
+    #: s the bus reader waits for a frame before it looks whether :meth:`stop` was called (so
+    #: also the longest :meth:`stop` waits for it)
+    NOTIFIER_CYCLE: float = 0.2
+
     def __init__(
         self,
         bus: can.BusABC,
@@ -270,7 +274,9 @@ class VirtualDrive:
         if self._started:
             return self
         self._started = True
-        self.network.notifier = can.Notifier(self.bus, self.network.listeners, 0.2)
+        self.network.notifier = can.Notifier(
+            self.bus, self.network.listeners, self.NOTIFIER_CYCLE
+        )
         self.nmt.boot()
         self.runner.start()
         logger.info(
