@@ -16,6 +16,7 @@ with, so the drive (before storing) and the host (before sending) reject the sam
 from __future__ import annotations
 
 import configparser
+import copy
 import difflib
 import functools
 import os
@@ -110,6 +111,7 @@ class ObjectDictionaryView:
             raise ValueError(f"duplicate object names in the EDS: {', '.join(dup)}")
         self._by_index = {(e.index, e.subindex): e for e in self._entries}
         self._constraints = constraints
+        self._od_templates: dict[int, cod.ObjectDictionary] = {}  # canopen_od, by node-ID
         self._defaults: dict[str, Number] = {
             e.name: e.default
             for e in self._entries
@@ -222,6 +224,12 @@ class ObjectDictionaryView:
         limits (which canopen drops) and enumerations are filled in from this view.
         """
         nid = self.node_id if node_id is None else node_id
+        template = self._od_templates.get(nid)
+        if template is None:  # parse once per node-ID; a deep copy is about 4x cheaper
+            template = self._od_templates[nid] = self._build_canopen_od(nid)
+        return copy.deepcopy(template)
+
+    def _build_canopen_od(self, nid: int) -> cod.ObjectDictionary:
         od = canopen.import_od(str(self.path), nid)
         for e in self._entries:
             var = od[e.index] if e.object_name == e.name else od[e.index][e.subindex]

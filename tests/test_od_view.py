@@ -288,6 +288,14 @@ def test_canopen_od_is_fresh_and_complete(view) -> None:
     assert od1[0x6060].value_descriptions[-1] == "PSEUDO_CURRENT"
     assert od2[0x1800][1].default == 0x189
     assert od2["measurements"]["i_p"].pdo_mappable
+    # fresh: a change to one dictionary (a LocalNode writing defaults) is not seen by the next
+    od1[0x2010][2].max = 1.0
+    od1[0x6060].value_descriptions.clear()
+    od3 = view.canopen_od()
+    assert od3 is not od1 and od3[0x2010][2] is not od1[0x2010][2]
+    assert od3[0x2010][2].max == pytest.approx(2e-3)
+    assert od3[0x6060].value_descriptions[-1] == "PSEUDO_CURRENT"
+    assert od3[0x2010][2].parent is od3[0x2010]  # the copy's tree links to itself
 
 
 def test_od_served_by_canopen_local_node_over_virtual_bus(view) -> None:

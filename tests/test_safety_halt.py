@@ -185,3 +185,23 @@ def test_torque_slope_ramps_the_demand(bench):
     bench.write("controlword", ENABLE | HALT)
     assert bench.wait(lambda: bench.read("measurements.i_p_ref") == 0.0, 2.0)
     bench.write("controlword", 0x02)  # quick stop: the free shaft spins up under 20 A
+
+
+def test_a_new_torque_target_is_not_reached_before_the_demand_gets_there(bench):
+    """Bit 10 in profile torque means the demand reached the target as written now (CiA 402
+    §11): right after a new 0x6071 or a halt, before the drive's next millisecond tick moved
+    the demand, it is not reached. The drive's pacing is held (its simulator lock) so the
+    read lands in that window every time, not only when the host happens to be quick."""
+    bench.write("torque_slope", 0)  # a step: reached at the next tick
+    bench.enable(4)
+    assert bench.wait(lambda: bench.read("statusword") & BIT10, 2.0)  # 0 A of 0 A
+    with bench.drive.sim_lock:  # no tick between the write and the read
+        bench.write("target_torque", 100)  # 10 A; the demand is still at 0 A
+        assert not bench.read("statusword") & BIT10
+    assert bench.wait(lambda: bench.read("statusword") & BIT10, 2.0)  # at 10 A now
+    assert bench.read("measurements.i_p_ref") == pytest.approx(10.0)
+    with bench.drive.sim_lock:
+        bench.write("controlword", ENABLE | HALT)  # halt: the target is 0 A now
+        assert not bench.read("statusword") & BIT10
+    assert bench.wait(lambda: bench.read("statusword") & BIT10, 2.0)  # halted at 0 A
+    assert bench.read("measurements.i_p_ref") == 0.0

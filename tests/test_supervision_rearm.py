@@ -345,6 +345,7 @@ def test_failed_rearm_blocks_user_commands_with_one_line(rig):
         d.supervisor.wait_ready(timeout=15.0)
         d.read("statusword")
     assert "\n" not in str(exc.value)
+    rig.restart()  # a drive again, so that closing the session does not wait out its retries
 
 
 def test_pdo_settings_the_session_changed_come_back(rig):

@@ -130,6 +130,10 @@ class VirtualDrive:
     :param sim: a ready :class:`virtual_drive.sim.Simulator` (default: a new one, PWM-exact).
     """
 
+    #: s the bus reader waits for a frame before it looks whether :meth:`stop` was called (so
+    #: also the longest :meth:`stop` waits for it)
+    NOTIFIER_CYCLE: float = 0.2
+
     def __init__(
         self,
         bus: can.BusABC,
@@ -273,7 +277,7 @@ class VirtualDrive:
         self._started = True
         self.remote = RemoteRequests(self.pdo.on_remote)  # RTR: TPDOs; no node guarding
         self.network.notifier = can.Notifier(
-            self.bus, [*self.network.listeners, self.remote], 0.2
+            self.bus, [*self.network.listeners, self.remote], self.NOTIFIER_CYCLE
         )
         self.nmt.boot()
         self.runner.start()

@@ -37,6 +37,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "current_ref",
+    "current_target",
     "prepare_chunk",
     "ramp_step",
     "ramp_towards",
@@ -105,6 +106,13 @@ def _current_target(d: VirtualDrive, mode: int, halt: bool) -> tuple[float, floa
     else:
         target = 0.0 if halt else float(d._param(SETPOINT_I_P_REF))
     return max(-cap, min(cap, target)), cap
+
+
+def current_target(d: VirtualDrive) -> float:
+    """Where i_p* (A) of the current modes heads now, from the setpoints as last written
+    (0x6071 or 0x2030:1, 0 on halt), capped; the chunk loop catches up at its next chunk."""
+    halt = bool(d.cia402.controlword & CW_HALT)
+    return _current_target(d, d._mode, halt)[0]
 
 
 def ramping(d: VirtualDrive) -> bool:

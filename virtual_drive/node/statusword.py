@@ -2,7 +2,8 @@
 
 Bit 10 (target reached): in profile velocity |speed - target| <= 0x606D for 0x606E ms (the
 target is 0 during a stop ramp or halt); in the current modes the reference reached its target
-and |i_p - i_p*| <= :data:`CURRENT_WINDOW_A`; in QUICK STOP ACTIVE the axis stopped. Bit 11
+as written now (a target written since the last chunk is not reached yet) and
+|i_p - i_p*| <= :data:`CURRENT_WINDOW_A`; in QUICK STOP ACTIVE the axis stopped. Bit 11
 (internal limit): |i_p*| at the speed loop's current limit. Bit 12 (speed zero, profile
 velocity): |speed| <= 0x606F for 0x6070 ms. Times are simulated seconds.
 """
@@ -22,6 +23,7 @@ from .od_addresses import (
     VELOCITY_WINDOW_TIME,
 )
 from .od_maps import CURRENT_WINDOW_A, MODE_PROFILE_VELOCITY
+from .ramps import current_target
 
 if TYPE_CHECKING:
     from .drive_node import VirtualDrive
@@ -51,8 +53,11 @@ def statusword(d: VirtualDrive) -> int:
             reached = velocity_reached(d)
             limit = abs(live["i_p_ref"]) >= 0.999 * d._param(SPEED_CURRENT_LIMIT)
         else:
+            # the target as written now, not as of the last chunk: a new 0x6071 is not
+            # reached until the demand got there (as velocity_reached does for 0x60FF)
             reached = (
-                d._i_ref == d._i_target and abs(live["i_p"] - live["i_p_ref"]) <= CURRENT_WINDOW_A
+                d._i_ref == d._i_target == current_target(d)
+                and abs(live["i_p"] - live["i_p_ref"]) <= CURRENT_WINDOW_A
             )
     if d._mode == MODE_PROFILE_VELOCITY and held(
         d, d._threshold_since, d._param(VELOCITY_THRESHOLD_TIME)
