@@ -74,6 +74,7 @@ def ready_count(cmd: str) -> int:
     m = re.search(r"--nworkers[ =](\d+)", cmd)
     return int(m[1]) if m else 1
 
+
 #: Wall-time limit of one foreground line (s); `check` and `record --seconds 10s` take 10-30 s.
 LINE_TIMEOUT = 180.0
 #: How long a background command may take to say it is ready (s; a loaded host is slow).

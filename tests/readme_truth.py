@@ -32,11 +32,29 @@ def hub_port(s: ShellSession) -> int:
     return int(next(iter(s.ports.values())))
 
 
+def _connect(open_it):
+    """python-can's socketcand client compares each handshake answer with one whole read, so
+    it fails ("Expected '< ok >' got: '< ok >< frame …'") when the hub's first frames arrive
+    in the same read as its ``< ok >`` (drives streaming): try again, up to 5 times."""
+    import can
+
+    for attempt in range(5):
+        try:
+            return open_it()
+        except can.CanError:
+            if attempt == 4:
+                raise
+            time.sleep(0.2)
+    raise AssertionError("unreachable")
+
+
 @contextlib.contextmanager
 def bus(s: ShellSession) -> Iterator:
     import can
 
-    b = can.Bus(interface="socketcand", host="127.0.0.1", port=hub_port(s), channel="vcan0")
+    b = _connect(
+        lambda: can.Bus(interface="socketcand", host="127.0.0.1", port=hub_port(s), channel="vcan0")
+    )
     try:
         yield b
     finally:
@@ -65,7 +83,11 @@ def sdo_nodes(s: ShellSession, *node_ids: int) -> Iterator[dict]:
     import canopen
 
     net = canopen.Network()
-    net.connect(interface="socketcand", host="127.0.0.1", port=hub_port(s), channel="vcan0")
+    _connect(
+        lambda: net.connect(
+            interface="socketcand", host="127.0.0.1", port=hub_port(s), channel="vcan0"
+        )
+    )
     try:
         nodes = {}
         for n in node_ids:
@@ -125,8 +147,8 @@ def scan_nodes(r: Result, s: ShellSession) -> list[str]:
 
 
 def node2_turns(r: Result, s: ShellSession) -> list[str]:
-    """"node 2 turns, node 1 stays disabled": 0x606C of node 2 reaches the 500 rpm asked for;
-    node 1's statusword (0x6041) is SWITCH ON DISABLED (CiA 402: xxxx xxxx x1xx 0000)."""
+    """The comment "node 2 turns, node 1 stays disabled": 0x606C of node 2 reaches the 500 rpm
+    asked for; node 1's statusword (0x6041) is SWITCH ON DISABLED (CiA 402: xxxx xxxx x1xx 0000)."""
     want = float(re.search(r"set-speed (\d+)rpm", r.cmd)[1])
     bad, v = [], None
     with sdo_nodes(s, 1, 2) as nodes:
@@ -224,7 +246,7 @@ def _rows(folder: Path) -> list[dict]:
 
 
 def sweep_table1(r: Result, s: ShellSession) -> list[str]:
-    """"N runs: Table 1 over L_c/L x R_c/R": runs.csv holds N runs, one per point of the
+    """The comment "N runs: Table 1 over L_c/L x R_c/R": runs.csv holds N runs, one per point of the
     L_c/L x R_c/R grid, and each run's ``stable`` is what the poles of the closed deadbeat loop
     (python-control, eqs. 8, 15) say, except within 0.2 % of the unit circle."""
     n = int(re.match(r"(\d+) runs", r.comment)[1])
@@ -242,9 +264,9 @@ def sweep_table1(r: Result, s: ShellSession) -> list[str]:
 
 
 def sweep_one_run(r: Result, s: ShellSession) -> list[str]:
-    """"one run alone: its row (L_c = 2.03 L: unstable)": the printed row is run N of the
-    sweep's runs.csv (same inputs, same verdict), its L_c/L rounds to the comment's figure, it
-    is unstable, and so say eq. (17) (L_c > 2 L) and the closed loop's poles."""
+    """The comment "one run alone: its row (L_c = 2.03 L: unstable)": the printed row is run N
+    of the sweep's runs.csv (same inputs, same verdict), its L_c/L rounds to the comment's
+    figure, it is unstable, and so say eq. (17) (L_c > 2 L) and the closed loop's poles."""
     row = dict(re.findall(r"^(\S+) = (.*)$", r.out, re.M))
     m = re.search(r"L_c = ([\d.]+) L: (unstable|stable)", r.comment)
     if m is None or "L_c/L" not in row:
