@@ -187,6 +187,8 @@ SLOW_FIRST = (
     "tests/test_readme_setup.py",
     "tests/test_readme_using.py",
     "tests/test_readme_commands.py",
+    "tests/test_readme_nodes.py",
+    "tests/test_readme_sweeps.py",
 )
 LANE_TEST = "tests/test_socketcan_lane.py::test_socketcan_lane"
 

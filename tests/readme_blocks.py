@@ -209,15 +209,27 @@ def starts_drive(b: Block) -> bool:
     return any(ln.background and "virtual-drive" in ln.cmd for ln in lines_of(b))
 
 
+def uses_drive(b: Block) -> bool:
+    """A block with a ``drive-link`` line talks to a drive (else it stands alone: sweeps)."""
+    return any(re.match(r"(\S+/)?drive-link\b", ln.cmd) for ln in lines_of(b))
+
+
 def sessions(bs: list[Block] | None = None) -> list[list[Block]]:
     """The runnable shell blocks in shell sessions: a block that starts no virtual drive of its
-    own continues the session of the shell block before it (same file)."""
+    own continues the session of the shell block before it (same file), if both talk to a
+    drive or neither does (the sweep blocks need none and share their own session)."""
     out: list[list[Block]] = []
     for b in bs if bs is not None else blocks():
         if b.lang not in SHELL or not runnable(b):
             continue
-        if out and not starts_drive(b) and out[-1][-1].path == b.path:
-            out[-1].append(b)
+        prev = out[-1] if out else []
+        if (
+            prev
+            and not starts_drive(b)
+            and prev[-1].path == b.path
+            and uses_drive(b) == any(uses_drive(p) or starts_drive(p) for p in prev)
+        ):
+            prev.append(b)
         else:
             out.append([b])
     return out

@@ -44,10 +44,37 @@ from pathlib import Path
 if __package__ in (None, ""):
     sys.path.insert(0, str(Path(__file__).resolve().parent))
 from conftest import RunQueueProbe
-from readme_blocks import LINE_NOT_HERE, Block, Line, lines_of
+from readme_blocks import LINE_NOT_HERE, ROOT, Block, Line, lines_of
 
-#: First word of a background command → what it prints when it is ready.
-READY = {"virtual-drive": re.compile(r"ready on")}
+#: First word of a background command → what it prints when it is ready (once per node or
+#: worker it starts, :func:`ready_count`): ``virtual-drive: node 1 ready on …``, ``virtual-drive:
+#: node 2 ready (pid …)`` of ``hub --nodes``, ``… unconfigured drive(s) … ready on``; Dask's
+#: scheduler and each worker process.
+READY = {
+    "virtual-drive": re.compile(r"\bready\b"),
+    "dask scheduler": re.compile(r"Scheduler at:"),
+    "dask worker": re.compile(r"Registered to:"),
+}
+
+
+def ready_pattern(cmd: str) -> re.Pattern | None:
+    words = cmd.split()
+    return READY.get(" ".join(words[:2])) or READY.get(words[0] if words else "")
+
+
+def ready_count(cmd: str) -> int:
+    """How many ready lines a background command prints: one per node of ``--nodes 1-2`` /
+    ``--nodes 1,2``, one per worker process of ``--nworkers N``, else one."""
+    m = re.search(r"--nodes[ =](\d+)-(\d+)", cmd)
+    if m:
+        return int(m[2]) - int(m[1]) + 1
+    m = re.search(r"--nodes[ =]([\d,]+)", cmd)
+    if m:
+        return len(m[1].split(","))
+    m = re.search(r"--nworkers[ =](\d+)", cmd)
+    return int(m[1]) if m else 1
+
+
 #: Wall-time limit of one foreground line (s); `check` and `record --seconds 10s` take 10-30 s.
 LINE_TIMEOUT = 180.0
 #: How long a background command may take to say it is ready (s; a loaded host is slow).
@@ -143,16 +170,30 @@ class ShellSession:
             if not link.exists():
                 link.symlink_to(venv)
             path.insert(0, str(venv / "bin"))
+            # the README's lines run in the checkout: its example files (sweep specs)
+            ex = self.cwd / "examples"
+            if not ex.exists():
+                ex.symlink_to(ROOT / "examples")
         env["PATH"] = os.pathsep.join(path)
         env["PYTHONUNBUFFERED"] = "1"
         self.env = env
         self.ports: dict[str, str] = {}
         self.ready_timeout = READY_TIMEOUT
         self.background: list[tuple[Result, subprocess.Popen, _Reader, _Reader]] = []
+        self.history: list[str] = []
+
+    def history_cmd(self, part: str) -> str:
+        """The last line run in this session that contains ``part`` (as localized), or ""."""
+        return next((c for c in reversed(self.history) if part in c), "")
 
     def localize(self, cmd: str) -> str:
-        """The README's fixed hub ports replaced by free ones (the same one all session)."""
-        for n in re.findall(r"--hub-port[ =](\d+)", cmd):
+        """The README's fixed ports replaced by free ones (the same one all session): a hub's
+        ``--hub-port N``, and ``--port N`` of a command started in the background (``virtual-drive
+        hub``, ``dask scheduler``); later lines (``H="--port N"``, ``tcp://…:N``) get the same."""
+        ports = re.findall(r"--hub-port[ =](\d+)", cmd)
+        if cmd.rstrip().endswith("&") and not cmd.rstrip().endswith("&&"):
+            ports += re.findall(r"(?<![\w-])--port[ =](\d+)", cmd)
+        for n in ports:
             self.ports.setdefault(n, str(free_port()))
         for readme, here in self.ports.items():
             cmd = re.sub(rf"\b{readme}\b", here, cmd)
@@ -173,8 +214,11 @@ class ShellSession:
 
     def run(self, line: Line) -> Result:
         cmd = self.localize(line.cmd)
+        self.history.append(cmd)
         if line.background:
             return self._start(line, cmd[:-1].rstrip())
+        if re.fullmatch(r"kill(\s+%[%+\-\d]*)+", cmd.strip()):
+            return self._kill_jobs(line, cmd.split()[1:])
         handler = interactive(cmd)
         if handler is not None:
             return handler(self, line, cmd)
@@ -214,6 +258,28 @@ class ShellSession:
         """A further command in this session (a check's own probe)."""
         return self.run(Line(cmd, ""))
 
+    def _kill_jobs(self, line: Line, specs: list[str]) -> Result:
+        """``kill %%`` / ``kill %2 %1``: SIGTERM to those background jobs of this session (bash's
+        job numbers: %1 the first started, %% and %+ the last, %- the one before); their ends
+        are reported by :meth:`close`."""
+        t0 = time.monotonic()
+        res = Result(line.cmd, line.comment, 0)
+        jobs = [p for _, p, _, _ in self.background]
+        for spec in specs:
+            n = {"%": len(jobs), "%%": len(jobs), "%+": len(jobs), "%-": len(jobs) - 1}.get(
+                spec, int(spec[1:]) if spec[1:].isdigit() else 0
+            )
+            if not 1 <= n <= len(jobs) or jobs[n - 1].poll() is not None:
+                res.rc, res.err = 1, f"bash: kill: {spec}: no such job\n"
+                continue
+            jobs[n - 1].send_signal(signal.SIGTERM)
+        for spec in specs:
+            with contextlib.suppress(subprocess.TimeoutExpired, ValueError, IndexError):
+                n = len(jobs) if spec in ("%", "%%", "%+") else int(spec[1:])
+                jobs[n - 1].wait(20)
+        res.seconds = time.monotonic() - t0
+        return res
+
     def _start(self, line: Line, cmd: str) -> Result:
         simple = not re.search(r"[;&|]", cmd)
         p = subprocess.Popen(
@@ -228,12 +294,12 @@ class ShellSession:
         out, err = _Reader(p.stdout.fileno()), _Reader(p.stderr.fileno())
         res = Result(line.cmd, line.comment, None)
         self.background.append((res, p, out, err))
-        ready = READY.get(cmd.split()[0])
+        ready, count = ready_pattern(cmd), ready_count(cmd)
         t0 = time.monotonic()
         if ready is not None:
             end = t0 + READY_TIMEOUT
             while time.monotonic() < end and p.poll() is None:
-                if ready.search(out.text) or ready.search(err.text):
+                if len(ready.findall(out.text)) + len(ready.findall(err.text)) >= count:
                     break
                 time.sleep(0.1)
             else:
@@ -419,15 +485,21 @@ def interactive(cmd: str):
 def run_blocks(blocks: list[Block], cwd: Path, judge=None, session: ShellSession | None = None):
     """Every line of ``blocks`` in one session; ``judge(result, session) -> [problems]`` looks
     at each line right after it ran (the session still open); the background commands' ends
-    come last (judged with session None). Returns [(result, problems)]."""
+    come last (judged with session None); ``judge.before(line, session)``, if the judge has
+    one, looks before the line runs (its answer in ``result.extra["before"]``). Returns
+    [(result, problems)]."""
     session = session or ShellSession(cwd)
     out: list[tuple[Result, list[str]]] = []
+    before = getattr(judge, "before", None)
     try:
         for b in blocks:
             for line in lines_of(b):
                 if line.cmd in LINE_NOT_HERE:
                     continue
+                seen = before(line, session) if before else None
                 r = session.run(line)
+                if seen is not None:
+                    r.extra["before"] = seen
                 out.append((r, judge(r, session) if judge else []))
     finally:
         for r in session.close():

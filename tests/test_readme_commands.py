@@ -28,7 +28,12 @@ import readme_session as rs
 pytestmark = pytest.mark.timeout(600)
 
 #: Section of a session's first block → the test file that runs it.
-ELSEWHERE = {"Using drive-link": "tests/test_readme_using.py"}
+ELSEWHERE = {
+    "Using drive-link": "tests/test_readme_using.py",
+    "Robustness sweeps (`virtual-drive sweep`)": "tests/test_readme_sweeps.py",
+    "Loopback hub and several drives": "tests/test_readme_nodes.py",
+    "Drives without a node-ID: LSS (CiA 305)": "tests/test_readme_nodes.py",
+}
 
 
 def report(results: list[tuple[rs.Result, list[str]]]) -> str:
