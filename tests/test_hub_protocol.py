@@ -349,3 +349,47 @@ def test_fast_frame_paths_agree_with_python_cans_own_encoder_and_parser():
         with pytest.raises(ProtocolError) as full:
             parse_send(bad)
         assert str(fast.value) == str(full.value)
+
+
+def test_a_slow_stock_client_reads_its_rawmode_ok_alone_while_frames_flow(hub):
+    """python-can's socketcand client reads ``< ok >`` with one ``recv`` and compares the whole
+    read. On a busy bus a client that makes that read 0.2 s late (a loaded host) must still get
+    ``< ok >`` alone (the old 50 ms hold glued frames to it: "Expected '< ok >' got: '< ok ><
+    frame …'"); a client that asked ``< features >`` (glue-safe) gets frames at once."""
+    import threading
+
+    talker = RawClient(hub.port)
+    stop = threading.Event()
+
+    def talk() -> None:
+        while not stop.is_set():
+            talker.send("< send 181 2 1 2 >")
+            time.sleep(0.002)
+
+    t = threading.Thread(target=talk, daemon=True)
+    t.start()
+    try:
+        sock = socket.create_connection(("127.0.0.1", hub.port), timeout=5)
+        assert sock.recv(256) == b"< hi >"
+        sock.sendall(b"< open vcan0 >")
+        assert sock.recv(256) == b"< ok >"
+        sock.sendall(b"< rawmode >")
+        time.sleep(0.2)  # the slow client
+        assert sock.recv(256) == b"< ok >"  # exactly what python-can compares
+        sock.settimeout(5)
+        assert b"< frame 181" in sock.recv(4096)  # then the frames come
+        sock.close()
+        lean = RawClient(hub.port, handshake=False)
+        assert lean.read_element() == b"< hi >"
+        lean.send("< open vcan0 >")
+        assert lean.read_element() == b"< ok >"
+        lean.send("< features >")
+        assert lean.read_element().startswith(b"< features")
+        lean.send("< rawmode >")
+        t0 = time.monotonic()
+        assert lean.read_element() == b"< ok >"
+        assert FRAME_RE.fullmatch(lean.read_element(timeout=1.0))
+        assert time.monotonic() - t0 < Hub.handshake_hold_s  # no hold for it
+    finally:
+        stop.set()
+        t.join(2)

@@ -116,6 +116,7 @@ class _Client:
         "events",
         "fd",
         "outbuf",
+        "parses_elements",
         "peer",
         "queue",
         "ready_at",
@@ -134,6 +135,7 @@ class _Client:
         self.splitter = CommandSplitter()
         self.outbuf = bytearray()
         self.ready_at = 0.0  # monotonic time before which frames are held back (see Hub)
+        self.parses_elements = False  # asked < features >: takes frames glued to < ok >
         #: (arrival, key, seq, id, data, ext, bits, stated time) waiting for the bus
         self.queue: deque = deque()
         self.bus: _Bus | None = None
@@ -241,8 +243,11 @@ class Hub:
     """
 
     #: After ``< rawmode >`` is acknowledged, frames for that client wait this long (s), so
-    #: python-can's handshake ``recv`` sees ``< ok >`` alone and not glued to a frame.
-    handshake_hold_s = 0.05
+    #: python-can's handshake ``recv`` sees ``< ok >`` alone and not glued to a frame (it reads
+    #: once and compares the whole read; on a loaded host a client took longer than 50 ms to
+    #: make that read and failed "Expected '< ok >' got: '< ok >< frame …'"). A client that
+    #: asked ``< features >`` parses element by element (the project's lean client): no hold.
+    handshake_hold_s = 0.3
     #: A ``sendat`` frame stated longer ago than this (s) arrives this long ago
     #: (:data:`hub_protocol.SENDAT_MAX_BACKDATE_S`).
     max_backdate_s = SENDAT_MAX_BACKDATE_S
@@ -709,6 +714,7 @@ class Hub:
             client.outbuf += b"< echo >"
         elif cmd == "features":
             client.outbuf += FEATURES_REPLY
+            client.parses_elements = True
         elif client.state == _WAIT_OPEN:
             if cmd != "open":
                 raise ProtocolError(f"expected '< open BUS >', got {cmd!r}")
@@ -725,7 +731,7 @@ class Hub:
             client.outbuf += b"< ok >"
             self._flush(client, now)
             client.state = _RAW
-            client.ready_at = now + self.handshake_hold_s
+            client.ready_at = now + (0.0 if client.parses_elements else self.handshake_hold_s)
             client.bus.receivers.append(client)
         elif cmd == "rawmode":
             client.outbuf += b"< ok >"
