@@ -20,7 +20,7 @@ from collections.abc import Callable
 from typing import Any
 
 from dashboard._bench import Bench
-from drive_link._nmt import NMT_STATES
+from drive_link.bus import NMT_STATES
 from drive_link.errors import NodeNotFound
 
 __all__ = ["OFFLINE_AFTER_S", "Nodes"]

@@ -13,13 +13,18 @@ from typing import Any
 
 import can
 
+from ._nmt import NMT_STATES
 from .errors import BusError
 
 __all__ = [
     "HUB_CHANNEL",
+    "NMT_STATES",
     "bus_settings",
     "open_bus",
 ]
+
+# NMT_STATES (re-exported): a heartbeat's state byte (& 0x7F) → its CiA 301 name, for code
+# outside drive_link that reads heartbeats off the bus itself (the dashboard's node list).
 
 #: Channel name the loopback hub serves (socketcand "bus name").
 HUB_CHANNEL = "vcan0"

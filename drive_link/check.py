@@ -67,13 +67,14 @@ class NotApplicable(Exception):  # noqa: N818
 
 
 #: :attr:`CheckResult.verdict` values.
-PASS, FAIL, NOT_APPLICABLE = "pass", "fail", "not applicable"
+PASS, FAIL, NOT_APPLICABLE, NOT_JUDGED = "pass", "fail", "not applicable", "not judged"
 
 
 @dataclass
 class CheckResult:
     """``name``, ``ok`` (false only for a failure), ``detail`` (one line), ``seconds`` taken,
-    ``verdict`` ("pass", "fail" or "not applicable"), ``evidence`` (what the item sent and
+    ``verdict`` ("pass", "fail", "not applicable" or "not judged": a timing item the host
+    stalled in every window, neither failed nor passed), ``evidence`` (what the item sent and
     what came back, for ``--json``; empty for items that give none)."""
 
     name: str
@@ -1181,11 +1182,13 @@ def _run_item(n: str, drive: Drive, opts: dict) -> tuple[bool, str, str]:
                 )
             return ok, detail, verdict
         stalls.append(probe.worst)
-    return False, (
+    # neither failed nor passed (issue 29): the measurement says more about the host than about
+    # the drive; the run does not fail on it, and the verdict and the summary say so
+    return True, (
         f"not judged: the host stalled in all {TIMING_ATTEMPTS} windows ("
         + ", ".join(f"{s * 1e3:.0f} ms" for s in stalls)
         + f"); last: {detail}"
-    ), FAIL
+    ), NOT_JUDGED
 
 
 def run_checks(

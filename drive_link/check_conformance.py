@@ -36,6 +36,7 @@ from canopen.sdo import SdoAbortedError, SdoClient
 
 from firmware_protocol import abort_codes, load_od
 from firmware_protocol.entry import BIT_LENGTH, TYPE_NAMES, Entry
+from firmware_protocol.index_ranges import MANUFACTURER, SIMULATION
 
 from .check import CheckFailed, _expect
 from .drive import Drive
@@ -48,7 +49,28 @@ ACCESS_TYPES = {"ro", "wo", "rw", "rwr", "rww", "const"}
 LENGTH_CODES = (abort_codes.LENGTH, abort_codes.LENGTH_TOO_HIGH, abort_codes.LENGTH_TOO_LOW)
 #: objects whose write is a command (store, restore, gain-set apply, error history): never
 #: written by the range and length items beyond what they must refuse
-COMMANDS = {0x1003, 0x1010, 0x1011, 0x20F1, 0x5010}
+_OD = load_od()
+
+
+def _index(name: str) -> int:
+    """The EDS index of object ``name`` (a record's by its first sub-object)."""
+    return _OD.entry(name).index
+
+
+COMMANDS = {
+    _index(n)
+    for n in (
+        "pre_defined_error_field.number_of_errors",
+        "store_parameters.highest_sub_index",
+        "restore_default_parameters.highest_sub_index",
+        "gain_set_apply",
+        "sim_fault.highest_sub_index",
+    )
+}
+#: CiA 301's mandatory objects: device type, error register, identity
+MANDATORY = {_index(n) for n in ("device_type", "error_register", "identity.highest_sub_index")}
+DEVICE_TYPE = _index("device_type")
+DEVICE_NAME = _index("manufacturer_device_name")  # > 4 bytes: a segmented upload
 Evidence = dict[str, Any]
 #: SYNC frames sync_pdo sends, and the share of them that must bring their TPDO (a link that
 #: loses 5 % of frames each way keeps about 90 %)
@@ -113,7 +135,7 @@ def item_eds(d: Drive, opts: dict) -> tuple[str, Evidence]:
         if len(entries) != n:
             problems.append(f"[{group}] lists {len(entries)} of SupportedObjects={n}")
         listed += entries
-    mandatory = {0x1000, 0x1001, 0x1018}
+    mandatory = MANDATORY
     if cp.has_section("MandatoryObjects"):
         sec = cp["MandatoryObjects"]
         have = {int(v, 0) for k, v in sec.items() if k != "SupportedObjects"}
@@ -263,7 +285,7 @@ def _sdo_aborts(d: Drive, opts: dict) -> tuple[str, Evidence]:
                     "too_high": 0, "too_low": 0, "problems": problems}  # fmt: skip
     opts["_evidence"] = ev  # kept with a failing verdict too
     indices = {e.index for e in entries}
-    gap = next(i for i in range(0x2000, 0x6000) if i not in indices)
+    gap = next(i for i in (*MANUFACTURER, *SIMULATION) if i not in indices)
     for what, fn in (
         ("read", lambda: d.sdo.upload(gap, 0)),
         ("write", lambda: d.sdo.download(gap, 0, b"\x00")),
@@ -358,12 +380,12 @@ def item_sdo_transfers(d: Drive, opts: dict) -> tuple[str, Evidence]:
     the downloads drive_link never makes (segmented of ≤ 4 bytes, block)."""
     ev: Evidence = {}
     opts["_evidence"] = ev  # kept with a failing verdict too
-    ev["expedited_upload"] = len(d.sdo.upload(0x1000, 0))
-    seg = d.sdo.upload(0x1008, 0)  # manufacturer device name (> 4 bytes: segmented)
-    _expect(len(seg) > 4, f"0x1008 has {len(seg)} bytes: no segmented upload to try")
+    ev["expedited_upload"] = len(d.sdo.upload(DEVICE_TYPE, 0))
+    seg = d.sdo.upload(DEVICE_NAME, 0)  # manufacturer device name (> 4 bytes: segmented)
+    _expect(len(seg) > 4, f"device name has {len(seg)} bytes: no segmented upload to try")
     ev["segmented_upload"] = len(seg)
-    blk = d.sdo.upload_block(0x1008, 0)
-    _expect(blk == seg, f"block upload of 0x1008 {blk!r} != segmented {seg!r}")
+    blk = d.sdo.upload_block(DEVICE_NAME, 0)
+    _expect(blk == seg, f"block upload of the device name {blk!r} != segmented {seg!r}")
     ev["block_upload"] = len(blk)
     hb = d.table["producer_heartbeat_time"]
     present = d.sdo.upload(hb.index, hb.subindex, hb.name)

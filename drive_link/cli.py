@@ -634,7 +634,7 @@ def cmd_check(args: argparse.Namespace, d: Drive) -> int:
     only = args.only.split(",") if args.only else None
     skip = args.skip.split(",") if args.skip else None
 
-    label = {"pass": "PASS", "fail": "FAIL", "not applicable": "N/A "}
+    label = {"pass": "PASS", "fail": "FAIL", "not applicable": "N/A ", "not judged": "N/J "}
 
     def show(r: Any) -> None:
         if not args.json:
@@ -648,6 +648,7 @@ def cmd_check(args: argparse.Namespace, d: Drive) -> int:
         raise InvalidValue(str(exc)) from None
     failed = [r.name for r in results if not r.ok]
     na = [r.name for r in results if r.verdict == "not applicable"]
+    nj = [r.name for r in results if r.verdict == "not judged"]
     if args.json:
         print(
             json.dumps(
@@ -666,8 +667,9 @@ def cmd_check(args: argparse.Namespace, d: Drive) -> int:
         )
     else:
         print(
-            f"{len(results) - len(failed) - len(na)}/{len(results) - len(na)} passed"
+            f"{len(results) - len(failed) - len(na) - len(nj)}/{len(results) - len(na)} passed"
             + (f"; not applicable: {', '.join(na)}" if na else "")
+            + (f"; not judged (host stalls): {', '.join(nj)}" if nj else "")
             + (f"; failed: {', '.join(failed)}" if failed else "")
         )
     return 1 if failed else 0

@@ -84,3 +84,35 @@ def test_a_host_stall_repeats_the_timing_item_and_says_so(parts):
     assert "measured again after host stalls of" in r.detail, r.detail
     assert r.ok, r.detail
     assert "bus time stamps" in r.detail  # what it judged
+
+
+def test_a_timing_item_stalled_in_every_window_is_not_judged_and_does_not_fail(parts):
+    """Issue 29: a host stall during a timing item repeats it "instead of failing or passing
+    it"; stalled in every window (a GIL-holding thread each window), the verdict is "not
+    judged" — neither pass nor fail — and the run is not failed by it."""
+    from drive_link.check import NOT_JUDGED, TIMING_ATTEMPTS
+
+    d, _vd = parts
+    old = sys.getswitchinterval()
+    done = threading.Event()
+
+    def stall_every_window() -> None:
+        while not done.is_set():
+            time.sleep(0.3)
+            sys.setswitchinterval(1.0)
+            try:
+                end = time.perf_counter() + 0.15
+                while time.perf_counter() < end:  # holds the interpreter lock throughout
+                    pass
+            finally:
+                sys.setswitchinterval(old)
+
+    t = threading.Thread(target=stall_every_window, daemon=True)
+    t.start()
+    try:
+        (r,) = run_checks(d, only=["pdo_rates"])
+    finally:
+        done.set()
+        t.join()
+    assert r.verdict == NOT_JUDGED and r.ok, (r.verdict, r.detail)
+    assert f"the host stalled in all {TIMING_ATTEMPTS} windows" in r.detail, r.detail

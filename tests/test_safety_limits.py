@@ -96,7 +96,12 @@ def test_R_c_zero_or_at_least_1e4_and_at_most_2R(bench):
     assert abort(bench, "current_controller.R_c", 5e-5) == TOO_LOW
     assert abort(bench, "current_controller.R_c", 2.01 * R) == TOO_HIGH
     assert abort(bench, "current_controller.R_c", 1.0) == TOO_HIGH  # inside the old [0, 1]
-    assert abort(bench, "gain_set.R_c", 1.0) == TOO_HIGH
+    # the staged set is scratch space: R_c = 1 Ω stages, the apply refuses the set as a whole
+    active = bench.read("current_controller.R_c")
+    assert abort(bench, "gain_set.R_c", 1.0) is None
+    assert abort(bench, "gain_set_apply", 1) == TOO_HIGH
+    assert bench.read("current_controller.R_c") == pytest.approx(active, rel=1e-6)
+    bench.write("gain_set.R_c", active)
     # R_c = 0 removes the deadbeat law's integral action: only with the back-EMF feed-forward
     assert abort(bench, "current_controller.R_c", 0.0) == INVALID
     bench.write("current_controller.emf_feedforward", 1)
@@ -196,20 +201,28 @@ def test_configuration_objects_only_with_the_power_stage_off(bench):
 # ---- L_c < 2 L interlock against every order of writes -------------------------------------
 
 
-def test_staged_L_c_checked_on_write_and_motor_L_against_staged(bench):
-    assert abort(bench, "gain_set.L_c", 2 * L) == TOO_HIGH
+def test_staged_L_c_checked_at_apply_and_motor_L_against_the_active_L_c(bench):
+    """The staged set 0x20F0 is scratch space (a staged value against its own range only); the
+    set as a whole meets L_c < 2L when gain_set_apply applies it, and nothing changes when it
+    does not. motor.L is held against the active L_c."""
+    active = bench.read("current_controller.L_c")
+    assert abort(bench, "gain_set.L_c", 2 * L) is None  # staged: not yet a gain the loop runs
+    assert abort(bench, "gain_set_apply", 1) == TOO_HIGH
+    assert bench.read("current_controller.L_c") == pytest.approx(active, rel=1e-6)
     bench.write("gain_set.L_c", 25e-6)  # < 2 x 14.8 uH
-    assert abort(bench, "motor.L", 12e-6) == TOO_LOW  # 2 x 12 = 24 < staged 25
+    assert abort(bench, "gain_set_apply", 1) is None
+    assert bench.read("current_controller.L_c") == pytest.approx(25e-6, rel=1e-6)
+    assert abort(bench, "motor.L", 12e-6) == TOO_LOW  # 2 x 12 = 24 < active 25
     bench.write("current_controller.L_c", 20e-6)
-    bench.write("gain_set.L_c", 14e-6)
     assert abort(bench, "motor.L", 9.9e-6) == TOO_LOW  # active 20 uH > 2 x 9.9
-    bench.write("motor.L", 10.5e-6)  # both L_c < 21 uH
+    bench.write("motor.L", 10.5e-6)  # active L_c 20 uH < 21 uH
     assert bench.read("motor.L") == pytest.approx(10.5e-6)
 
 
 def test_interlock_holds_for_random_write_orders(bench):
     """A seeded random walk of writes of motor.L, L_c, staged L_c and gain-set applies: after
-    every accepted write the drive holds L_c < 2L and staged L_c < 2L."""
+    every step the drive holds the active L_c < 2L (in the object dictionary and in the
+    controller); an apply of a staged L_c ≥ 2L is refused and changes nothing."""
     rng = random.Random(20260223)
     accepted = refused = 0
     for _ in range(150):
@@ -220,12 +233,14 @@ def test_interlock_holds_for_random_write_orders(bench):
             code = abort(bench, op, rng.choice((1e-6, 5e-6, 8e-6, 14.8e-6, 20e-6, 40e-6, 1e-4)))
         if code is None:
             accepted += 1
-        else:
-            assert code in (TOO_HIGH, TOO_LOW), hex(code)
+        else:  # 0x06090030: the set, with the new value in place, fails the current loop's
+            # admissibility (e.g. L_c < L/2 without the feed-forward) rather than L_c < 2L
+            assert code in (TOO_HIGH, TOO_LOW, INVALID), hex(code)
             refused += 1
         motor_L = bench.read("motor.L")
+        if op == "apply" and bench.read("gain_set.L_c") >= 2 * motor_L:
+            assert code == TOO_HIGH
         assert bench.read("current_controller.L_c") < 2 * motor_L
-        assert bench.read("gain_set.L_c") < 2 * motor_L
         assert bench.drive.sim.current.L_c < 2 * bench.drive.sim.motor.L
     assert accepted > 20 and refused > 20
 
