@@ -26,7 +26,7 @@ import can
 from ._monitor_decode import FrameDecoder, kind_of
 from .errors import InvalidValue
 
-__all__ = ["BusTable", "IdFilter", "cmd_monitor", "parse_ids"]
+__all__ = ["BusTable", "IdFilter", "TableFeed", "cmd_monitor", "parse_ids"]
 
 
 @dataclass
@@ -162,7 +162,10 @@ def render(rows: list[dict[str, Any]], width: int = 120, paused: bool = False) -
     return lines
 
 
-class _Feed(can.Listener):
+class TableFeed(can.Listener):
+    """A python-can listener that counts every frame but error frames into ``table`` (the
+    ``monitor`` command and the dashboard's Bus tab put it on their notifier)."""
+
     def __init__(self, table: BusTable):
         self.table = table
 
@@ -194,7 +197,7 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     settings = {k: v for k, v in bus_settings(args).items() if k != "node"}
     bus = open_bus(**settings)
     table = BusTable(keep=keep)
-    notifier = can.Notifier(bus, [_Feed(table)], timeout=0.1)
+    notifier = can.Notifier(bus, [TableFeed(table)], timeout=0.1)
     cpu0, t0 = time.process_time(), time.monotonic()
     try:
         if interactive:

@@ -17,7 +17,7 @@ import can
 
 from dashboard._gui_tabs.config import bus_kwargs
 from drive_link.bus import open_bus
-from drive_link.monitor import BusTable, IdFilter, parse_ids
+from drive_link.monitor import BusTable, IdFilter, TableFeed, parse_ids
 
 __all__ = ["BusTab", "rows_html"]
 
@@ -42,16 +42,6 @@ def rows_html(rows: list[dict[str, Any]], frames: int, paused: bool) -> str:
         '<div style="font-family:monospace;font-size:11px">'
         f"<div>{html.escape(note)}</div><table><tr>{head}</tr>{''.join(body)}</table></div>"
     )
-
-
-class _Feed(can.Listener):
-    def __init__(self, table: BusTable):
-        self.table = table
-
-    def on_message_received(self, msg: can.Message) -> None:
-        if not msg.is_error_frame:
-            self.table.on_frame(msg.arbitration_id, bytes(msg.data), msg.timestamp,
-                                msg.is_remote_frame)  # fmt: skip
 
 
 class BusTab:
@@ -109,7 +99,7 @@ class BusTab:
             if self.bus_on.value and self._bus is None:
                 table = BusTable(keep=self._bus_keep())
                 bus = open_bus(**bus_kwargs(self.config, getattr(self.bench, "hub_port", None)))
-                notifier = can.Notifier(bus, [_Feed(table)], timeout=0.1)
+                notifier = can.Notifier(bus, [TableFeed(table)], timeout=0.1)
                 self._bus = (bus, notifier, table)
                 threading.Thread(target=self._bus_loop, name="bench-bus-tab", daemon=True).start()
             elif not self.bus_on.value and self._bus is not None:
