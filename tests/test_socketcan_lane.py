@@ -1,7 +1,8 @@
 """The SocketCAN lane: boots User-Mode Linux (tests/uml/runner.py) and runs, on a real kernel
 SocketCAN inside it, tests/uml/vcan_checks.py (the README's vcan0/can0 commands as written, NMT,
-CiA 402, error frames, a full transmit queue) and the whole scenario suite of tests/scenarios with
-BENCH_CONDITION=vcan0 (the matrix's SocketCAN row).
+CiA 402, error frames, a full transmit queue), tests/uml/vcan_checks_cia301.py (issue 29 on vcan0:
+supervision in a held quick stop, SDO protocol bytes, RTR, a dead drive) and the whole scenario
+suite of tests/scenarios with BENCH_CONDITION=vcan0 (the matrix's SocketCAN row).
 
 UML spends about 38 µs per system call: a drive-link call takes 5-15 s there, the lane several
 minutes. It therefore runs in the background while the rest of the suite runs (tests/uml/lane.py,
@@ -46,8 +47,8 @@ def _load(name: str, path: Path):
 uml = _load("uml_runner", HERE / "uml" / "runner.py")
 lane = _load("uml_lane", HERE / "uml" / "lane.py")
 
-#: ``SOCKETCAN_LANE=quick``: the vcan_checks items but the drive-side block upload through
-#: vcan1's 10-frame queue, and the scan scenario.
+#: ``SOCKETCAN_LANE=quick``: the vcan_checks items (both modules: ``-k`` matches the module
+#: name) but the drive-side block upload through vcan1's 10-frame queue, and the scan scenario.
 QUICK = "(vcan_checks and not block_upload) or test_scan"
 #: Wall-time limit of the lane (boot, all checks, power-off), s.
 LANE_TIMEOUT = 900.0
@@ -61,7 +62,7 @@ def lane_argv() -> list[str]:
     """The pytest command run inside UML."""
     argv = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-rfE"]
     argv += ["--durations=15", "--durations-min=2"]
-    argv += ["tests/uml/vcan_checks.py", "tests/scenarios"]
+    argv += ["tests/uml/vcan_checks.py", "tests/uml/vcan_checks_cia301.py", "tests/scenarios"]
     if MODE == "quick":
         argv += ["-k", QUICK]
     return argv
