@@ -25,6 +25,7 @@ __all__ = [
     "free_port",
     "launch",
     "open_bench",
+    "renderer_pids",
     "run_dashboard",
     "stop_process",
     "text_input",
@@ -77,6 +78,17 @@ def open_bench(page: Any, url: str, timeout: float = 240.0) -> float:
         f"bench page {url} not usable after {time.monotonic() - t0:.0f} s (two loads); "
         f"it shows: {shown!r}"
     ) from last
+
+
+def renderer_pids(page: Any) -> list[int]:
+    """The renderer processes of the browser that shows ``page`` (Chromium's own list, by the
+    DevTools protocol): what a test measures the CPU and run-queue time of."""
+    cdp = page.context.browser.new_browser_cdp_session()
+    try:
+        info = cdp.send("SystemInfo.getProcessInfo")["processInfo"]
+    finally:
+        cdp.detach()
+    return [p["id"] for p in info if p["type"] == "renderer"]
 
 
 def stop_process(proc: subprocess.Popen, timeout: float = 10.0) -> None:

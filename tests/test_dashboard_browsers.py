@@ -40,7 +40,7 @@ from dashboard import _gui_pace
 from dashboard._gui import LEASE_GRACE_S
 from dashboard._gui_pace import AHEAD
 from dashboard.app import create_app
-from dashboard.browser import CHROMIUM, launch, open_bench, text_input
+from dashboard.browser import CHROMIUM, launch, open_bench, renderer_pids, text_input
 from dashboard.browser import click as _click
 from dashboard.browser import click_until as _click_until
 from dashboard.config import BenchConfig
@@ -439,16 +439,6 @@ def test_live_view_survives_failures_and_shows_stale(api, pages, monkeypatch):
     wait_text(b, r"● live · data [\d.]+ s old")
 
 
-def _renderer_pids(page) -> list[int]:
-    """The renderer processes of the browser that shows ``page`` (Chromium's own list)."""
-    cdp = page.context.browser.new_browser_cdp_session()
-    try:
-        info = cdp.send("SystemInfo.getProcessInfo")["processInfo"]
-    finally:
-        cdp.detach()
-    return [p["id"] for p in info if p["type"] == "renderer"]
-
-
 def _starve(pids: list[int], seconds: float, duty: float, stop: threading.Event) -> None:
     """Let ``pids`` run ``duty`` of every 0.5 s (SIGSTOP/SIGCONT) for ``seconds``."""
     until = time.monotonic() + seconds
@@ -476,7 +466,7 @@ def test_a_starved_page_gets_no_backlog_and_is_usable_when_it_runs(api, pages):
     assert len(panels) == 2
     pa = next(p for p in panels if p.holds_control())
     pb = next(p for p in panels if p is not pa)
-    pids = _renderer_pids(b)
+    pids = renderer_pids(b)
     assert pids
     stop = threading.Event()
     th = threading.Thread(target=_starve, args=(pids, 12.0, 0.1, stop), daemon=True)

@@ -29,7 +29,7 @@ import httpx
 import pytest
 from conftest import RunQueueProbe
 
-from dashboard.browser import CHROMIUM, launch, open_bench, run_dashboard
+from dashboard.browser import CHROMIUM, launch, open_bench, renderer_pids, run_dashboard
 from virtual_drive.launch import virtual_bench
 
 pytestmark = [
@@ -115,16 +115,6 @@ def state_calls(api_url: str, n: int = 6) -> tuple[list[float], dict]:
     return took, last
 
 
-def _renderer_pids(page) -> list[int]:
-    """The renderer processes of the browser that shows ``page`` (Chromium's own list)."""
-    cdp = page.context.browser.new_browser_cdp_session()
-    try:
-        info = cdp.send("SystemInfo.getProcessInfo")["processInfo"]
-    finally:
-        cdp.detach()
-    return [p["id"] for p in info if p["type"] == "renderer"]
-
-
 class HostDelay:
     """What the host, not the product, added to a wait: the run-queue time of the processes
     that must act for the page to change (the dashboard's and the page's renderer's), each
@@ -132,7 +122,7 @@ class HostDelay:
     once is late by the longest wait, not their sum). ``allowance()`` → seconds."""
 
     def __init__(self, page, *pids: int) -> None:
-        self.probes = [RunQueueProbe(p) for p in (*pids, *_renderer_pids(page))]
+        self.probes = [RunQueueProbe(p) for p in (*pids, *renderer_pids(page))]
         self.t0 = time.monotonic()
 
     def allowance(self) -> float:

@@ -47,18 +47,25 @@ def _msg(cob: int, data: bytes) -> can.Message:
     return can.Message(arbitration_id=cob, data=data, is_extended_id=False)
 
 
-def _run_monitor(port: int, send, *extra: str) -> dict:
+def _run_monitor(hub, send, *extra: str) -> dict:
+    """``drive-link monitor`` on ``hub`` while ``send`` puts frames on it (after the monitor
+    has joined: the hub counts its connection and its rawmode hold has passed)."""
+    port = hub.port
+    before = hub.stats.clients_total
     out = io.StringIO()
     box = {}
 
     def run() -> None:
         with contextlib.redirect_stdout(out):
             box["rc"] = cli.main(["monitor", "--host", "127.0.0.1", "--port", str(port),
-                                  "--seconds", "2.5", "--json", *extra])  # fmt: skip
+                                  "--seconds", "4", "--json", *extra])  # fmt: skip
 
     th = threading.Thread(target=run)
     th.start()
-    time.sleep(1.0)  # the monitor has joined the hub
+    deadline = time.monotonic() + 30.0
+    while hub.stats.clients_total == before and time.monotonic() < deadline:
+        time.sleep(0.02)  # a loaded host took over 1 s to start the monitor
+    time.sleep(Hub.handshake_hold_s + 0.3)
     with can.Bus(interface="socketcand", host="127.0.0.1", port=port, channel="vcan0") as tx:
         send(tx)
     th.join(20)
@@ -91,7 +98,7 @@ def test_monitor_decodes_raw_frames_as_the_eds_says(hub):
         time.sleep(0.05)
         tx.send(_msg(0x280 + N, struct.pack("<ff", -7.25, 1000.0)))
 
-    res = _run_monitor(hub.port, send, "--show-nodes", str(N))
+    res = _run_monitor(hub, send, "--show-nodes", str(N))
     rows = {r["id"]: r for r in res["rows"]}
     assert f"0x{0x704:03X}" not in rows  # --show-nodes 3
     assert rows["0x000"]["text"] == f"start node {N}"
