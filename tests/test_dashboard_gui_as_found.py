@@ -105,7 +105,7 @@ def run_and_wait(page, tab: str, button, done: str, timeout: float = 120) -> str
     body = ""
     while time.monotonic() < deadline:
         body = page.inner_text("body")
-        if re.search(done, body) or "⚠" in body:
+        if re.search(done, body) or re.search(r"⚠ (?!STALE)", body):  # a notice, not the badge
             break
         time.sleep(0.3)
     assert re.search(done, body), body[-800:]

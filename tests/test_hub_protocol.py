@@ -393,3 +393,25 @@ def test_a_slow_stock_client_reads_its_rawmode_ok_alone_while_frames_flow(hub):
     finally:
         stop.set()
         t.join(2)
+
+
+def test_the_rawmode_hold_ends_at_the_clients_first_frame(hub):
+    """A stock client that sends right after its handshake (an SDO request, an LSS query) gets
+    the answer at once, not after the rawmode hold: the hold ends at its first element."""
+    answerer = RawClient(hub.port)
+    sock = socket.create_connection(("127.0.0.1", hub.port), timeout=5)
+    assert sock.recv(256) == b"< hi >"
+    sock.sendall(b"< open vcan0 >")
+    assert sock.recv(256) == b"< ok >"
+    sock.sendall(b"< rawmode >")
+    assert sock.recv(256) == b"< ok >"
+    t0 = time.monotonic()
+    sock.sendall(b"< send 601 8 40 41 60 00 00 00 00 00 >")
+    assert answerer.read_element().startswith(b"< frame 601 ")
+    answerer.send("< send 581 8 4b 41 60 00 37 06 00 00 >")
+    sock.settimeout(5)
+    got = b""
+    while b"< frame 581" not in got:
+        got += sock.recv(4096)
+    assert time.monotonic() - t0 < Hub.handshake_hold_s / 2, time.monotonic() - t0
+    sock.close()

@@ -43,6 +43,7 @@ def test_replay_judges_drops_with_the_event_timer_in_force(hub, tmp_path):
     rec.start()
     time.sleep(0.5)
     with Drive.connect(host="127.0.0.1", port=hub.port, node_id=1, heartbeat_ms=None) as d:
+        missed0 = int(d.read("tpdo_missed_events.tpdo2"))
         d.nmt("start")
         time.sleep(1.0)  # TPDO2 at its default 1 ms
         d.write("tpdo2_communication.event_timer", 10)
@@ -50,6 +51,9 @@ def test_replay_judges_drops_with_the_event_timer_in_force(hub, tmp_path):
         d.write("tpdo2_communication.event_timer", 1)
         time.sleep(1.0)
         d.nmt("pre-operational")
+        # periods the drive itself could not send (starved on a busy host; 0x2070, CiA 301's
+        # event timer sends no burst to catch up): missing on the bus, but not lost by it
+        starved = int(d.read("tpdo_missed_events.tpdo2")) - missed0
     time.sleep(0.3)
     stop.set()
     rec.join(20)
@@ -59,7 +63,7 @@ def test_replay_judges_drops_with_the_event_timer_in_force(hub, tmp_path):
     assert s["tpdo_configurations"] >= 3
     assert tp["expected_hz"] == [1000.0, 100.0]
     # the hub loses nothing: a clean recording (allow a host stall or two at this load)
-    assert tp["dropped"] <= 0.03 * tp["frames"], tp
+    assert tp["dropped"] <= 0.03 * tp["frames"] + starved, (tp, starved)
     # the 100 Hz stretch is in the file as such (frames of 0x281 between the two writes)
     frames = [m.timestamp for m in can.LogReader(path) if m.arbitration_id == 0x281]
     gaps = sorted(b - a for a, b in itertools.pairwise(frames))

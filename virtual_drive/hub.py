@@ -247,6 +247,8 @@ class Hub:
     #: once and compares the whole read; on a loaded host a client took longer than 50 ms to
     #: make that read and failed "Expected '< ok >' got: '< ok >< frame …'"). A client that
     #: asked ``< features >`` parses element by element (the project's lean client): no hold.
+    #: The hold also ends at the client's first element in rawmode (python-can sends only
+    #: after its handshake read): a request sent at once gets its answer at once.
     handshake_hold_s = 0.3
     #: A ``sendat`` frame stated longer ago than this (s) arrives this long ago
     #: (:data:`hub_protocol.SENDAT_MAX_BACKDATE_S`).
@@ -612,6 +614,8 @@ class Hub:
                 client.sock.setsockopt(socket.IPPROTO_TCP, _QUICKACK, 1)
             except OSError:
                 pass
+        if client.state == _RAW:  # it speaks after its handshake: it has read its < ok >,
+            client.ready_at = 0.0  # so the hold ends (an answer to its first request waits not)
         if client.state == _RAW and not client.splitter.pending_bytes:
             while chunk:  # the common case: only well-formed sends (or sendats)
                 frames, used = scan_sends(chunk)
