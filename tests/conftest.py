@@ -91,6 +91,25 @@ class RunQueueProbe:
         return f"run-queue wait {self.wait:.2f} s/s, CPU {self.cpu:.2f} s/s (pid {self.pid})"
 
 
+class HostDelay:
+    """What the host, not the product, added to a wait: the run-queue time of the processes
+    that must act (a dashboard, a browser's renderers, a drive), each counted at most once per
+    second of the window (a process with several threads waiting at once is late by the
+    longest wait, not their sum). ``HostDelay(*pids)`` at the start, ``allowance()`` (s) at
+    the end."""
+
+    def __init__(self, *pids: int) -> None:
+        self.probes = [RunQueueProbe(p) for p in pids]
+        self.t0 = time.monotonic()
+
+    def allowance(self) -> float:
+        window = time.monotonic() - self.t0
+        return sum(window * min(1.0, p.stop()) for p in self.probes)
+
+    def __repr__(self) -> str:
+        return "; ".join(repr(p) for p in self.probes)
+
+
 @pytest.fixture(scope="module")
 def hub_drive(tmp_path_factory):
     """A loopback hub in this process with a ``virtual-drive run`` child on it (node 1, its own

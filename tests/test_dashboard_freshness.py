@@ -27,7 +27,7 @@ import time
 
 import httpx
 import pytest
-from conftest import RunQueueProbe
+from conftest import HostDelay
 
 from dashboard.browser import CHROMIUM, launch, open_bench, renderer_pids, run_dashboard
 from virtual_drive.launch import virtual_bench
@@ -115,26 +115,8 @@ def state_calls(api_url: str, n: int = 6) -> tuple[list[float], dict]:
     return took, last
 
 
-class HostDelay:
-    """What the host, not the product, added to a wait: the run-queue time of the processes
-    that must act for the page to change (the dashboard's and the page's renderer's), each
-    counted at most once per second of the window (a process with several threads waiting at
-    once is late by the longest wait, not their sum). ``allowance()`` → seconds."""
-
-    def __init__(self, page, *pids: int) -> None:
-        self.probes = [RunQueueProbe(p) for p in (*pids, *renderer_pids(page))]
-        self.t0 = time.monotonic()
-
-    def allowance(self) -> float:
-        window = time.monotonic() - self.t0
-        return sum(window * min(1.0, p.stop()) for p in self.probes)
-
-    def __repr__(self) -> str:
-        return "; ".join(repr(p) for p in self.probes)
-
-
 def check_frozen(page, api_url: str, pid: int, what: str, dash_pid: int) -> None:
-    host = HostDelay(page, dash_pid)
+    host = HostDelay(dash_pid, *renderer_pids(page))
     with frozen(pid) as t_stop:
         waited = page_waits(page, BAR_STALE, 20.0)
         shown = time.monotonic() - t_stop
@@ -199,7 +181,7 @@ def test_a_stopped_bus_node_is_stale_within_a_second_while_its_heartbeat_goes_on
     bus, dash, page = rig
     page.wait_for_function(BAR_LIVE, timeout=60_000)
     with Drive.connect(host="127.0.0.1", port=bus.port, node_id=1, heartbeat_ms=None) as d:
-        host = HostDelay(page, dash.proc.pid)
+        host = HostDelay(dash.proc.pid, *renderer_pids(page))
         d.nmt("stop")
         t_stop = time.monotonic()
         try:
@@ -229,7 +211,7 @@ def test_a_frozen_dashboard_is_stale_on_the_page_by_itself(rig):
     """The dashboard's own loops stopped (its whole process): nothing reaches the page, which
     shows the stale state by itself and counts the seconds."""
     _, dash, page = rig
-    host = HostDelay(page)  # the dashboard is frozen: only the page's renderer must act
+    host = HostDelay(*renderer_pids(page))  # the dashboard is frozen: only the page acts
     with frozen(dash.proc.pid) as t_stop:
         page_waits(page, PAGE_STALE, 20.0)
         shown = time.monotonic() - t_stop
