@@ -121,6 +121,20 @@ def hub_drive(tmp_path_factory):
         yield bus.hub
 
 
+def cia402_state(sw: int) -> str:
+    """CiA 402-2 table 30 (statusword bits 0-3, 5, 6)."""
+    if sw & 0x4F == 0x00:
+        return "NOT READY TO SWITCH ON"
+    if sw & 0x4F == 0x40:
+        return "SWITCH ON DISABLED"
+    if sw & 0x4F == 0x0F:
+        return "FAULT REACTION ACTIVE"
+    if sw & 0x4F == 0x08:
+        return "FAULT"
+    return {0x21: "READY TO SWITCH ON", 0x23: "SWITCHED ON", 0x27: "OPERATION ENABLED",
+            0x07: "QUICK STOP ACTIVE"}.get(sw & 0x6F, f"? {sw:#06x}")
+
+
 def recv_frames(bus, n: int, timeout: float = 10.0) -> list:
     """Up to ``n`` frames (``can.Message``) from python-can ``bus`` within ``timeout`` s."""
     out: list = []

@@ -23,6 +23,19 @@ from drive_link.check import run_checks
 pytestmark = pytest.mark.timeout(90)
 
 
+def hold_the_interpreter(seconds: float) -> None:
+    """Keep the interpreter's lock ``seconds``: every thread of the process waits, as for a
+    CPU on a starved machine."""
+    old = sys.getswitchinterval()
+    sys.setswitchinterval(1.0)
+    try:
+        end = time.perf_counter() + seconds
+        while time.perf_counter() < end:
+            pass
+    finally:
+        sys.setswitchinterval(old)
+
+
 @pytest.fixture
 def parts():
     from virtual_drive.node import VirtualDrive
@@ -65,17 +78,10 @@ def test_pdo_rates_fails_a_drive_that_drops_periods_and_counts_them(parts):
 
 def test_a_host_stall_repeats_the_timing_item_and_says_so(parts):
     d, _vd = parts
-    old = sys.getswitchinterval()
 
     def stall() -> None:
         time.sleep(0.5)  # inside the first window
-        sys.setswitchinterval(1.0)
-        try:
-            end = time.perf_counter() + 0.25
-            while time.perf_counter() < end:  # holds the interpreter lock throughout
-                pass
-        finally:
-            sys.setswitchinterval(old)
+        hold_the_interpreter(0.25)
 
     t = threading.Thread(target=stall, daemon=True)
     t.start()
@@ -93,19 +99,12 @@ def test_a_timing_item_stalled_in_every_window_is_not_judged_and_does_not_fail(p
     from drive_link.check import NOT_JUDGED, TIMING_ATTEMPTS
 
     d, _vd = parts
-    old = sys.getswitchinterval()
     done = threading.Event()
 
     def stall_every_window() -> None:
         while not done.is_set():
             time.sleep(0.3)
-            sys.setswitchinterval(1.0)
-            try:
-                end = time.perf_counter() + 0.15
-                while time.perf_counter() < end:  # holds the interpreter lock throughout
-                    pass
-            finally:
-                sys.setswitchinterval(old)
+            hold_the_interpreter(0.15)
 
     t = threading.Thread(target=stall_every_window, daemon=True)
     t.start()

@@ -21,6 +21,7 @@ import time
 import can
 import httpx
 import pytest
+from conftest import cia402_state
 
 from dashboard.browser import (
     CHROMIUM,
@@ -39,16 +40,6 @@ pytestmark = [
     pytest.mark.timeout(420),
     pytest.mark.skipif(not os.path.exists(CHROMIUM), reason="needs Debian's chromium"),
 ]
-
-
-def cia402_state(sw: int) -> str:
-    """CiA 402-2 table 30 (statusword bits 0-3, 5, 6)."""
-    if sw & 0x4F == 0x40:
-        return "SWITCH ON DISABLED"
-    if sw & 0x4F in (0x08, 0x0F):
-        return "FAULT"
-    return {0x21: "READY TO SWITCH ON", 0x23: "SWITCHED ON", 0x27: "OPERATION ENABLED",
-            0x07: "QUICK STOP ACTIVE"}.get(sw & 0x6F, f"? {sw:#06x}")
 
 
 class BusWatch:

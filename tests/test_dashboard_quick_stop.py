@@ -28,7 +28,7 @@ import time
 import can
 import httpx
 import pytest
-from conftest import HostDelay
+from conftest import HostDelay, cia402_state
 from fastapi.testclient import TestClient
 
 from dashboard.app import create_app
@@ -49,20 +49,6 @@ NODE = 1
 MAX_REACTION_S = 0.5
 
 pytestmark = pytest.mark.timeout(300)
-
-
-def cia402_state(sw: int) -> str:
-    """CiA 402-2 table 30 (statusword bits 0-3, 5, 6)."""
-    if sw & 0x4F == 0x00:
-        return "NOT READY TO SWITCH ON"
-    if sw & 0x4F == 0x40:
-        return "SWITCH ON DISABLED"
-    if sw & 0x4F == 0x0F:
-        return "FAULT REACTION ACTIVE"
-    if sw & 0x4F == 0x08:
-        return "FAULT"
-    return {0x21: "READY TO SWITCH ON", 0x23: "SWITCHED ON", 0x27: "OPERATION ENABLED",
-            0x07: "QUICK STOP ACTIVE"}.get(sw & 0x6F, f"? {sw:#06x}")
 
 
 class StatuswordWatch:
