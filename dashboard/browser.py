@@ -27,6 +27,7 @@ __all__ = [
     "open_bench",
     "renderer_pids",
     "run_dashboard",
+    "select_tab",
     "stop_process",
     "text_input",
 ]
@@ -137,13 +138,42 @@ def run_dashboard(args: Sequence[str], timeout: float = 60.0) -> Iterator[Dashbo
         stop_process(proc)
 
 
-def click(page: Any, locator: Any) -> None:
+_ARM = """e => {
+    e.scrollIntoView({block: 'center'});
+    window.__benchHit = null;
+    document.addEventListener('click', ev => { window.__benchHit = ev.target; },
+                              {capture: true, once: true});
+}"""
+# Did the click reach the element? A node React replaced meanwhile (detached) counts as reached:
+# the click went to the panel being re-rendered, and repeating it could act twice.
+_REACHED = """e => {
+    const hit = window.__benchHit;
+    if (hit === null) return false;
+    if (!hit.isConnected || e === hit || e.contains(hit)) return true;
+    const label = hit.closest ? hit.closest('label') : null;
+    return label !== null && label.control === e;
+}"""
+
+
+def click(page: Any, locator: Any, attempts: int = 5) -> None:
     """A real mouse click on the element, without Playwright's wait for a "stable" element:
     viser re-renders the panel several times a second, and on a busy host that wait can time
-    out. The element is scrolled to the middle of the view first."""
-    locator.first.wait_for(state="attached", timeout=60_000)
-    locator.first.evaluate("e => e.scrollIntoView({block: 'center'})")
-    locator.first.click(force=True, timeout=60_000)
+    out. The element is scrolled to the middle of the view first.
+
+    A forced click goes to whatever is under the element's centre when the browser gets it; if
+    the panel moved meanwhile (a status line grew, a notice slid in) it reaches something else
+    (seen in CI at load 7: a tab, a Run button). So a capturing listener records what the click
+    hit, and only a click that did not reach the element is repeated (``attempts`` in all)."""
+    el = locator.first
+    el.wait_for(state="attached", timeout=60_000)
+    for _ in range(attempts):
+        el.evaluate(_ARM)
+        el.click(force=True, timeout=60_000)
+        if el.evaluate(_REACHED):
+            break
+        time.sleep(0.2)
+    else:
+        raise AssertionError(f"{attempts} clicks on {locator} reached something else")
     time.sleep(0.1)  # viser batches GUI messages in 50 ms windows
 
 
@@ -160,6 +190,25 @@ def click_until(page: Any, locator: Any, done: Any, timeout: float = 20.0) -> No
         except AssertionError:
             if attempt == 2:
                 raise
+
+
+def select_tab(page: Any, name: str, exact: bool = False, timeout: float = 20.0) -> None:
+    """Click the tab ``name`` until the page marks it selected (``aria-selected="true"``).
+
+    A forced click that lands while viser re-renders the panel reaches nothing, and the tab's
+    content then never appears (seen once in CI: a "Tuning" click lost at load 7): the tab's
+    own state is the proof, so the click is repeated, at most 3 clicks in all."""
+    tab = page.get_by_role("tab", name=name, exact=exact)
+
+    def selected(t: float) -> None:
+        deadline = time.monotonic() + t
+        while time.monotonic() < deadline:
+            if tab.first.get_attribute("aria-selected", timeout=60_000) == "true":
+                return
+            time.sleep(0.1)
+        raise AssertionError(f"tab {name!r} not selected within {t:g} s")
+
+    click_until(page, tab, selected, timeout=timeout)
 
 
 def dismiss_notifications(page: Any) -> None:

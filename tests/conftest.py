@@ -79,12 +79,12 @@ class RunQueueProbe:
         self.pid = os.getpid() if pid is None else pid
         self._t0 = time.monotonic()
         self._start = _schedstat(self.pid)
-        self.cpu = self.wait = 0.0
+        self.cpu = self.wait = self.waited = 0.0
 
     def stop(self) -> float:
         dt = max(time.monotonic() - self._t0, 1e-9)
-        cpu, wait = _delta(self._start, _schedstat(self.pid))
-        self.cpu, self.wait = cpu / dt, wait / dt
+        cpu, self.waited = _delta(self._start, _schedstat(self.pid))
+        self.cpu, self.wait = cpu / dt, self.waited / dt
         return self.wait
 
     def __repr__(self) -> str:

@@ -43,6 +43,7 @@ from dashboard.app import create_app
 from dashboard.browser import CHROMIUM, launch, open_bench, renderer_pids, text_input
 from dashboard.browser import click as _click
 from dashboard.browser import click_until as _click_until
+from dashboard.browser import select_tab as _select_tab
 from dashboard.config import BenchConfig
 
 pytestmark = [
@@ -250,6 +251,7 @@ def explained(fn):
 
 click = explained(_click)
 click_until = explained(_click_until)
+select_tab = explained(_select_tab)
 
 
 @pytest.fixture(scope="module")
@@ -351,17 +353,17 @@ def test_inputs_are_per_browser_and_only_the_controller_applies(api, pages):
     assert api.get("/api/state").json()["speed_setpoint"] == 500  # B changed nothing
     r = api.put("/api/setpoints/speed", json={"rpm": 100})  # REST client without the lease
     assert r.status_code == 409
-    click(b, b.get_by_role("tab", name="Tuning"))
-    click(a, a.get_by_role("tab", name="Tuning"))
+    select_tab(b, "Tuning")
+    select_tab(a, "Tuning")
     type_into(b, "L_c / L", "1.9")  # B's tuning inputs stay B's
     assert field(a, "L_c / L") == "1"
-    click(b, b.get_by_role("tab", name="Speed"))
+    select_tab(b, "Speed")
 
 
 @explained
 def test_typed_values_are_strict_and_nothing_is_sent(api, pages):
     a, _ = pages
-    click(a, a.get_by_role("tab", name="Tuning"))
+    select_tab(a, "Tuning")
     a.evaluate(SCROLL_TOP)  # the panel from its top: preview and Apply without scrolling
     time.sleep(0.3)
     for name in ("Apply gains", "Read back"):
@@ -508,6 +510,6 @@ def test_closed_tab_loses_the_lease_after_the_grace_time(api, pages):
         what="lease released",
     )
     # (B shows the Speed tab, whatever an earlier test of this module left it on)
-    click(b, b.get_by_role("tab", name="Speed"))
+    select_tab(b, "Speed")
     click(b, b.get_by_role("button", name="+ step"))  # nobody holds it: B's action takes it
     wait_text(b, r"In control: browser #\d+ \(you\)")

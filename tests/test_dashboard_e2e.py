@@ -31,6 +31,7 @@ from dashboard.browser import (
     launch,
     open_bench,
     run_dashboard,
+    select_tab,
     text_input,
 )
 
@@ -196,8 +197,8 @@ def deadbeat_db(ratio: float, f_hz: float) -> float:
 
 
 def test_change_L_c_and_see_readback_and_margins(page, bench):
-    click(page, page.get_by_role("tab", name="Tuning"))
-    click(page, page.get_by_role("tab", name="Loop", exact=True))  # Bode and z-plane beside
+    select_tab(page, "Tuning")
+    select_tab(page, "Loop", exact=True)  # Bode and z-plane beside
     pattern = r"Current \(deadbeat, L_c/L = ([\d.]+)\): stable · GM ([\d.]+) dB · PM ([-\d.]+)°"
     m0 = wait_text(page, pattern)
     assert float(m0.group(1)) == pytest.approx(1.0, abs=1e-3)
@@ -242,8 +243,8 @@ def test_change_L_c_and_see_readback_and_margins(page, bench):
     while abs(loop_legend(page).get("current, applied", 0.0) - deadbeat_db(1.5, f)) > 0.02:
         assert time.monotonic() < deadline, "applied curve did not follow the read-back"
         time.sleep(0.3)
-    click(page, page.get_by_role("tab", name="Speed"))
-    click(page, page.get_by_role("tab", name="Live", exact=True))
+    select_tab(page, "Speed")
+    select_tab(page, "Live", exact=True)
     dismiss_notifications(page)  # viser's "software WebGL" notice
     page.get_by_text("In control:").scroll_into_view_if_needed()
     time.sleep(0.5)
@@ -279,7 +280,7 @@ def test_status_bar_stays_in_view_and_uncovered_while_the_tuning_tab_scrolls(pag
     """1280×800 (issue 24): with the Tuning tab scrolled to its end, the CiA 402 badge and
     Quick stop are in view and on top (the element at their centre is theirs), Quick stop is
     red, and viser's notices (software WebGL here) cover no plot and no control."""
-    click(page, page.get_by_role("tab", name="Tuning"))
+    select_tab(page, "Tuning")
     time.sleep(0.3)
     page.evaluate(
         "() => document.querySelectorAll('.mantine-ScrollArea-viewport')"
@@ -302,7 +303,7 @@ def test_status_bar_stays_in_view_and_uncovered_while_the_tuning_tab_scrolls(pag
         "() => document.querySelectorAll('.mantine-ScrollArea-viewport')"
         ".forEach(e => { e.scrollTop = 0; })"
     )
-    click(page, page.get_by_role("tab", name="Speed"))
+    select_tab(page, "Speed")
 
 
 def test_nothing_leaves_the_machine(page, bench):

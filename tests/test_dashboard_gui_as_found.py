@@ -32,6 +32,7 @@ from dashboard.browser import (
     launch,
     open_bench,
     run_dashboard,
+    select_tab,
 )
 
 NODE = 1
@@ -90,7 +91,7 @@ def at_1000_rpm_enabled(w: BusWatch) -> bool:
 
 
 def run_and_wait(page, tab: str, button, done: str, timeout: float = 120) -> str:
-    click(page, page.get_by_role("tab", name=tab))
+    select_tab(page, tab)
     click(page, button)
     deadline = time.monotonic() + timeout
     body = ""
@@ -116,7 +117,7 @@ def test_step_test_and_identification_from_the_gui_leave_speed_mode_at_1000_rpm(
             page.set_default_timeout(90_000)
             open_bench(page, dash.gui_url)
             dismiss_notifications(page)
-            click(page, page.get_by_role("tab", name="Speed"))
+            select_tab(page, "Speed")
             click_until(page, page.get_by_role("button", name="Enable"),
                         lambda t: wait_for(lambda: w.state and w.state[-1][1]
                                            == "OPERATION ENABLED", t, "enabled"))

@@ -42,6 +42,7 @@ from dashboard.browser import (
     open_bench,
     renderer_pids,
     run_dashboard,
+    select_tab,
 )
 from dashboard.config import BenchConfig
 
@@ -173,7 +174,7 @@ def test_watching_browser_quick_stops_a_report_at_once():
             open_bench(page, dash.gui_url)
             dismiss_notifications(page)
         # browser A: speed mode at 1000 rpm, enabled (it takes control by its first action)
-        click(a, a.get_by_role("tab", name="Speed"))
+        select_tab(a, "Speed")
         click_until(a, a.get_by_role("button", name="Enable"),
                     lambda t: wait_for(lambda: w.last() == "OPERATION ENABLED", t, "enabled"))
         holder = httpx.get(f"{api}/api/state", timeout=30).json()["controller"]
@@ -186,7 +187,7 @@ def test_watching_browser_quick_stops_a_report_at_once():
         before = httpx.get(f"{api}/api/state", timeout=30).json()
         assert before["mode"] == "speed" and before["state"] == "OPERATION ENABLED"
         # browser A runs the whole report (about 40 s); B watches
-        click(a, a.get_by_role("tab", name="Report"))
+        select_tab(a, "Report")
         click(a, a.get_by_role("button", name="Run report"))
 
         def running() -> bool:
