@@ -11,7 +11,7 @@ import re
 
 from . import abort_codes, current_stability, stability
 from .cob_id import RESTRICTED_CAN_IDS
-from .emcy_codes import EMCY_CODES
+from .emcy_codes import EMCY_CODES, TRIP_REASONS
 from .entry import Entry
 from .od import ObjectDictionaryView
 
@@ -232,6 +232,13 @@ def render_header(view: ObjectDictionaryView) -> str:
     add("/* ---- EMCY error codes the drive sends (see OD.md) ---- */")
     for code, (stem, _when) in sorted(EMCY_CODES.items()):
         define(f"OD_EMCY_{stem}", f"0x{code:04X}u")
+    add("")
+    add("/* ---- Trip reasons of the sample loop's protection (fault_reason) and the EMCY code")
+    add(" *      each trip sends (an injected fault sends the injected code) ---- */")
+    for number, reason in sorted(TRIP_REASONS.items()):
+        define(f"OD_TRIP_{reason.stem}", f"{number}u", reason.text)
+        if reason.emcy is not None:
+            define(f"OD_TRIP_{reason.stem}_EMCY", f"OD_EMCY_{EMCY_CODES[reason.emcy][0]}")
     add("")
     add("#endif /* BLDC_DRIVE_OD_H */")
     return "\n".join(lines) + "\n"

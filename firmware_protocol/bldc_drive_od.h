@@ -3024,4 +3024,16 @@
 #define OD_EMCY_RPDO_VALUE                                       0x8200u
 #define OD_EMCY_RPDO_LENGTH                                      0x8210u
 
+/* ---- Trip reasons of the sample loop's protection (fault_reason) and the EMCY code
+ *      each trip sends (an injected fault sends the injected code) ---- */
+#define OD_TRIP_OVERCURRENT                                      1u /* overcurrent: phase current above protection.overcurrent_trip */
+#define OD_TRIP_OVERCURRENT_EMCY                                 OD_EMCY_OVERCURRENT
+#define OD_TRIP_NONFINITE                                        2u /* overcurrent: non-finite (diverged) state */
+#define OD_TRIP_NONFINITE_EMCY                                   OD_EMCY_OVERCURRENT
+#define OD_TRIP_DC_OVERVOLTAGE                                   3u /* DC-link overvoltage */
+#define OD_TRIP_DC_OVERVOLTAGE_EMCY                              OD_EMCY_DC_OVERVOLTAGE
+#define OD_TRIP_DC_UNDERVOLTAGE                                  4u /* DC-link undervoltage */
+#define OD_TRIP_DC_UNDERVOLTAGE_EMCY                             OD_EMCY_DC_UNDERVOLTAGE
+#define OD_TRIP_INJECTED                                         5u /* injected fault */
+
 #endif /* BLDC_DRIVE_OD_H */

@@ -1,7 +1,9 @@
 """EMCY error codes (CiA 301 table 21, CiA 402 §8): the ones the drive sends and their meanings.
 
 The virtual drive (``virtual_drive.node``) and the DSP firmware (macros ``OD_EMCY_*`` in the
-generated header) send exactly :data:`EMCY_CODES`; ``OD.md`` lists them. :data:`MEANINGS` and
+generated header) send exactly :data:`EMCY_CODES`; ``OD.md`` lists them. The sample loop's
+protection (``virtual_drive/csrc/loop.c``) trips for one of :data:`TRIP_REASONS` (macros
+``OD_TRIP_*``), each with its EMCY code. :data:`MEANINGS` and
 :func:`describe` are what the host shows (``drive_link``, the dashboard): the exact code when it
 is listed, else its class from canopen's own table (:attr:`canopen.emcy.EmcyError.DESCRIPTIONS`).
 
@@ -15,6 +17,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from types import MappingProxyType
+from typing import NamedTuple
 
 from canopen.emcy import EmcyError
 
@@ -30,6 +33,8 @@ __all__ = [
     "OVERCURRENT",
     "RPDO_LENGTH",
     "RPDO_VALUE",
+    "TRIP_REASONS",
+    "TripReason",
     "describe",
 ]
 
@@ -76,6 +81,29 @@ EMCY_CODES: dict[int, tuple[str, str]] = {
         "RPDO shorter than its mapping, not processed; data[3] = RPDO number, data[4] = bytes "
         "received, data[5] = bytes mapped",
     ),
+}
+
+
+class TripReason(NamedTuple):
+    """Why the sample loop's protection tripped: macro stem, the EMCY code it sends (``None``:
+    the injected code itself) and its text."""
+
+    stem: str
+    emcy: int | None
+    text: str
+
+
+#: trip reason number (the C loop's ``fault_reason``, macros ``OD_TRIP_*``) -> its reason
+TRIP_REASONS: dict[int, TripReason] = {
+    1: TripReason(
+        "OVERCURRENT",
+        OVERCURRENT,
+        "overcurrent: phase current above protection.overcurrent_trip",
+    ),
+    2: TripReason("NONFINITE", OVERCURRENT, "overcurrent: non-finite (diverged) state"),
+    3: TripReason("DC_OVERVOLTAGE", DC_OVERVOLTAGE, "DC-link overvoltage"),
+    4: TripReason("DC_UNDERVOLTAGE", DC_UNDERVOLTAGE, "DC-link undervoltage"),
+    5: TripReason("INJECTED", None, "injected fault"),
 }
 
 MEANINGS: Mapping[int, str] = MappingProxyType(

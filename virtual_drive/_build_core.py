@@ -83,7 +83,8 @@ ffibuilder.set_source(
     "virtual_drive._core",
     '#include "controllers.h"\n#include "plant.h"\n#include "loop.h"\n',
     sources=[str(Path("virtual_drive") / "csrc" / s) for s in _SOURCES],
-    include_dirs=[str(Path("virtual_drive") / "csrc")],
+    # firmware_protocol: the generated header bldc_drive_od.h (OD_EMCY_*, OD_TRIP_*)
+    include_dirs=[str(Path("virtual_drive") / "csrc"), "firmware_protocol"],
     extra_compile_args=["-std=c99", "-O3", "-fno-math-errno", "-fno-semantic-interposition"],
     libraries=["m"],
 )

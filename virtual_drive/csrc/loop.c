@@ -2,6 +2,7 @@
 #include <math.h>
 #include <stddef.h>
 
+#include "bldc_drive_od.h" /* OD_EMCY_*, OD_TRIP_* (generated from the EDS) */
 #include "loop.h"
 
 #define PI_D 3.14159265358979323846
@@ -383,16 +384,16 @@ int loop_run(loop_t *L, int n, float **sig, double *t_out)
         /* protection */
         if (L->fault_code == 0) {
             if (p->nonfinite || !(i_p == i_p)) {
-                trip(L, 0x2310, 2);
+                trip(L, OD_TRIP_NONFINITE_EMCY, OD_TRIP_NONFINITE);
             } else if (p->i_abs_max > L->oc_trip) {
-                trip(L, 0x2310, 1);
+                trip(L, OD_TRIP_OVERCURRENT_EMCY, OD_TRIP_OVERCURRENT);
             } else if (L->inject != 0) {
-                trip(L, L->inject, 5);
+                trip(L, L->inject, OD_TRIP_INJECTED);
                 L->inject = 0;
             } else if (p->V_dc > L->ov_trip) {
-                trip(L, 0x3210, 3);
+                trip(L, OD_TRIP_DC_OVERVOLTAGE_EMCY, OD_TRIP_DC_OVERVOLTAGE);
             } else if (p->V_dc < L->uv_trip) {
-                trip(L, 0x3220, 4);
+                trip(L, OD_TRIP_DC_UNDERVOLTAGE_EMCY, OD_TRIP_DC_UNDERVOLTAGE);
             }
         }
         {

@@ -20,7 +20,10 @@
  *
  * Protection (checked at every sample; trip = bridge off at once, fault code kept until
  * loop_reset_fault): any |i_x| seen during the last sample > oc_trip or a non-finite state ->
- * 0x2310; V_dc > ov_trip -> 0x3210; V_dc < uv_trip -> 0x3220; an injected fault -> its code.
+ * OD_EMCY_OVERCURRENT; V_dc > ov_trip -> OD_EMCY_DC_OVERVOLTAGE; V_dc < uv_trip ->
+ * OD_EMCY_DC_UNDERVOLTAGE; an injected fault -> its code.  The reason is one of OD_TRIP_*; both
+ * sets of macros are generated into firmware_protocol/bldc_drive_od.h from
+ * firmware_protocol/emcy_codes.py.
  */
 #ifndef BLDC_LOOP_H
 #define BLDC_LOOP_H
@@ -75,8 +78,8 @@ typedef struct {
     int sec_prev, sec_prev2;
     int on_prev, on_prev2;
     double oc_trip, ov_trip, uv_trip;
-    int fault_code;    /* 0 none, else EMCY code */
-    int fault_reason;  /* 1 overcurrent, 2 non-finite, 3 OV, 4 UV, 5 injected */
+    int fault_code;    /* 0 none, else EMCY code (OD_EMCY_*) */
+    int fault_reason;  /* 0 none, else OD_TRIP_* */
     double fault_time; /* s */
     int inject;        /* pending injected fault code, 0 none */
     double t;          /* s, time of the next sample */

@@ -57,15 +57,14 @@ FAULT_KINDS: dict[str, int] = {
 #: most instants :meth:`Simulator.run_points` copies in one call
 MAX_POINTS = 64
 
-_REASONS = {
-    1: "overcurrent: phase current above protection.overcurrent_trip",
-    2: "overcurrent: non-finite (diverged) state",
-    3: "DC-link overvoltage",
-    4: "DC-link undervoltage",
-    5: "injected fault",
-}
 _MODES = {"off": 0, "current": 1, "speed": 2}
 _MODELS = {"pwm": 0, "averaged": 1}
+
+
+def _trip_text(reason: int) -> str:
+    """Text of the C loop's trip reason number (``OD_TRIP_*``), ``"?"`` if unknown."""
+    trip = emcy_codes.TRIP_REASONS.get(reason)
+    return trip.text if trip is not None else "?"
 
 
 @dataclass(frozen=True)
@@ -557,7 +556,7 @@ class Simulator:
                 return None
             return Fault(
                 code=int(L.fault_code),
-                reason=_REASONS.get(int(L.fault_reason), "?"),
+                reason=_trip_text(int(L.fault_reason)),
                 t=float(L.fault_time),
             )
 
