@@ -153,11 +153,11 @@ def test_tiny_R_c_in_the_c_controller_gives_the_limit_gamma():
     sim = Simulator()
     for R_c in (1.4e-45, 1e-38, 1e-20, 1e-8, 0.0):
         sim.set_current_gains(R_c=R_c)
-        assert sim._L.cc.Gamma_c == pytest.approx(TS / (2 * L), rel=1e-6), R_c
+        assert sim._loop.cc.Gamma_c == pytest.approx(TS / (2 * L), rel=1e-6), R_c
     for R_c in (1e-4, R, 1.0):
         sim.set_current_gains(R_c=R_c)
         exact = -math.expm1(-R_c * TS / L) / (2 * R_c)
-        assert sim._L.cc.Gamma_c == pytest.approx(exact, rel=1e-6), R_c
+        assert sim._loop.cc.Gamma_c == pytest.approx(exact, rel=1e-6), R_c
     # and the loop regulates with it (no trip): 15 A in current mode for 50 ms
     sim.set_current_gains(R_c=1.4e-45)
     sim.set_mode("current")

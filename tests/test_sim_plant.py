@@ -301,11 +301,11 @@ def test_chunk_boundaries_and_recording_change_nothing(case):
     for name in SIGNALS:
         np.testing.assert_array_equal(ra[name][:999], rb1[name], err_msg=name)
         np.testing.assert_array_equal(ra[name][1600:], rb2[name], err_msg=name)
-    assert a.state == b.state  # the latest values (L->last) after the chunk ...
+    assert a.state == b.state  # the latest values (loop->last) after the chunk ...
     for name in SIGNALS:  # ... are the last recorded sample's
         assert a.state[name] == pytest.approx(float(ra[name][-1]), rel=0, abs=0), name
-    La, Lb = a._L.p, b._L.p
+    plant_a, plant_b = a._loop.p, b._loop.p
     for x in range(3):
-        assert La.i[x] == Lb.i[x]
-    assert (La.omega, La.theta_e) == (Lb.omega, Lb.theta_e)
+        assert plant_a.i[x] == plant_b.i[x]
+    assert (plant_a.omega, plant_a.theta_e) == (plant_b.omega, plant_b.theta_e)
     assert a.segments == b.segments

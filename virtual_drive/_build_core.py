@@ -57,7 +57,7 @@ typedef struct {
     long long segments;
     int os_n; double *os_buf; long long os_cap; long long os_len;
     ...;
-} loop_t;
+} sample_loop_t;
 
 int cc_current_configure(cc_current_t *c, int type, float Ts, float L_c, float R_c, float k_p,
                          float k_i, float T_BT, float T_DD, float T_SD, float V_G, int emf_ff);
@@ -70,11 +70,11 @@ float cc_speed_step(cc_speed_t *s, float w_ref, float w);
 double plant_emf_shape(double theta, double w);
 int plant_hall_sector(double theta_e);
 
-void loop_init(loop_t *L);
-void loop_update_mech(loop_t *L);
-int loop_run(loop_t *L, int n, float **sig, double *t_out);
-int loop_run_points(loop_t *L, int n, const int *at, int n_at, float *snap);
-void loop_reset_fault(loop_t *L);
+void loop_init(sample_loop_t *loop);
+void loop_update_mech(sample_loop_t *loop);
+int loop_run(sample_loop_t *loop, int n, float **sig, double *t_out);
+int loop_run_points(sample_loop_t *loop, int n, const int *at, int n_at, float *snap);
+void loop_reset_fault(sample_loop_t *loop);
 """
 
 ffibuilder = FFI()

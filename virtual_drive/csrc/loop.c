@@ -28,73 +28,73 @@ static double pseudo_current(const double i[3], int sec, double omega)
     return 0.5 * (i[sec_plus[sec]] - i[sec_minus[sec]] + open_sign[!(omega >= 0.0)][sec] * i[o]);
 }
 
-void loop_update_mech(loop_t *L)
+void loop_update_mech(sample_loop_t *loop)
 {
-    if (L->p.B_tot > 0.0) {
-        L->a_m = exp(-L->p.B_tot * L->Ts / L->p.J);
-        L->p.mech_gain = -expm1(-L->p.B_tot * L->Ts / L->p.J) / L->p.B_tot;
+    if (loop->p.B_tot > 0.0) {
+        loop->a_m = exp(-loop->p.B_tot * loop->Ts / loop->p.J);
+        loop->p.mech_gain = -expm1(-loop->p.B_tot * loop->Ts / loop->p.J) / loop->p.B_tot;
     } else {
-        L->a_m = 1.0;
-        L->p.mech_gain = 0.0;
+        loop->a_m = 1.0;
+        loop->p.mech_gain = 0.0;
     }
 }
 
-static double ctrl_v0(const loop_t *L, double e_L)
+static double ctrl_v0(const sample_loop_t *loop, double e_L)
 {
-    if (L->cc.type == CC_PREDICTIVE) {
+    if (loop->cc.type == CC_PREDICTIVE) {
         return e_L;
     }
-    return L->cc.emf_ff ? 0.0 : e_L;
+    return loop->cc.emf_ff ? 0.0 : e_L;
 }
 
-void loop_init(loop_t *L)
+void loop_init(sample_loop_t *loop)
 {
-    L->p.i[0] = L->p.i[1] = L->p.i[2] = 0.0;
-    L->p.Te_int = 0.0;
-    L->p.i_abs_max = 0.0;
-    L->p.nonfinite = 0;
-    L->m_prev = L->m_prev2 = 0.0f;
-    L->sec_prev = L->sec_prev2 = plant_hall_sector(L->p.theta_e);
-    L->on_prev = L->on_prev2 = 0;
-    L->active = 0;
-    L->fault_code = 0;
-    L->fault_reason = 0;
-    L->fault_time = 0.0;
-    L->inject = 0;
-    L->segments = 0;
-    L->os_len = 0;
-    L->p.ip_min = L->p.ip_max = L->p.ip_last = 0.0;
-    L->p.ip_dir = L->p.ip_peaks = 0;
-    cc_current_reset(&L->cc, 0.0f);
-    cc_speed_reset(&L->sc, 0.0f, 0.0f);
-    loop_update_mech(L);
+    loop->p.i[0] = loop->p.i[1] = loop->p.i[2] = 0.0;
+    loop->p.Te_int = 0.0;
+    loop->p.i_abs_max = 0.0;
+    loop->p.nonfinite = 0;
+    loop->m_prev = loop->m_prev2 = 0.0f;
+    loop->sec_prev = loop->sec_prev2 = plant_hall_sector(loop->p.theta_e);
+    loop->on_prev = loop->on_prev2 = 0;
+    loop->active = 0;
+    loop->fault_code = 0;
+    loop->fault_reason = 0;
+    loop->fault_time = 0.0;
+    loop->inject = 0;
+    loop->segments = 0;
+    loop->os_len = 0;
+    loop->p.ip_min = loop->p.ip_max = loop->p.ip_last = 0.0;
+    loop->p.ip_dir = loop->p.ip_peaks = 0;
+    cc_current_reset(&loop->cc, 0.0f);
+    cc_speed_reset(&loop->sc, 0.0f, 0.0f);
+    loop_update_mech(loop);
 }
 
-void loop_reset_fault(loop_t *L)
+void loop_reset_fault(sample_loop_t *loop)
 {
-    L->fault_code = 0;
-    L->fault_reason = 0;
-    L->inject = 0;
-    L->p.nonfinite = 0;
-    L->p.i_abs_max = 0.0;
-    L->active = 0;
+    loop->fault_code = 0;
+    loop->fault_reason = 0;
+    loop->inject = 0;
+    loop->p.nonfinite = 0;
+    loop->p.i_abs_max = 0.0;
+    loop->active = 0;
 }
 
-static void os_record(loop_t *L, double t)
+static void os_record(sample_loop_t *loop, double t)
 {
     double *b;
     int sec;
-    if (L->os_buf == NULL || L->os_len >= L->os_cap) {
+    if (loop->os_buf == NULL || loop->os_len >= loop->os_cap) {
         return;
     }
-    b = L->os_buf + 5 * L->os_len;
-    sec = plant_hall_sector(L->p.theta_e);
+    b = loop->os_buf + 5 * loop->os_len;
+    sec = plant_hall_sector(loop->p.theta_e);
     b[0] = t;
-    b[1] = L->p.i[0];
-    b[2] = L->p.i[1];
-    b[3] = L->p.i[2];
-    b[4] = pseudo_current(L->p.i, sec, L->p.omega);
-    L->os_len++;
+    b[1] = loop->p.i[0];
+    b[2] = loop->p.i[1];
+    b[3] = loop->p.i[2];
+    b[4] = pseudo_current(loop->p.i, sec, loop->p.omega);
+    loop->os_len++;
 }
 
 static int leg_mode_pwm(double d, double u, double Ts, double T_BT)
@@ -151,21 +151,21 @@ static void sort_d(double *a, int n)
 
 /* Advance the plant over pattern time [u0, u1) of one PWM period; t_start is the absolute time
  * at u0 (for the oversampled record). */
-static void apply_pattern(loop_t *L, float m, int sec, int on, double u0, double u1,
+static void apply_pattern(sample_loop_t *loop, float m, int sec, int on, double u0, double u1,
                           double t_start)
 {
     double bp[16 + LOOP_OS_MAX];
     int nb = 0, j;
     int mode[3];
     double vdrv[3] = {0.0, 0.0, 0.0};
-    const double Ts = L->Ts, Vd = L->p.V_dc;
+    const double Ts = loop->Ts, Vd = loop->p.V_dc;
     double dp = 0.5 * (1.0 + (double)m), dm = 0.5 * (1.0 - (double)m);
     int xp = sec_plus[sec], xm = sec_minus[sec];
-    double os_dt = (L->os_n > 0) ? Ts / L->os_n : 0.0;
+    double os_dt = (loop->os_n > 0) ? Ts / loop->os_n : 0.0;
     if (u1 <= u0) {
         return;
     }
-    if (on && L->model == LOOP_MODEL_PWM && L->T_BT == 0.0 && os_dt == 0.0) {
+    if (on && loop->model == LOOP_MODEL_PWM && loop->T_BT == 0.0 && os_dt == 0.0) {
         /* Fast path without blanking time: the edges are already ordered,
          * r_hi <= r_lo <= f_lo <= f_hi for the legs with the larger / smaller duty. */
         int x_hi = (dp >= dm) ? xp : xm, x_lo = (dp >= dm) ? xm : xp;
@@ -177,7 +177,7 @@ static void apply_pattern(loop_t *L, float m, int sec, int on, double u0, double
         mode[x_lo] = PLANT_DRIVEN;
         mode[open] = PLANT_OPEN;
         vdrv[open] = 0.0;
-        if (L->p.V_G == 0.0) {
+        if (loop->p.V_G == 0.0) {
             /* all sub-intervals in one call (legs a < b driven, see plant_advance_six_step) */
             double va[5], vb[5], dt[5];
             int ns = 0, xa = (open == 0) ? 1 : 0;
@@ -195,7 +195,7 @@ static void apply_pattern(loop_t *L, float m, int sec, int on, double u0, double
                 dt[ns] = b - a;
                 ++ns;
             }
-            L->segments += plant_advance_six_step(&L->p, open, va, vb, dt, ns);
+            loop->segments += plant_advance_six_step(&loop->p, open, va, vb, dt, ns);
             return;
         }
         for (k = 0; k < 5; ++k) {
@@ -206,23 +206,23 @@ static void apply_pattern(loop_t *L, float m, int sec, int on, double u0, double
             }
             vdrv[x_hi] = (k >= 1 && k <= 3) ? Vd : 0.0;
             vdrv[x_lo] = (k == 2) ? Vd : 0.0;
-            L->segments += plant_advance(&L->p, mode, vdrv, b - a);
+            loop->segments += plant_advance(&loop->p, mode, vdrv, b - a);
         }
         return;
     }
     bp[nb++] = u0;
     bp[nb++] = u1;
-    if (on && L->model == LOOP_MODEL_PWM) {
+    if (on && loop->model == LOOP_MODEL_PWM) {
         double cand[8];
         int c;
         cand[0] = 0.5 * (1.0 - dp) * Ts;
-        cand[1] = cand[0] + L->T_BT;
+        cand[1] = cand[0] + loop->T_BT;
         cand[2] = 0.5 * (1.0 + dp) * Ts;
-        cand[3] = cand[2] + L->T_BT;
+        cand[3] = cand[2] + loop->T_BT;
         cand[4] = 0.5 * (1.0 - dm) * Ts;
-        cand[5] = cand[4] + L->T_BT;
+        cand[5] = cand[4] + loop->T_BT;
         cand[6] = 0.5 * (1.0 + dm) * Ts;
-        cand[7] = cand[6] + L->T_BT;
+        cand[7] = cand[6] + loop->T_BT;
         for (c = 0; c < 8; ++c) {
             if (cand[c] > u0 && cand[c] < u1) {
                 bp[nb++] = cand[c];
@@ -231,7 +231,7 @@ static void apply_pattern(loop_t *L, float m, int sec, int on, double u0, double
     }
     if (os_dt > 0.0) {
         /* grid points t_k + j Ts/os_n, in pattern time u = t - t_start + u0 */
-        double g = ceil((t_start - L->t) / os_dt - 1e-9) * os_dt + L->t; /* absolute */
+        double g = ceil((t_start - loop->t) / os_dt - 1e-9) * os_dt + loop->t; /* absolute */
         for (; g < t_start + (u1 - u0) - 1e-12 && nb < 16 + LOOP_OS_MAX; g += os_dt) {
             double ug = g - t_start + u0;
             if (ug > u0 + 1e-12) {
@@ -252,9 +252,9 @@ static void apply_pattern(loop_t *L, float m, int sec, int on, double u0, double
             for (x = 0; x < 3; ++x) {
                 mode[x] = PLANT_OPEN;
             }
-            if (L->model == LOOP_MODEL_PWM) {
-                int mp = leg_mode_pwm(dp, um, Ts, L->T_BT);
-                int mm = leg_mode_pwm(dm, um, Ts, L->T_BT);
+            if (loop->model == LOOP_MODEL_PWM) {
+                int mp = leg_mode_pwm(dp, um, Ts, loop->T_BT);
+                int mm = leg_mode_pwm(dm, um, Ts, loop->T_BT);
                 if (mp != 2) {
                     mode[xp] = PLANT_DRIVEN;
                     vdrv[xp] = mp ? Vd : 0.0;
@@ -264,40 +264,40 @@ static void apply_pattern(loop_t *L, float m, int sec, int on, double u0, double
                     vdrv[xm] = mm ? Vd : 0.0;
                 }
             } else {
-                double bt = Vd * L->T_BT / Ts;
+                double bt = Vd * loop->T_BT / Ts;
                 mode[xp] = PLANT_DRIVEN;
                 mode[xm] = PLANT_DRIVEN;
-                vdrv[xp] = dp * Vd - sgn_d(L->p.i[xp]) * bt;
-                vdrv[xm] = dm * Vd - sgn_d(L->p.i[xm]) * bt;
+                vdrv[xp] = dp * Vd - sgn_d(loop->p.i[xp]) * bt;
+                vdrv[xm] = dm * Vd - sgn_d(loop->p.i[xm]) * bt;
             }
         }
-        L->segments += plant_advance(&L->p, mode, vdrv, b - a);
+        loop->segments += plant_advance(&loop->p, mode, vdrv, b - a);
         if (os_dt > 0.0) {
             double tb = t_start + (b - u0);
-            double rel = (tb - L->t) / os_dt;
+            double rel = (tb - loop->t) / os_dt;
             double rr = floor(rel + 0.5);
-            if (fabs(rel - rr) < 1e-6 && rr >= 1.0 && rr < (double)L->os_n - 0.5) {
-                os_record(L, tb);
+            if (fabs(rel - rr) < 1e-6 && rr >= 1.0 && rr < (double)loop->os_n - 0.5) {
+                os_record(loop, tb);
             }
         }
     }
 }
 
-static void trip(loop_t *L, int code, int reason)
+static void trip(sample_loop_t *loop, int code, int reason)
 {
-    L->fault_code = code;
-    L->fault_reason = reason;
-    L->fault_time = L->t;
-    L->on_prev = L->on_prev2 = 0;
-    L->active = 0;
+    loop->fault_code = code;
+    loop->fault_reason = reason;
+    loop->fault_time = loop->t;
+    loop->on_prev = loop->on_prev2 = 0;
+    loop->active = 0;
 }
 
 /* apply_pattern over a whole period for the common case -- PWM model, bridge on, no blanking
  * time, no switch drop, no oversampled record -- with the set-up of its fast path: the same
  * sub-intervals [a, b) and leg voltages, handed to plant_advance_six_step in one call. */
-static void pattern_six_step(loop_t *L, float m, int sec, double u0, double u1)
+static void pattern_six_step(sample_loop_t *loop, float m, int sec, double u0, double u1)
 {
-    const double Ts = L->Ts, Vd = L->p.V_dc;
+    const double Ts = loop->Ts, Vd = loop->p.V_dc;
     const double dp = 0.5 * (1.0 + (double)m), dm = 0.5 * (1.0 - (double)m);
     const int xp = sec_plus[sec], xm = sec_minus[sec], open = sec_open[sec];
     const int p_hi = (dp >= dm);
@@ -323,14 +323,14 @@ static void pattern_six_step(loop_t *L, float m, int sec, double u0, double u1)
         dt[ns] = b - a;
         ++ns;
     }
-    L->segments += plant_advance_six_step(&L->p, open, va, vb, dt, ns);
+    loop->segments += plant_advance_six_step(&loop->p, open, va, vb, dt, ns);
 }
 
-int loop_run(loop_t *L, int n, float **sig, double *t_out)
+int loop_run(sample_loop_t *loop, int n, float **sig, double *t_out)
 {
     int k;
-    plant_t *const p = &L->p;
-    const double Ts = L->Ts;
+    plant_t *const p = &loop->p;
+    const double Ts = loop->Ts;
     float *rec_ptr[LOOP_NSIG]; /* the recorded signals' buffers, */
     int rec_sig[LOOP_NSIG];    /* their SIG_* indices */
     int n_rec = 0, all_sig;
@@ -351,20 +351,22 @@ int loop_run(loop_t *L, int n, float **sig, double *t_out)
         hw = (w > 0.0) ? 0.5 * w : 0.0;
         inv2w = 0.5 / w;
         mid_gain = 0.5 * Ts * p->pole_pairs;
-        six = (L->model == LOOP_MODEL_PWM && L->T_BT == 0.0 && L->os_n <= 0 && p->V_G == 0.0);
+        six = (loop->model == LOOP_MODEL_PWM && loop->T_BT == 0.0 && loop->os_n <= 0
+               && p->V_G == 0.0);
         /* e_L feeds the current law only with the EMF feed-forward or the predictive law;
          * otherwise e_L and T_e at the sample are only recorded (or start the controllers) */
-        emf_always = L->cc.emf_ff || L->cc.type == CC_PREDICTIVE
+        emf_always = loop->cc.emf_ff || loop->cc.type == CC_PREDICTIVE
                      || (sig != NULL && (sig[SIG_E_L] != NULL || sig[SIG_T_E] != NULL));
     }
     for (k = 0; k < n; ++k) {
         const double theta = p->theta_e, omega = p->omega;
         const int sec = plant_hall_sector_in(theta);
         const int last = (k == n - 1);
-        double e_L = 0.0, i_p, speed, Te = 0.0, i_ref = 0.0, w_ref = L->w_ref_set;
+        double e_L = 0.0, i_p, speed, Te = 0.0, i_ref = 0.0, w_ref = loop->w_ref_set;
         float m = 0.0f;
         int on = 0;
-        if (emf_always || last || (L->mode != LOOP_OFF && L->fault_code == 0 && !L->active)) {
+        if (emf_always || last
+            || (loop->mode != LOOP_OFF && loop->fault_code == 0 && !loop->active)) {
             /* back-EMF e_x = k_e w F_x and torque T_e = k_e sum(F_x i_x) at the sample; not
              * computed when nothing uses them (the values are the same either way) */
             double e[3], F[3], kw = p->k_e * omega;
@@ -382,18 +384,18 @@ int loop_run(loop_t *L, int n, float **sig, double *t_out)
         i_p = pseudo_current(p->i, sec, omega);
         speed = omega * RPM_PER_RAD_S;
         /* protection */
-        if (L->fault_code == 0) {
+        if (loop->fault_code == 0) {
             if (p->nonfinite || !(i_p == i_p)) {
-                trip(L, OD_TRIP_NONFINITE_EMCY, OD_TRIP_NONFINITE);
-            } else if (p->i_abs_max > L->oc_trip) {
-                trip(L, OD_TRIP_OVERCURRENT_EMCY, OD_TRIP_OVERCURRENT);
-            } else if (L->inject != 0) {
-                trip(L, L->inject, OD_TRIP_INJECTED);
-                L->inject = 0;
-            } else if (p->V_dc > L->ov_trip) {
-                trip(L, OD_TRIP_DC_OVERVOLTAGE_EMCY, OD_TRIP_DC_OVERVOLTAGE);
-            } else if (p->V_dc < L->uv_trip) {
-                trip(L, OD_TRIP_DC_UNDERVOLTAGE_EMCY, OD_TRIP_DC_UNDERVOLTAGE);
+                trip(loop, OD_TRIP_NONFINITE_EMCY, OD_TRIP_NONFINITE);
+            } else if (p->i_abs_max > loop->oc_trip) {
+                trip(loop, OD_TRIP_OVERCURRENT_EMCY, OD_TRIP_OVERCURRENT);
+            } else if (loop->inject != 0) {
+                trip(loop, loop->inject, OD_TRIP_INJECTED);
+                loop->inject = 0;
+            } else if (p->V_dc > loop->ov_trip) {
+                trip(loop, OD_TRIP_DC_OVERVOLTAGE_EMCY, OD_TRIP_DC_OVERVOLTAGE);
+            } else if (p->V_dc < loop->uv_trip) {
+                trip(loop, OD_TRIP_DC_UNDERVOLTAGE_EMCY, OD_TRIP_DC_UNDERVOLTAGE);
             }
         }
         {
@@ -419,27 +421,27 @@ int loop_run(loop_t *L, int n, float **sig, double *t_out)
             speed = p->omega * RPM_PER_RAD_S;
         }
         /* controllers */
-        if (L->mode != LOOP_OFF && L->fault_code == 0) {
-            if (!L->active) {
-                cc_current_reset(&L->cc, (float)ctrl_v0(L, e_L));
-                cc_speed_reset(&L->sc, (float)i_p, (float)speed);
+        if (loop->mode != LOOP_OFF && loop->fault_code == 0) {
+            if (!loop->active) {
+                cc_current_reset(&loop->cc, (float)ctrl_v0(loop, e_L));
+                cc_speed_reset(&loop->sc, (float)i_p, (float)speed);
             }
-            if (L->mode == LOOP_SPEED) {
-                i_ref = cc_speed_step(&L->sc, (float)w_ref, (float)speed);
+            if (loop->mode == LOOP_SPEED) {
+                i_ref = cc_speed_step(&loop->sc, (float)w_ref, (float)speed);
             } else {
-                i_ref = L->i_ref_set;
+                i_ref = loop->i_ref_set;
             }
-            m = cc_current_step(&L->cc, (float)i_ref, (float)i_p, (float)e_L, (float)p->V_dc);
+            m = cc_current_step(&loop->cc, (float)i_ref, (float)i_p, (float)e_L, (float)p->V_dc);
             on = 1;
-            L->active = 1;
+            loop->active = 1;
         } else {
-            L->active = 0;
-            i_ref = (L->mode == LOOP_CURRENT) ? L->i_ref_set : 0.0;
+            loop->active = 0;
+            i_ref = (loop->mode == LOOP_CURRENT) ? loop->i_ref_set : 0.0;
         }
-        if (L->mode != LOOP_SPEED) {
-            w_ref = (L->mode == LOOP_OFF) ? 0.0 : w_ref;
+        if (loop->mode != LOOP_SPEED) {
+            w_ref = (loop->mode == LOOP_OFF) ? 0.0 : w_ref;
         }
-        /* record sample k (L->last: only the chunk's last sample is kept, the one seen after
+        /* record sample k (loop->last: only the chunk's last sample is kept, the one seen after
          * the call) */
         if (sig != NULL || last) {
             float r[LOOP_NSIG];
@@ -454,7 +456,7 @@ int loop_run(loop_t *L, int n, float **sig, double *t_out)
             r[SIG_M] = m;
             r[SIG_HALL] = (float)sec;
             r[SIG_I_P_REF] = (float)i_ref;
-            r[SIG_SPEED_REF] = (float)((L->mode == LOOP_SPEED) ? w_ref : 0.0);
+            r[SIG_SPEED_REF] = (float)((loop->mode == LOOP_SPEED) ? w_ref : 0.0);
             r[SIG_V_DC] = (float)p->V_dc;
             r[SIG_T_E] = (float)Te;
             r[SIG_THETA_E] = (float)p->theta_e;
@@ -472,15 +474,15 @@ int loop_run(loop_t *L, int n, float **sig, double *t_out)
             }
             if (last) {
                 for (j = 0; j < LOOP_NSIG; ++j) {
-                    L->last[j] = r[j];
+                    loop->last[j] = r[j];
                 }
             }
         }
         if (t_out != NULL) {
-            t_out[k] = L->t;
+            t_out[k] = loop->t;
         }
-        if (L->os_n > 0) {
-            os_record(L, L->t);
+        if (loop->os_n > 0) {
+            os_record(loop, loop->t);
         }
         { /* i_p over the coming PWM period, tracked by the plant at every switching edge */
             p->w_ip[sec_plus[sec]] = 0.5;
@@ -498,55 +500,55 @@ int loop_run(loop_t *L, int n, float **sig, double *t_out)
             p->e_seg[1] = kw * p->F_seg[1];
             p->e_seg[2] = kw * p->F_seg[2];
         }
-        if (L->T_delay > 0.0) {
-            if (six && L->on_prev2) {
-                pattern_six_step(L, L->m_prev2, L->sec_prev2, Ts - L->T_delay, Ts);
+        if (loop->T_delay > 0.0) {
+            if (six && loop->on_prev2) {
+                pattern_six_step(loop, loop->m_prev2, loop->sec_prev2, Ts - loop->T_delay, Ts);
             } else {
-                apply_pattern(L, L->m_prev2, L->sec_prev2, L->on_prev2, Ts - L->T_delay, Ts,
-                              L->t);
+                apply_pattern(loop, loop->m_prev2, loop->sec_prev2, loop->on_prev2,
+                              Ts - loop->T_delay, Ts, loop->t);
             }
-            if (six && L->on_prev) {
-                pattern_six_step(L, L->m_prev, L->sec_prev, 0.0, Ts - L->T_delay);
+            if (six && loop->on_prev) {
+                pattern_six_step(loop, loop->m_prev, loop->sec_prev, 0.0, Ts - loop->T_delay);
             } else {
-                apply_pattern(L, L->m_prev, L->sec_prev, L->on_prev, 0.0, Ts - L->T_delay,
-                              L->t + L->T_delay);
+                apply_pattern(loop, loop->m_prev, loop->sec_prev, loop->on_prev, 0.0,
+                              Ts - loop->T_delay, loop->t + loop->T_delay);
             }
-        } else if (six && L->on_prev) {
-            pattern_six_step(L, L->m_prev, L->sec_prev, 0.0, Ts);
+        } else if (six && loop->on_prev) {
+            pattern_six_step(loop, loop->m_prev, loop->sec_prev, 0.0, Ts);
         } else {
-            apply_pattern(L, L->m_prev, L->sec_prev, L->on_prev, 0.0, Ts, L->t);
+            apply_pattern(loop, loop->m_prev, loop->sec_prev, loop->on_prev, 0.0, Ts, loop->t);
         }
-        if (L->fault_code != 0) {
+        if (loop->fault_code != 0) {
             on = 0;
         }
-        L->m_prev2 = L->m_prev;
-        L->sec_prev2 = L->sec_prev;
-        L->on_prev2 = L->on_prev;
-        L->m_prev = m;
-        L->sec_prev = sec;
-        L->on_prev = on;
-        plant_mech_step_in(p, Ts, L->a_m);
-        L->k += 1;
-        L->t = L->k * Ts;
+        loop->m_prev2 = loop->m_prev;
+        loop->sec_prev2 = loop->sec_prev;
+        loop->on_prev2 = loop->on_prev;
+        loop->m_prev = m;
+        loop->sec_prev = sec;
+        loop->on_prev = on;
+        plant_mech_step_in(p, Ts, loop->a_m);
+        loop->k += 1;
+        loop->t = loop->k * Ts;
     }
     return n;
 }
 
-int loop_run_points(loop_t *L, int n, const int *at, int n_at, float *snap)
+int loop_run_points(sample_loop_t *loop, int n, const int *at, int n_at, float *snap)
 {
     int done = 0, j, x;
     for (j = 0; j < n_at; ++j) {
         int a = (at[j] < n) ? at[j] : n;
         if (a > done) {
-            loop_run(L, a - done, NULL, NULL);
+            loop_run(loop, a - done, NULL, NULL);
             done = a;
         }
         for (x = 0; x < LOOP_NSIG; ++x) {
-            snap[j * LOOP_NSIG + x] = L->last[x];
+            snap[j * LOOP_NSIG + x] = loop->last[x];
         }
     }
     if (n > done) {
-        loop_run(L, n - done, NULL, NULL);
+        loop_run(loop, n - done, NULL, NULL);
     }
     return n;
 }

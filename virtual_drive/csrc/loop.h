@@ -61,6 +61,9 @@ enum {
 #define LOOP_MODEL_PWM 0
 #define LOOP_MODEL_AVERAGED 1
 
+/* The whole state of the 50 kHz sample loop (one per simulated drive): the plant, both
+ * controllers, the PWM pattern memory of the delays, the protection and the records.  Owned by
+ * virtual_drive.sim.Simulator (its _loop); every loop_* function takes it as `loop`. */
 typedef struct {
     plant_t p;
     cc_current_t cc;
@@ -91,24 +94,24 @@ typedef struct {
     double *os_buf;    /* 5 doubles per point */
     long long os_cap;  /* points */
     long long os_len;
-} loop_t;
+} sample_loop_t;
 
 /* Initialise state (currents, speed, pipeline, controllers reset) after the params are set. */
-void loop_init(loop_t *L);
+void loop_init(sample_loop_t *loop);
 
 /* Recompute derived plant constants after changing p.J / p.B_tot. */
-void loop_update_mech(loop_t *L);
+void loop_update_mech(sample_loop_t *loop);
 
 /* Run n samples.  sig[j] (j < LOOP_NSIG) may be NULL or point to n floats; t_out may be NULL
  * or point to n doubles.  Returns the number of samples run (n). */
-int loop_run(loop_t *L, int n, float **sig, double *t_out);
+int loop_run(sample_loop_t *loop, int n, float **sig, double *t_out);
 
-/* Run n samples in one call (no record) and copy the LOOP_NSIG latest values (L->last) into
+/* Run n samples in one call (no record) and copy the LOOP_NSIG latest values (loop->last) into
  * snap + LOOP_NSIG * j once at[j] samples have run, for j < n_at (0 <= at[0] <= at[1] <= ...;
  * an at[j] > n counts as n): the values of the instants a pacing tick's TPDOs are due at,
  * without a call per instant.  Returns n. */
-int loop_run_points(loop_t *L, int n, const int *at, int n_at, float *snap);
+int loop_run_points(sample_loop_t *loop, int n, const int *at, int n_at, float *snap);
 
-void loop_reset_fault(loop_t *L);
+void loop_reset_fault(sample_loop_t *loop);
 
 #endif

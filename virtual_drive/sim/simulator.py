@@ -98,11 +98,12 @@ class Simulator:
         protection: ProtectionParams | None = None,
     ) -> None:
         self._lock = threading.RLock()
-        self._L = ffi.new("loop_t *")
+        #: the C sample loop's whole state (csrc/loop.h ``sample_loop_t``), owned here
+        self._loop = ffi.new("sample_loop_t *")
         self._os_keep: Any = None
-        L = self._L
-        L.Ts = Ts
-        L.p.theta_e = math.pi / 3.0  # middle of Hall sector 1
+        loop = self._loop
+        loop.Ts = Ts
+        loop.p.theta_e = math.pi / 3.0  # middle of Hall sector 1
         self._motor = motor if motor is not None else MotorParams()
         self._inverter = inverter if inverter is not None else InverterParams()
         self._load = load if load is not None else LoadParams()
@@ -117,10 +118,10 @@ class Simulator:
         self._apply_speed()
         self._apply_protection()
         self.set_model(model)
-        lib.loop_init(L)
+        lib.loop_init(loop)
         self._last: dict[str, float] | None = None
         #: float32 view of the C loop's latest values (SIGNALS order), read without a copy
-        self._last_view = np.frombuffer(ffi.buffer(ffi.addressof(L, "last")), dtype=np.float32)
+        self._last_view = np.frombuffer(ffi.buffer(ffi.addressof(loop, "last")), dtype=np.float32)
         # run_points' buffers: sample counts and the rows copied at them (+1: the chunk's end)
         self._points_at = ffi.new("int[]", MAX_POINTS + 1)
         self._points_buf = ffi.new("float[]", (MAX_POINTS + 1) * len(SIGNALS))
@@ -159,26 +160,26 @@ class Simulator:
         return dataclasses.replace(self._protection)
 
     def _apply_motor(self) -> None:
-        m, p = self._motor, self._L.p
+        m, p = self._motor, self._loop.p
         p.R, p.L, p.k_e = m.R, m.L, m.k_e
         p.pole_pairs, p.emf_rounding = m.pole_pairs, m.emf_rounding
 
     def _apply_inverter(self) -> None:
-        v, L = self._inverter, self._L
-        L.p.V_dc = self._supply
-        L.p.V_G = v.V_G
-        L.T_BT = v.T_BT
-        L.T_delay = v.T_DD + v.T_SD
+        v, loop = self._inverter, self._loop
+        loop.p.V_dc = self._supply
+        loop.p.V_G = v.V_G
+        loop.T_BT = v.T_BT
+        loop.T_delay = v.T_DD + v.T_SD
 
     def _apply_load(self) -> None:
-        ld, p = self._load, self._L.p
+        ld, p = self._load, self._loop.p
         p.J, p.B_tot, p.T_load = ld.J, ld.B_tot, ld.T_load
-        lib.loop_update_mech(self._L)
+        lib.loop_update_mech(self._loop)
 
     def _apply_current(self) -> None:
         c = self._current
         rc = lib.cc_current_configure(
-            ffi.addressof(self._L, "cc"),
+            ffi.addressof(self._loop, "cc"),
             c.type_code,
             Ts,
             c.L_c,
@@ -196,12 +197,13 @@ class Simulator:
 
     def _apply_speed(self) -> None:
         s = self._speed
-        if lib.cc_speed_configure(ffi.addressof(self._L, "sc"), s.k_p, s.k_i, s.current_limit) != 0:
+        speed_loop = ffi.addressof(self._loop, "sc")
+        if lib.cc_speed_configure(speed_loop, s.k_p, s.k_i, s.current_limit) != 0:
             raise ValueError(f"SpeedControllerParams not representable in float32: {s}")
 
     def _apply_protection(self) -> None:
-        pr, L = self._protection, self._L
-        L.oc_trip, L.ov_trip, L.uv_trip = (
+        pr, loop = self._protection, self._loop
+        loop.oc_trip, loop.ov_trip, loop.uv_trip = (
             pr.overcurrent_trip,
             pr.overvoltage_trip,
             pr.undervoltage_trip,
@@ -230,7 +232,7 @@ class Simulator:
             self._current = new
             self._apply_current()
             if new.type != old_type:
-                self._L.active = 0
+                self._loop.active = 0
             return self.current
 
     def set_speed_gains(self, **kw: Any) -> SpeedControllerParams:
@@ -301,7 +303,7 @@ class Simulator:
             if not math.isfinite(v) or v <= 0.0 or v > 1000.0:
                 raise ValueError(f"V_dc supply must be in (0, 1000] V, got {V!r}")
             self._supply = v
-            self._L.p.V_dc = v
+            self._loop.p.V_dc = v
 
     @property
     def supply_voltage(self) -> float:
@@ -322,7 +324,7 @@ class Simulator:
         if kind not in FAULT_KINDS:
             raise ValueError(f"fault kind must be one of {names} or 0..3, got {kind!r}")
         with self._lock:
-            self._L.inject = FAULT_KINDS[kind]
+            self._loop.inject = FAULT_KINDS[kind]
 
     def set_model(self, model: str) -> None:
         """ "pwm" (exact per PWM sub-interval) or "averaged" (period-mean leg voltages)."""
@@ -330,7 +332,7 @@ class Simulator:
             raise ValueError(f"model must be one of {list(_MODELS)}, got {model!r}")
         with self._lock:
             self._model = model
-            self._L.model = _MODELS[model]
+            self._loop.model = _MODELS[model]
 
     @property
     def model(self) -> str:
@@ -344,33 +346,33 @@ class Simulator:
             raise ValueError(f"mode must be one of {list(_MODES)}, got {mode!r}")
         with self._lock:
             new = _MODES[mode]
-            if new != self._L.mode:
-                self._L.active = 0  # controllers restart bumplessly
-            self._L.mode = new
+            if new != self._loop.mode:
+                self._loop.active = 0  # controllers restart bumplessly
+            self._loop.mode = new
 
     @property
     def mode(self) -> str:
-        return {v: k for k, v in _MODES.items()}[int(self._L.mode)]
+        return {v: k for k, v in _MODES.items()}[int(self._loop.mode)]
 
     def set_current_ref(self, i_p_ref: float) -> None:
         """Pseudo-current reference (A), finite, |.| <= 1000 (current mode)."""
         v = float(i_p_ref)
-        if v == self._L.i_ref_set:
+        if v == self._loop.i_ref_set:
             return  # unchanged (the pacing loop sets it every chunk): no lock needed
         if not math.isfinite(v) or abs(v) > 1000.0:
             raise ValueError(f"i_p_ref must be finite and |i_p_ref| <= 1000 A, got {i_p_ref!r}")
         with self._lock:
-            self._L.i_ref_set = v
+            self._loop.i_ref_set = v
 
     def set_speed_ref(self, rpm: float) -> None:
         """Speed reference (rpm), finite, |.| <= 20000 (speed mode)."""
         v = float(rpm)
-        if v == self._L.w_ref_set:
+        if v == self._loop.w_ref_set:
             return  # unchanged (the pacing loop sets it every chunk): no lock needed
         if not math.isfinite(v) or abs(v) > 20000.0:
             raise ValueError(f"speed_ref must be finite and |speed_ref| <= 20000 rpm, got {rpm!r}")
         with self._lock:
-            self._L.w_ref_set = v
+            self._loop.w_ref_set = v
 
     def set_speed(self, rpm: float, theta_e: float | None = None) -> None:
         """Force the shaft speed (rpm) and optionally the electrical angle (rad), e.g. to start
@@ -385,9 +387,9 @@ class Simulator:
                 raise ValueError(f"theta_e must be finite, got {theta_e!r}")
             th = th % (2.0 * math.pi)
         with self._lock:
-            self._L.p.omega = v / RPM_PER_RAD_S
+            self._loop.p.omega = v / RPM_PER_RAD_S
             if th is not None:
-                self._L.p.theta_e = th
+                self._loop.p.theta_e = th
 
     # ------------------------------------------------------------------ running
     def run(
@@ -406,11 +408,11 @@ class Simulator:
         if not record and not os_n and n <= 1 << 20:
             # the pacing loop's path: one C call, nothing built (state is made when asked)
             with self._lock:
-                lib.loop_run(self._L, n, ffi.NULL, ffi.NULL)
+                lib.loop_run(self._loop, n, ffi.NULL, ffi.NULL)
                 self._last = None
             return {}
         with self._lock:
-            L = self._L
+            loop = self._loop
             if record:
                 data = np.empty((len(SIGNALS), n), dtype=np.float32)
                 t = np.empty(n, dtype=np.float64)
@@ -425,10 +427,10 @@ class Simulator:
             os_buf = None
             if os_n:
                 os_buf = np.zeros((n * os_n + 1, 5), dtype=np.float64)
-                L.os_n = os_n
-                L.os_buf = ffi.cast("double *", os_buf.ctypes.data)
-                L.os_cap = os_buf.shape[0]
-                L.os_len = 0
+                loop.os_n = os_n
+                loop.os_buf = ffi.cast("double *", os_buf.ctypes.data)
+                loop.os_cap = os_buf.shape[0]
+                loop.os_len = 0
             try:
                 chunk = 1 << 20
                 done = 0
@@ -438,14 +440,14 @@ class Simulator:
                         for j in range(len(SIGNALS)):
                             ptrs[j] = ffi.cast("float *", data[j, done:].ctypes.data)
                         t_ptr = ffi.cast("double *", t[done:].ctypes.data)
-                    lib.loop_run(L, m, ptrs, t_ptr)
+                    lib.loop_run(loop, m, ptrs, t_ptr)
                     done += m
             finally:
                 if os_n:
-                    os_len = int(L.os_len)
-                    L.os_n = 0
-                    L.os_buf = ffi.NULL
-                    L.os_cap = 0
+                    os_len = int(loop.os_len)
+                    loop.os_n = 0
+                    loop.os_buf = ffi.NULL
+                    loop.os_cap = 0
             self._refresh_last()
             if not record:
                 return {}
@@ -472,10 +474,10 @@ class Simulator:
         """Latest recorded value of every signal (and "t", s)."""
         with self._lock:
             if self._last is None:
-                L = self._L
+                loop = self._loop
                 last = dict(zip(SIGNALS, self._last_view.tolist(), strict=True))
                 last["hall_sector"] = round(last["hall_sector"])
-                last["t"] = float(L.t) - Ts if L.k > 0 else 0.0
+                last["t"] = float(loop.t) - Ts if loop.k > 0 else 0.0
                 self._last = last
             return dict(self._last)
 
@@ -487,7 +489,7 @@ class Simulator:
         with self._lock:
             while n > 0:
                 m = n if n <= 1 << 20 else 1 << 20
-                lib.loop_run(self._L, m, ffi.NULL, ffi.NULL)
+                lib.loop_run(self._loop, m, ffi.NULL, ffi.NULL)
                 n -= m
             self._last = None
             out.update(zip(SIGNALS, self._last_view.tolist(), strict=True))
@@ -511,7 +513,7 @@ class Simulator:
             buf[j] = last = a
         buf[m] = n_samples
         with self._lock:
-            lib.loop_run_points(self._L, n_samples, buf, m + 1, self._points_buf)
+            lib.loop_run_points(self._loop, n_samples, buf, m + 1, self._points_buf)
             self._last = None
             return self._points_rows[: m + 1].tolist()
 
@@ -535,7 +537,7 @@ class Simulator:
                 m = min(1 << 20, n - done)
                 for name, arr in out.items():
                     ptrs[SIGNALS.index(name)] = ffi.cast("float *", arr[start + done :].ctypes.data)
-                lib.loop_run(self._L, m, ptrs, ffi.NULL)
+                lib.loop_run(self._loop, m, ptrs, ffi.NULL)
                 done += m
             self._last = None
 
@@ -548,48 +550,48 @@ class Simulator:
     @property
     def fault(self) -> Fault | None:
         """None, or the active trip."""
-        if self._L.fault_code == 0:  # one int read: no lock needed on the no-fault path
+        if self._loop.fault_code == 0:  # one int read: no lock needed on the no-fault path
             return None
         with self._lock:
-            L = self._L
-            if L.fault_code == 0:
+            loop = self._loop
+            if loop.fault_code == 0:
                 return None
             return Fault(
-                code=int(L.fault_code),
-                reason=_trip_text(int(L.fault_reason)),
-                t=float(L.fault_time),
+                code=int(loop.fault_code),
+                reason=_trip_text(int(loop.fault_reason)),
+                t=float(loop.fault_time),
             )
 
     def fault_persists(self) -> bool:
         """True while a trip's cause is still there (the DC supply outside the overvoltage /
         undervoltage limits): a fault reset now would trip again at the next sample."""
         with self._lock:
-            V = float(self._L.p.V_dc)
-            return V > float(self._L.ov_trip) or V < float(self._L.uv_trip)
+            V = float(self._loop.p.V_dc)
+            return V > float(self._loop.ov_trip) or V < float(self._loop.uv_trip)
 
     def reset_fault(self) -> None:
         """Clear the trip; the drive goes to mode "off" (bridge disabled) and must be enabled
         again with set_mode.  A persisting cause (supply out of limits) trips again."""
         with self._lock:
-            lib.loop_reset_fault(self._L)
-            self._L.mode = 0
+            lib.loop_reset_fault(self._loop)
+            self._loop.mode = 0
 
     @property
     def time(self) -> float:
         """Simulated time of the next sample (s)."""
-        return float(self._L.t)
+        return float(self._loop.t)
 
     @property
     def sample_index(self) -> int:
         """Index of the next sample."""
-        return int(self._L.k)
+        return int(self._loop.k)
 
     @property
     def speed_rpm(self) -> float:
         """Present shaft speed (rpm)."""
-        return float(self._L.p.omega) * RPM_PER_RAD_S
+        return float(self._loop.p.omega) * RPM_PER_RAD_S
 
     @property
     def segments(self) -> int:
         """Circuit segments solved so far (diagnostic: sub-intervals + diode events)."""
-        return int(self._L.segments)
+        return int(self._loop.segments)
