@@ -11,6 +11,7 @@ import can
 import pytest
 
 from virtual_drive.hub import Hub
+from virtual_drive.hub_faults import FaultInjection
 
 pytestmark = pytest.mark.timeout(30)
 
@@ -188,11 +189,11 @@ def test_jitter_delay_is_uniform_bounded_and_reproducible():
     delay, jitter = 0.002, 0.001
 
     def dues(seed: int, spacing: float, n: int = 2000) -> list[tuple[float, float]]:
-        hub = Hub(port=0, delay_s=delay, jitter_s=jitter, seed=seed)
+        faults = FaultInjection(delay_s=delay, jitter_s=jitter, seed=seed)  # as Hub(...) makes
         out, last = [], 0.0
         for k in range(n):
             end = 1.0 + k * spacing
-            last = hub._delivery_due(end, last)
+            last = faults.delivery_due(end, last)
             out.append((end, last))
         return out
 

@@ -30,29 +30,23 @@ with virtual drives is :mod:`virtual_drive.launch`.
 from __future__ import annotations
 
 import logging
-import math
-import random
 import select
 import socket
 import threading
 import time
-from bisect import bisect_right
-from collections import deque
 from dataclasses import dataclass
 
-from firmware_protocol.can_bits import arbitration_key, frame_bits_fast
+from virtual_drive.hub_bus import CLOSED, RAW, WAIT_MODE, WAIT_OPEN, Bus, Client, HubCounters
+from virtual_drive.hub_faults import FaultInjection
 from virtual_drive.hub_protocol import (
     FEATURES_REPLY,
     SENDAT_MAX_BACKDATE_S,
-    CommandSplitter,
     ProtocolError,
     format_error,
-    frame_line,
     parse_channel,
     parse_send_fields,
     parse_sendat_fields,
     parse_sendrtr_fields,
-    rtr_line,
     scan_sendats,
     scan_sends,
 )
@@ -103,128 +97,6 @@ class HubStats:
     def dropped(self) -> int:
         """Alias of :attr:`frames_dropped`."""
         return self.frames_dropped
-
-
-_WAIT_OPEN, _WAIT_MODE, _RAW, _CLOSED = range(4)
-
-
-class _Client:
-    __slots__ = (
-        "bus",
-        "bus_end",
-        "errors",
-        "events",
-        "fd",
-        "outbuf",
-        "parses_elements",
-        "peer",
-        "queue",
-        "ready_at",
-        "sock",
-        "spacing",
-        "splitter",
-        "state",
-    )
-
-    def __init__(self, sock: socket.socket, peer: tuple) -> None:
-        self.sock = sock
-        self.fd = sock.fileno()
-        self.events = 0  # epoll events registered for it
-        self.peer = peer
-        self.state = _WAIT_OPEN
-        self.splitter = CommandSplitter()
-        self.outbuf = bytearray()
-        self.ready_at = 0.0  # monotonic time before which frames are held back (see Hub)
-        self.parses_elements = False  # asked < features >: takes frames glued to < ok >
-        #: (arrival, key, seq, id, data, ext, bits, stated time) waiting for the bus
-        self.queue: deque = deque()
-        self.bus: _Bus | None = None
-        self.bus_end = 0.0  # monotonic time its last frame left the bus
-        self.errors = 0
-        #: CAN-ID -> (stated time, end on the bus, stated gap to the one before or None) of
-        #: this client's last frame with that ID: see :func:`_spacing_floor`
-        self.spacing: dict[int, tuple[float, float, float | None]] = {}
-
-
-class _Bus:
-    """One emulated CAN bus (one socketcand channel)."""
-
-    __slots__ = (
-        "busy_end",
-        "busy_start",
-        "deliveries",
-        "free_at",
-        "last_due",
-        "name",
-        "receivers",
-        "senders",
-    )
-
-    def __init__(self, name: str) -> None:
-        self.name = name
-        self.receivers: list[_Client] = []  # clients in rawmode
-        self.senders: list[_Client] = []  # clients with frames waiting for the bus
-        self.free_at = 0.0  # monotonic time the bus becomes idle
-        self.deliveries: deque = deque()  # (due, sender, frame), due non-decreasing
-        self.last_due = 0.0
-        #: the bus's recent occupancy: frame i was on it from busy_start[i] to busy_end[i]
-        #: (monotonic s, sorted, never overlapping; the last max_backdate_s are kept), so a
-        #: frame stated in the past can take an idle gap of then (see Hub._advance)
-        self.busy_start: list[float] = []
-        self.busy_end: list[float] = []
-
-
-#: intervals a late ``sendat`` frame looks past for an idle gap before it waits for the bus
-#: (a bus full since its stated time has no gap: the search ends there, not at the backlog's end)
-_GAP_SCAN = 32
-
-
-def _idle_gap(bus: _Bus, t: float, duration: float) -> tuple[int, float] | None:
-    """``(index, start)`` of an idle stretch of ``duration`` s at or after ``t`` (monotonic s)
-    that ends before the bus's :attr:`_Bus.free_at`, in its occupancy; None: no such stretch
-    within :data:`_GAP_SCAN` frames."""
-    starts, ends = bus.busy_start, bus.busy_end
-    i = bisect_right(ends, t)  # the first frame still on the bus after t
-    n = len(starts)
-    limit = bus.free_at
-    for _ in range(_GAP_SCAN):
-        if t + duration > limit:
-            return None
-        if i >= n or starts[i] >= t + duration:
-            return i, t
-        t = ends[i]
-        i += 1
-    return None
-
-
-#: longest a frame is held past its arrival to keep its sender's spacing (s): several frame
-#: times at 125 kbit/s, so arbitration delays never shorten a gap; no persistent lag
-SPACING_HOLD_S = 0.005
-
-
-def _spacing_floor(client: _Client, head: tuple, bitrate: float) -> float:
-    """Earliest start (monotonic s) of ``client``'s queue head that keeps it as far after its
-    last frame with the same CAN-ID, end to end on the bus, as the smaller of the two last
-    stated gaps (its own and the previous one): a sender's spacing (a TPDO's inhibit time)
-    is not eaten by arbitration delays (a frame held back one frame time while the next one
-    goes on time, or a late batch moved up to the backdate limit in one piece). Both stated
-    gaps are at least the sender's minimum, so their minimum is a spacing it asked for; a
-    longer gap (after a pause) lets a delay recover. 0: no earlier frame with that ID. Plain
-    ``send`` frames are stated at their arrival."""
-    last = client.spacing.get(head[3])
-    if last is None:
-        return 0.0
-    gap = head[7] - last[0]
-    keep = gap if last[2] is None or gap < last[2] else last[2]
-    floor = last[1] + keep - head[6] / bitrate
-    # held back at most SPACING_HOLD_S past its arrival: an arbitration delay is a few frame
-    # times; a longer hold would stay with every later frame of a stream at its minimum
-    # spacing (and everything the sender queues behind it)
-    return floor if floor - head[0] <= SPACING_HOLD_S else 0.0
-
-
-def _head_arrival(client: _Client) -> float:
-    return client.queue[0][0]
 
 
 class Hub:
@@ -284,36 +156,26 @@ class Hub:
             raise ValueError(f"bitrate must be an integer in bit/s, got {bitrate!r}")
         if not 1 <= bitrate <= 1_000_000_000:
             raise ValueError(f"bitrate must be 1 .. 1e9 bit/s, got {bitrate}")
-        self._check_faults(drop_rate, delay_s, jitter_s)
+        self._faults = FaultInjection(drop_rate, delay_s, jitter_s, seed)
         self._requested_port = port
         self._bitrate = bitrate
-        self._drop_rate = float(drop_rate)
-        self._delay_s = float(delay_s)
-        self._jitter_s = float(jitter_s)
-        self._rng = random.Random(seed)
-        self._jitter_rng = random.Random(None if seed is None else f"jitter-{seed}")
         self._listener: socket.socket | None = None
         self._wake_r: socket.socket | None = None
         self._wake_w: socket.socket | None = None
         self._poll: select.epoll | None = None
-        self._by_fd: dict[int, _Client] = {}
+        self._by_fd: dict[int, Client] = {}
         self._thread: threading.Thread | None = None
         self._stopping = False
-        self._clients: dict[socket.socket, _Client] = {}
-        self._buses: dict[str, _Bus] = {}
+        self._clients: dict[socket.socket, Client] = {}
+        self._buses: dict[str, Bus] = {}
         self._mono0 = time.monotonic()
         self._wall0 = time.time()
-        self._seq = 0
         self._failure: BaseException | None = None
         # counters (written by the hub thread only)
         self._n_clients_total = 0
         self._n_clients_dropped = 0
-        self._n_received = 0
-        self._n_forwarded = 0
-        self._n_dropped = 0
-        self._n_overrun = 0
         self._n_errors = 0
-        self._busy_s = 0.0
+        self._frames = HubCounters()  # added to by the buses
 
     # ---------------------------------------------------------------- public API
 
@@ -337,17 +199,17 @@ class Hub:
     @property
     def drop_rate(self) -> float:
         """Current drop probability (0..1)."""
-        return self._drop_rate
+        return self._faults.drop_rate
 
     @property
     def delay_s(self) -> float:
         """Current extra delivery delay, s."""
-        return self._delay_s
+        return self._faults.delay_s
 
     @property
     def jitter_s(self) -> float:
         """Current ± jitter of the delivery delay, s."""
-        return self._jitter_s
+        return self._faults.jitter_s
 
     @property
     def running(self) -> bool:
@@ -357,20 +219,19 @@ class Hub:
     @property
     def stats(self) -> HubStats:
         """A snapshot of the hub's counters."""
-        pending = 0
-        for b in list(self._buses.values()):
-            pending += len(b.deliveries) + sum(len(c.queue) for c in list(b.senders))
+        pending = sum(b.pending() for b in list(self._buses.values()))
+        frames = self._frames
         return HubStats(
             clients=len(self._clients),
             clients_total=self._n_clients_total,
             clients_dropped=self._n_clients_dropped,
-            frames_received=self._n_received,
-            frames_forwarded=self._n_forwarded,
-            frames_dropped=self._n_dropped,
-            frames_overrun=self._n_overrun,
+            frames_received=frames.received,
+            frames_forwarded=frames.forwarded,
+            frames_dropped=frames.dropped,
+            frames_overrun=frames.overrun,
             frames_pending=pending,
             protocol_errors=self._n_errors,
-            bus_busy_s=self._busy_s,
+            bus_busy_s=frames.busy_s,
         )
 
     def join_kwargs(self, channel: str = "vcan0", tcp_tune: bool = True) -> dict:
@@ -402,13 +263,7 @@ class Hub:
         jitter_s: ± uniform jitter of the delay per frame, s (≥ 0). None keeps a setting.
         Raises ValueError (and changes nothing) for out-of-range values.
         """
-        new_drop = self._drop_rate if drop_rate is None else drop_rate
-        new_delay = self._delay_s if delay_s is None else delay_s
-        new_jitter = self._jitter_s if jitter_s is None else jitter_s
-        self._check_faults(new_drop, new_delay, new_jitter)
-        self._drop_rate = float(new_drop)
-        self._delay_s = float(new_delay)
-        self._jitter_s = float(new_jitter)
+        self._faults.set(drop_rate, delay_s, jitter_s)
 
     def start(self) -> Hub:
         """Bind 127.0.0.1:port and start serving in a background thread.
@@ -468,30 +323,6 @@ class Hub:
 
     # ---------------------------------------------------------------- internals
 
-    @staticmethod
-    def _check_faults(drop_rate: float, delay_s: float, jitter_s: float = 0.0) -> None:
-        for name, v in (("drop_rate", drop_rate), ("delay_s", delay_s), ("jitter_s", jitter_s)):
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-                raise ValueError(f"{name} must be a finite number, got {v!r}")
-        if not 0.0 <= drop_rate <= 1.0:
-            raise ValueError(f"drop_rate must be in 0..1, got {drop_rate}")
-        if not 0.0 <= delay_s <= 3600.0:
-            raise ValueError(f"delay_s must be in 0..3600 s, got {delay_s}")
-        if not 0.0 <= jitter_s <= 3600.0:
-            raise ValueError(f"jitter_s must be in 0..3600 s, got {jitter_s}")
-
-    def _delivery_due(self, end: float, last_due: float) -> float:
-        """Delivery time of a frame that completed on the bus at ``end`` (monotonic s) when the
-        previous frame on its bus is due at ``last_due``: end + delay_s + U(−jitter_s, jitter_s),
-        never before ``end`` nor before ``last_due`` (CAN keeps the order of frames)."""
-        if self._jitter_s == 0.0:
-            due = end + self._delay_s
-            return due if due > last_due else last_due
-        delay = self._delay_s
-        if self._jitter_s > 0.0:
-            delay = max(0.0, delay + self._jitter_rng.uniform(-self._jitter_s, self._jitter_s))
-        return max(end + delay, last_due)
-
     def _wall(self, mono: float) -> float:
         return self._wall0 + (mono - self._mono0)
 
@@ -543,8 +374,10 @@ class Hub:
                     _log.exception("hub: dropping client %s (internal error)", client.peer)
                     self._drop(client)
         now = time.monotonic()
+        backdate, max_outbuf = self.max_backdate_s, self.max_outbuf_bytes
         for bus in self._buses.values():
-            self._advance(bus, now)
+            for c in bus.advance(now, backdate, max_outbuf):
+                self._flush(c, now)
         for client in writable:
             self._flush(client, now)
 
@@ -554,22 +387,13 @@ class Hub:
         A bus needs a wake when its first pending delivery is due. If the next frame waiting for
         the bus will be due within :attr:`delivery_batch_s` after that, the wake waits for it, so
         both go out in one write per client (frames back to back, e.g. a node's TPDOs of one
-        tick). Arbitration needs no wake of its own: :meth:`_advance` computes each frame's start
+        tick). Arbitration needs no wake of its own: :meth:`Bus.advance` computes each frame's start
         from the bus's free time and the arrivals, not from the time it runs.
         """
         deadline = None
         batch = self.delivery_batch_s
         for bus in self._buses.values():
-            t = None
-            senders = bus.senders
-            if senders:
-                head = senders[0] if len(senders) == 1 else min(senders, key=_head_arrival)
-                start = max(bus.free_at, head.queue[0][0])
-                t = start + head.queue[0][6] / self._bitrate + self._delay_s
-            if bus.deliveries:
-                due = bus.deliveries[0][0]
-                if t is None or t > due + batch:
-                    t = due
+            t = bus.next_wake(batch)
             if t is not None and (deadline is None or t < deadline):
                 deadline = t
         for c in self._clients.values():
@@ -587,7 +411,7 @@ class Hub:
                 return
             sock.setblocking(False)
             sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-            client = _Client(sock, peer)
+            client = Client(sock, peer)
             self._clients[sock] = client
             self._by_fd[client.fd] = client
             self._poll.register(client.fd, _EPOLLIN)
@@ -596,7 +420,7 @@ class Hub:
             client.outbuf += b"< hi >"
             self._flush(client, now)
 
-    def _read(self, client: _Client, now: float) -> None:
+    def _read(self, client: Client, now: float) -> None:
         try:
             chunk = client.sock.recv(65536)
         except (BlockingIOError, InterruptedError):
@@ -614,18 +438,19 @@ class Hub:
                 client.sock.setsockopt(socket.IPPROTO_TCP, _QUICKACK, 1)
             except OSError:
                 pass
-        if client.state == _RAW:  # it speaks after its handshake: it has read its < ok >,
+        if client.state == RAW:  # it speaks after its handshake: it has read its < ok >,
             client.ready_at = 0.0  # so the hold ends (an answer to its first request waits not)
-        if client.state == _RAW and not client.splitter.pending_bytes:
+        if client.state == RAW and not client.splitter.pending_bytes:
+            bus, backdate = client.bus, self.max_backdate_s
             while chunk:  # the common case: only well-formed sends (or sendats)
                 frames, used = scan_sends(chunk)
                 if frames:
-                    self._enqueue(client, frames, now)
+                    bus.enqueue(client, frames, now)
                 else:
                     timed, used = scan_sendats(chunk)
                     if not timed:
                         break
-                    self._enqueue_timed(client, timed, now)
+                    bus.enqueue_timed(client, timed, now, backdate)
                 chunk = chunk[used:]
         for item in client.splitter.feed(chunk):
             if isinstance(item, ProtocolError):
@@ -635,7 +460,7 @@ class Hub:
                     self._handle(client, item, now)
                 except ProtocolError as exc:
                     self._reject(client, str(exc), now)
-            if client.state == _CLOSED:
+            if client.state == CLOSED:
                 return
         if client.splitter.overflow:
             self._reject(client, "element too long", now)
@@ -643,106 +468,51 @@ class Hub:
             return
         self._flush(client, now)
 
-    def _enqueue(
-        self, client: _Client, frames: list[tuple[int, bytes, bool]], now: float
-    ) -> None:
-        """Queue ``frames`` (id, data, is_extended) of ``client`` for the bus, arrived ``now``."""
-        self._queue(client, [(now, can_id, data, ext) for can_id, data, ext in frames])
-
-    def _enqueue_timed(
-        self, client: _Client, frames: list[tuple[float, int, bytes, bool]], now: float
-    ) -> None:
-        """Queue ``sendat`` frames ``(unix_time, id, data, is_extended)``: each arrives at its
-        stated time, but never before a frame of this client still waiting for the bus (its
-        order is kept), never more than :attr:`max_backdate_s` ago and never after ``now``
-        (see :mod:`hub_protocol`). A frame of the client that is already on the bus does not
-        hold it back: it starts when the bus is free, as a CAN controller's other transmit
-        mailbox would."""
-        queue = client.queue
-        lo = now - self.max_backdate_s
-        if queue and queue[-1][0] > lo:
-            lo = queue[-1][0]
-        mono_offset = self._mono0 - self._wall0
-        timed = []
-        # a batch stated before the backdate limit moves up as a whole, keeping its spacing
-        # (one frame at the limit, the rest after it as stated), not all onto the limit
-        shift = max(0.0, lo - (frames[0][0] + mono_offset)) if frames else 0.0
-        for stamp, can_id, data, ext in frames:
-            stated = stamp + mono_offset
-            arrival = stated + shift
-            if arrival < lo:
-                arrival = lo
-            elif arrival > now:
-                arrival = now
-            lo = arrival
-            timed.append((arrival, can_id, data, ext, stated))
-        self._queue(client, timed)
-
-    def _queue(self, client: _Client, frames: list[tuple[float, int, bytes, bool]]) -> None:
-        """Append ``(arrival, id, data, is_extended)`` to ``client``'s queue for the bus."""
-        queue = client.queue
-        if not queue:
-            client.bus.senders.append(client)
-        seq = self._seq
-        for arrival, can_id, data, ext, *stated in frames:
-            seq += 1
-            rtr = data.__class__ is int  # a remote frame: data is its DLC
-            queue.append(
-                (
-                    arrival,
-                    # the RTR bit follows the identifier: recessive (1) in a remote frame, so a
-                    # data frame with the same identifier wins
-                    arbitration_key(can_id, ext) << 1 | rtr,
-                    seq,
-                    can_id,
-                    data,
-                    ext,
-                    frame_bits_fast(can_id, b"" if rtr else data, ext),
-                    # the time its sender stated (a sendat moved up to the backdate limit
-                    # keeps it: its spacing to the next one is the sender's)
-                    stated[0] if stated else arrival,
-                )
-            )
-        self._seq = seq
-        self._n_received += len(frames)
-
-    def _handle(self, client: _Client, words: list[str], now: float) -> None:
+    def _handle(self, client: Client, words: list[str], now: float) -> None:
         cmd = words[0]
-        if client.state == _RAW and cmd == "send":
-            self._enqueue(client, [parse_send_fields(words)], now)
-        elif client.state == _RAW and cmd == "sendrtr":
-            self._enqueue(client, [parse_sendrtr_fields(words)], now)  # (id, DLC, ext)
-        elif client.state == _RAW and cmd == "sendat":
-            self._enqueue_timed(client, [parse_sendat_fields(words)], now)
+        if client.state == RAW and cmd == "send":
+            client.bus.enqueue(client, [parse_send_fields(words)], now)
+        elif client.state == RAW and cmd == "sendrtr":
+            client.bus.enqueue(client, [parse_sendrtr_fields(words)], now)  # (id, DLC, ext)
+        elif client.state == RAW and cmd == "sendat":
+            timed = [parse_sendat_fields(words)]
+            client.bus.enqueue_timed(client, timed, now, self.max_backdate_s)
         elif cmd == "echo":
             client.outbuf += b"< echo >"
         elif cmd == "features":
             client.outbuf += FEATURES_REPLY
             client.parses_elements = True
-        elif client.state == _WAIT_OPEN:
+        elif client.state == WAIT_OPEN:
             if cmd != "open":
                 raise ProtocolError(f"expected '< open BUS >', got {cmd!r}")
             name = parse_channel(words)
             bus = self._buses.get(name)
             if bus is None:
-                bus = self._buses[name] = _Bus(name)
+                bus = self._buses[name] = Bus(
+                    name,
+                    self._bitrate,
+                    self._faults,
+                    self._frames,
+                    wall_offset=self._wall0 - self._mono0,
+                    mono_offset=self._mono0 - self._wall0,
+                )
             client.bus = bus
-            client.state = _WAIT_MODE
+            client.state = WAIT_MODE
             client.outbuf += b"< ok >"
-        elif client.state == _WAIT_MODE:
+        elif client.state == WAIT_MODE:
             if cmd != "rawmode":
                 raise ProtocolError(f"only rawmode is supported, got {cmd!r}")
             client.outbuf += b"< ok >"
             self._flush(client, now)
-            client.state = _RAW
+            client.state = RAW
             client.ready_at = now + (0.0 if client.parses_elements else self.handshake_hold_s)
-            client.bus.receivers.append(client)
+            client.bus.join(client)
         elif cmd == "rawmode":
             client.outbuf += b"< ok >"
         else:
             raise ProtocolError(f"unknown or unsupported command {cmd!r}")
 
-    def _reject(self, client: _Client, reason: str, now: float) -> None:
+    def _reject(self, client: Client, reason: str, now: float) -> None:
         self._n_errors += 1
         client.errors += 1
         if len(client.outbuf) < self.max_outbuf_bytes:
@@ -750,8 +520,8 @@ class Hub:
         if client.errors > self.max_errors_per_client:
             self._drop(client)
 
-    def _drop(self, client: _Client) -> None:
-        if client.state == _CLOSED:
+    def _drop(self, client: Client) -> None:
+        if client.state == CLOSED:
             return
         self._n_clients_dropped += 1
         try:  # best effort: let it see why
@@ -760,10 +530,10 @@ class Hub:
             pass
         self._close(client)
 
-    def _close(self, client: _Client) -> None:
-        if client.state == _CLOSED:
+    def _close(self, client: Client) -> None:
+        if client.state == CLOSED:
             return
-        client.state = _CLOSED
+        client.state = CLOSED
         self._clients.pop(client.sock, None)
         if self._by_fd.pop(client.fd, None) is not None and self._poll is not None:
             try:
@@ -771,16 +541,15 @@ class Hub:
             except (OSError, ValueError):
                 pass
         bus = client.bus
-        if bus is not None and client in bus.receivers:
-            bus.receivers.remove(client)
-        # frames it already sent stay queued: they were on their way to the bus
+        if bus is not None:
+            bus.leave(client)  # frames it already sent stay queued
         try:
             client.sock.close()
         except OSError:
             pass
 
-    def _flush(self, client: _Client, now: float) -> None:
-        if not client.outbuf or client.ready_at > now or client.state == _CLOSED:
+    def _flush(self, client: Client, now: float) -> None:
+        if not client.outbuf or client.ready_at > now or client.state == CLOSED:
             return
         try:
             sent = client.sock.send(client.outbuf)
@@ -790,93 +559,3 @@ class Hub:
             self._close(client)
             return
         del client.outbuf[:sent]
-
-    def _advance(self, bus: _Bus, now: float) -> None:
-        """Run the bus up to ``now``: arbitrate, occupy, schedule delivery, deliver what is due."""
-        senders = bus.senders
-        deliveries = bus.deliveries
-        if not senders and (not deliveries or deliveries[0][0] > now):
-            return  # most wakes: nothing on this bus to do
-        bitrate = self._bitrate
-        old = now - self.max_backdate_s
-        if bus.busy_end and bus.busy_end[0] < old - 0.25:  # forget what no sendat reaches
-            k = bisect_right(bus.busy_end, old)  # (a quarter second at a time)
-            del bus.busy_start[:k], bus.busy_end[:k]
-        while senders:
-            if len(senders) == 1:  # the usual case: no arbitration to decide
-                winner = senders[0]
-                start = winner.queue[0][0]
-                if start < bus.free_at:
-                    start = bus.free_at
-                if start > now:
-                    break
-            else:
-                start = max(bus.free_at, min(c.queue[0][0] for c in senders))
-                if start > now:
-                    break
-                winner = None
-                best = None
-                for c in senders:
-                    arrival, key, seq = c.queue[0][:3]
-                    if arrival <= start and (best is None or (key, seq) < best):
-                        best = (key, seq)
-                        winner = c
-            head = winner.queue[0]
-            floor = _spacing_floor(winner, head, bitrate)
-            if start < floor - 1e-9:  # its spacing is not over: compete again from then
-                winner.queue[0] = (floor, *head[1:])
-                continue
-            arrival, _, _, can_id, data, ext, bits, stated = winner.queue.popleft()
-            if not winner.queue:
-                senders.remove(winner)
-            duration = bits / bitrate
-            gap = None
-            if start > arrival and start > winner.bus_end and bus.busy_end:
-                # the bus was taken at its stated time by a frame that reached the hub first
-                # (a batch stated in the past arrives after frames sent meanwhile): an idle
-                # gap since then is where it was on the bus, as its sender stated; its own
-                # earlier frames stay before it
-                gap = _idle_gap(bus, max(arrival, winner.bus_end), duration)
-            if gap is not None:
-                i, start = gap
-                end = start + duration
-                bus.busy_start.insert(i, start)
-                bus.busy_end.insert(i, end)
-            else:
-                end = start + duration
-                bus.free_at = end
-                bus.busy_start.append(start)
-                bus.busy_end.append(end)
-            winner.bus_end = end
-            last = winner.spacing.get(can_id)
-            winner.spacing[can_id] = (stated, end, None if last is None else stated - last[0])
-            self._busy_s += duration
-            if self._drop_rate > 0.0 and self._rng.random() < self._drop_rate:
-                self._n_dropped += 1
-                continue
-            due = self._delivery_due(end, bus.last_due)
-            bus.last_due = due
-            deliveries.append((due, winner, can_id, data, ext))
-        touched: list[_Client] = []
-        wall_offset = self._wall0 - self._mono0
-        max_outbuf = self.max_outbuf_bytes
-        receivers = bus.receivers
-        while deliveries and deliveries[0][0] <= now:
-            due, sender, can_id, data, ext = deliveries.popleft()
-            if data.__class__ is int:  # a remote frame (its DLC)
-                line = rtr_line(can_id, data, ext, due + wall_offset)
-            else:
-                line = frame_line(can_id, data, ext, due + wall_offset)
-            for c in receivers:
-                if c is sender:
-                    continue
-                outbuf = c.outbuf
-                if not outbuf:
-                    touched.append(c)
-                elif len(outbuf) >= max_outbuf:
-                    self._n_overrun += 1
-                    continue
-                outbuf += line
-            self._n_forwarded += 1
-        for c in touched:
-            self._flush(c, now)
