@@ -15,6 +15,14 @@ __all__ = ["MARKDOWN_NAME", "render_markdown"]
 MARKDOWN_NAME = "OD.md"
 
 
+def _int(value: object) -> int:
+    """An integer default of the EDS (a PDO's mapped count, references, transmission type,
+    event timer); TypeError for anything else."""
+    if isinstance(value, int):
+        return value
+    raise TypeError(f"expected an integer default, got {value!r}")
+
+
 def _md(text: object) -> str:
     return str(text).replace("|", "\\|").replace("\n", " ")
 
@@ -86,13 +94,11 @@ def render_markdown(view: ObjectDictionaryView) -> str:
                 break
             comm = mapping - 0x200
             cob = view.by_index(comm, 1)
-            ttype = view.by_index(comm, 2).default
+            ttype = _int(view.by_index(comm, 2).default)
             timer = view.by_index(comm, 5)
-            refs = [view.by_index(mapping, i).default for i in range(1, int(count or 0) + 1)]
-            mapped = ", ".join(
-                f"`{view.by_reference(int(r)).name}` ({int(r) & 0xFF})" for r in refs
-            )
-            period = f"{timer.default} {timer.unit}" if timer.default else "-"
+            refs = [_int(view.by_index(mapping, i).default) for i in range(1, _int(count or 0) + 1)]
+            mapped = ", ".join(f"`{view.by_reference(r).name}` ({r & 0xFF})" for r in refs)
+            period = f"{_int(timer.default)} {timer.unit}" if timer.default else "-"
             add(f"| {kind}{n + 1} | {cob.default_raw} | 0x{ttype:02X} | {period} | {mapped} |")
     add("")
     add("## Enumerations")

@@ -79,7 +79,8 @@ class LimitError(ValueError):
 
 def f32(x: float) -> float:
     """Round a Python float to the nearest IEEE-754 binary32 (the DSP's float)."""
-    return struct.unpack("<f", struct.pack("<f", x))[0]
+    value: float = struct.unpack("<f", struct.pack("<f", x))[0]
+    return value
 
 
 @dataclass(frozen=True)

@@ -21,6 +21,7 @@ import difflib
 import functools
 import os
 import re
+from collections import Counter
 from collections.abc import Iterator, Mapping
 from pathlib import Path
 from types import MappingProxyType
@@ -106,8 +107,8 @@ class ObjectDictionaryView:
         self._entries = tuple(sorted(entries, key=lambda e: (e.index, e.subindex)))
         self._by_name = {e.name: e for e in self._entries}
         if len(self._by_name) != len(self._entries):
-            seen: set[str] = set()
-            dup = sorted({e.name for e in self._entries if e.name in seen or seen.add(e.name)})
+            names = Counter(e.name for e in self._entries)
+            dup = sorted(name for name, n in names.items() if n > 1)
             raise ValueError(f"duplicate object names in the EDS: {', '.join(dup)}")
         self._by_index = {(e.index, e.subindex): e for e in self._entries}
         self._constraints = constraints
@@ -232,9 +233,13 @@ class ObjectDictionaryView:
     def _build_canopen_od(self, nid: int) -> cod.ObjectDictionary:
         od = canopen.import_od(str(self.path), nid)
         for e in self._entries:
-            var = od[e.index] if e.object_name == e.name else od[e.index][e.subindex]
-            if e.is_real:
-                var.min, var.max = e.low, e.high
+            var = od[e.index]
+            if e.object_name != e.name:
+                assert isinstance(var, (cod.ODRecord, cod.ODArray))
+                var = var[e.subindex]
+            assert isinstance(var, cod.ODVariable)
+            if e.is_real:  # (canopen types the limits as int; a REAL32's are floats)
+                var.min, var.max = e.low, e.high  # type: ignore[assignment]
             if e.enum:
                 for value, label in e.enum.items():
                     var.add_value_description(value, label)
@@ -248,11 +253,13 @@ def _entry_from(
     section: Mapping[str, str],
 ) -> Entry:
     dt = var.data_type
+    if dt is None:
+        raise ValueError(f"{name}: no DataType")
     low = _parse_number(section["LowLimit"], dt) if "LowLimit" in section else None
     high = _parse_number(section["HighLimit"], dt) if "HighLimit" in section else None
     enum = MappingProxyType(_parse_enum(section["Enum"])) if "Enum" in section else None
     min_nonzero = _parse_number(section["MinNonZero"], dt) if "MinNonZero" in section else None
-    default = var.default
+    default: Number | str | bytes | None = var.default
     if dt == REAL32 and default is not None:
         default = float(default)
     return Entry(
