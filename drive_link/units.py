@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 import re
 from functools import lru_cache
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 from .errors import InvalidValue
 
@@ -49,7 +49,7 @@ def registry() -> pint.UnitRegistry:
     needs it."""
     import pint
 
-    ureg = pint.UnitRegistry(autoconvert_offset_to_baseunit=True)
+    ureg: pint.UnitRegistry = pint.UnitRegistry(autoconvert_offset_to_baseunit=True)
     ureg.define("sample = [sample] = samples")
     ureg.define("Ohm = ohm")
     return ureg
@@ -68,7 +68,7 @@ def unit_of(unit: str) -> pint.Quantity | None:
     ureg = registry()
     text = _ALIASES.get(unit.strip(), unit.strip())
     try:
-        q = ureg.Quantity(text)
+        q: pint.Quantity = ureg.Quantity(text)
     except _errors():
         return None
     if not isinstance(q, ureg.Quantity):  # a plain number is not a unit
@@ -86,7 +86,7 @@ def parse_quantity(text: str) -> pint.Quantity:
     if _HEX.match(s):
         return ureg.Quantity(int(s, 16), "dimensionless")
     try:
-        q = ureg.Quantity(s)
+        q: pint.Quantity = ureg.Quantity(s)
     except _errors() as exc:
         raise InvalidValue(f"{s!r} is not a number or a quantity with a unit ({exc})") from None
     if not isinstance(q, ureg.Quantity):
@@ -198,7 +198,7 @@ def parse_for(obj: ObjectInfo | str, text: str | float | int) -> float | int | s
     if obj.enum and isinstance(text, str):
         for v, label in obj.enum:
             if text.strip().lower() == str(label).lower():
-                return obj.check(v)
+                return cast("float | int", obj.check(v))  # an enumerated object: an integer
     integer = not obj.is_float
     value = parse_value(text, obj.unit, integer=integer, name=obj.name)
-    return obj.check(value)
+    return cast("float | int", obj.check(value))  # an object with a struct format: a number

@@ -36,7 +36,8 @@ def unipolar_ripple_pp(V_dc: np.ndarray, m: np.ndarray, L: float) -> np.ndarray:
     """Peak-to-peak ripple (A) of unipolar PWM on two phases in series (2 L, L in H) with DC
     link ``V_dc`` (V) and modulation index ``m`` (|m| ≤ 1): V_dc |m| (1 − |m|) T_s / (4 L)."""
     a = np.abs(np.asarray(m, dtype=float))
-    return np.asarray(V_dc, dtype=float) * a * (1.0 - a) * TS / (4.0 * L)
+    pp: np.ndarray = np.asarray(V_dc, dtype=float) * a * (1.0 - a) * TS / (4.0 * L)
+    return pp
 
 
 def pwm_ripple(ctx: Context) -> ExperimentResult:

@@ -136,7 +136,8 @@ def _load_response(a: float, b: float, k_p: float, k_i: float, i_load: float,
     + a − k_p b)."""
     num = [0.0, -b, b]
     den = [1.0, k_p * b * k_i + k_p * b - 1.0 - a, a - k_p * b]
-    return signal.lfilter(num, den, np.full(n, float(i_load)))
+    deviation: np.ndarray = signal.lfilter(num, den, np.full(n, float(i_load)))
+    return deviation
 
 
 def load_step(ctx: Context) -> ExperimentResult:
