@@ -357,9 +357,11 @@ def run_command(args: argparse.Namespace) -> int:
                 )
             except Exception as exc:
                 return _fail(f"cannot start the drive (node {node_id}): {exc}")
-            if drive.store_error:
+            if drive.parameters.store_error:
                 logger.error(
-                    "node %d parameter file: %s (defaults used)", node_id, drive.store_error
+                    "node %d parameter file: %s (defaults used)",
+                    node_id,
+                    drive.parameters.store_error,
                 )
             pacer.adopt(drive.runner)  # one pacing thread for all nodes
             if hasattr(bus, "rx_wanted"):

@@ -198,7 +198,7 @@ class PdoEngine:
 
     # -- helpers --------------------------------------------------------------------------
     def _u(self, index: int, sub: int) -> int:
-        obj = self.node._find_object(index, sub)
+        obj = self.node.find_object(index, sub)
         return obj.decode_raw(self.node.get_data(index, sub))
 
     def _mapped(self, map_index: int) -> list[tuple[int, int, int]]:
@@ -237,7 +237,7 @@ class PdoEngine:
             fmt = "<"
             getters = []
             for index, sub, _bits in self._mapped(TPDO_MAP + k):
-                obj = self.node._find_object(index, sub)
+                obj = self.node.find_object(index, sub)
                 fmt += _FMT[obj.data_type]
                 getters.append(self._getter(index, sub, obj))
             event_ms = self._u(TPDO_COMM + k, PDO_EVENT_TIMER_SUB)
@@ -313,7 +313,7 @@ class PdoEngine:
         for s in range(1, value + 1):
             entry = self._u(index, s)
             m_index, m_sub, bits = (entry >> 16) & 0xFFFF, (entry >> 8) & 0xFF, entry & 0xFF
-            obj = self.node._find_object(m_index, m_sub)  # 0x06020000 / 0x06090011
+            obj = self.node.find_object(m_index, m_sub)  # 0x06020000 / 0x06090011
             if not obj.pdo_mappable or len(obj) != bits or obj.data_type not in _FMT:
                 raise SdoAbortedError(ABORT_CANNOT_MAP)
             if (receive and not obj.writable) or (not receive and not obj.readable):

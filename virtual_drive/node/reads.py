@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from .od_addresses import (
     CURRENT_ACTUAL_VALUE,
@@ -37,31 +37,30 @@ from .od_addresses import (
     VELOCITY_ACTUAL_VALUE,
 )
 from .od_maps import MEASUREMENTS
-
-if TYPE_CHECKING:
-    from .drive_node import VirtualDrive
+from .parts import DriveParts
 
 __all__ = ["clamp_int", "make_live_getters"]
 
 
-def make_live_getters(d: VirtualDrive) -> dict[tuple[int, int], Callable[[], Any]]:
+def make_live_getters(d: DriveParts) -> dict[tuple[int, int], Callable[[], Any]]:
     """The live objects of drive ``d``: CiA 301 error objects, CiA 402 actual values (0x6041,
     0x6061, 0x606C rpm, 0x6077/0x6078 per mille of rated, 0x6079 mV), 0x2040 measurements, the
     recorder's read-only objects and the simulator's clock."""
     live = d.live
+    param = d.node.param
     g: dict[tuple[int, int], Callable[[], Any]] = {
         ERROR_REGISTER: lambda: d.emcy.error_register,
-        STORE_STATUS: lambda: int(d.store_status),
+        STORE_STATUS: lambda: int(d.parameters.store_status),
         ERROR_HISTORY_COUNT: lambda: len(d.emcy.history),
         ERROR_CODE: lambda: d.emcy.last_code,
         STATUSWORD: d.statusword,
-        MODES_OF_OPERATION_DISPLAY: lambda: d._mode,
+        MODES_OF_OPERATION_DISPLAY: lambda: d.ramps.mode,
         VELOCITY_ACTUAL_VALUE: lambda: clamp_int(live["speed"], 32),
         TORQUE_ACTUAL_VALUE: lambda: clamp_int(
-            live["T_e"] / (d._param(MOTOR_RATED_TORQUE) / 1000.0) * 1000.0, 16
+            live["T_e"] / (param(MOTOR_RATED_TORQUE) / 1000.0) * 1000.0, 16
         ),
         CURRENT_ACTUAL_VALUE: lambda: clamp_int(
-            live["i_p"] / (d._param(MOTOR_RATED_CURRENT) / 1000.0) * 1000.0, 16
+            live["i_p"] / (param(MOTOR_RATED_CURRENT) / 1000.0) * 1000.0, 16
         ),
         DC_LINK_VOLTAGE: lambda: max(0, round(live["V_dc"] * 1000.0)),
         TRACE_STATE: lambda: d.recorder.state,
