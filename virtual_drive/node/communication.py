@@ -20,22 +20,23 @@ import canopen
 
 from firmware_protocol.cob_id import CAN_ID_MASK, COB_INVALID
 from firmware_protocol.index_ranges import COMMUNICATION
+from firmware_protocol.od import load_od
 
 from . import storage
 from .emcy import EmcyManager
 from .heartbeat import HeartbeatConsumer, HeartbeatProducer
 from .local_node import DriveLocalNode
-from .od_addresses import (
-    COB_ID_EMCY,
-    COB_ID_SYNC,
-    CONSUMER_HEARTBEAT_COUNT,
-    CONSUMER_HEARTBEAT_INDEX,
-    PRODUCER_HEARTBEAT,
-    SDO_SERVER_2_RX,
-    SDO_SERVER_2_TX,
-)
 from .pdo import PdoEngine
 from .sdo_block import BlockSdoServer
+
+_OD = load_od()  # where the objects are: the EDS, through firmware_protocol's view
+COB_ID_EMCY = _OD.address("cob_id_emcy")
+COB_ID_SYNC = _OD.address("cob_id_sync")
+CONSUMER_HEARTBEAT_INDEX = _OD.index_of("consumer_heartbeat_time")
+CONSUMER_HEARTBEAT_COUNT = _OD.address("consumer_heartbeat_time.highest_sub_index")
+PRODUCER_HEARTBEAT = _OD.address("producer_heartbeat_time")
+SDO_SERVER_2_RX = _OD.address("sdo_server_2.cob_id_client_to_server")
+SDO_SERVER_2_TX = _OD.address("sdo_server_2.cob_id_server_to_client")
 
 __all__ = ["Communication"]
 

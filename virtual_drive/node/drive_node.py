@@ -56,12 +56,6 @@ from .gain_sets import GainSets
 from .heartbeat import HeartbeatConsumer, HeartbeatProducer
 from .local_node import DriveLocalNode, RpdoRefusedError
 from .nmt import OPERATIONAL, NmtSlave
-from .od_addresses import (
-    DISABLE_OPERATION_OPTION,
-    FAULT_REACTION_OPTION,
-    QUICK_STOP_OPTION,
-    SHUTDOWN_OPTION,
-)
 from .od_maps import (
     CURRENT_WINDOW_A,
     MEASUREMENTS,
@@ -85,6 +79,12 @@ from .sdo_block import BlockSdoServer
 from .statusword import StatusWord
 from .trace_config import TraceConfig
 from .tx import Transmitter
+
+_OD = load_od()  # where the objects are: the EDS, through firmware_protocol's view
+QUICK_STOP_OPTION = _OD.address("quick_stop_option_code")
+SHUTDOWN_OPTION = _OD.address("shutdown_option_code")
+DISABLE_OPERATION_OPTION = _OD.address("disable_operation_option_code")
+FAULT_REACTION_OPTION = _OD.address("fault_reaction_option_code")
 
 __all__ = [
     "CURRENT_WINDOW_A",

@@ -23,25 +23,25 @@ from typing import Any
 from canopen.sdo import SdoAbortedError
 
 from firmware_protocol import abort_codes
+from firmware_protocol.od import load_od
 
 from . import plant
 from .local_node import DriveLocalNode
-from .od_addresses import (
-    CURRENT_CONTROLLER_INDEX,
-    GAIN_SET_INDEX,
-    MAX_CURRENT,
-    MOTOR_RATED_CURRENT,
-    SPEED_CONTROLLER_INDEX,
-    SPEED_CURRENT_LIMIT,
-    sub_names,
-)
 from .params import ParamChecker
+
+_OD = load_od()  # where the objects are: the EDS, through firmware_protocol's view
+CURRENT_CONTROLLER_INDEX = _OD.index_of("current_controller")
+SPEED_CONTROLLER_INDEX = _OD.index_of("speed_controller")
+SPEED_CURRENT_LIMIT = _OD.address("speed_controller.current_limit")
+GAIN_SET_INDEX = _OD.index_of("gain_set")
+MAX_CURRENT = _OD.address("max_current")
+MOTOR_RATED_CURRENT = _OD.address("motor_rated_current")
 
 __all__ = ["GainSets"]
 
 logger = logging.getLogger(__name__)
 
-_GAIN_SET_SUBS = sub_names("gain_set")
+_GAIN_SET_SUBS = _OD.sub_names("gain_set")
 """gain_set sub -> name (``type`` .. ``emf_feedforward`` as in current_controller, then
 ``speed_k_p``, ``speed_k_i``, ``speed_current_limit``)."""
 

@@ -84,8 +84,9 @@ class DriveLocalNode(LocalNode):
 
     # -- the parameter store ------------------------------------------------------------
     def param(self, address: tuple[int, int]) -> Any:
-        """Present parameter value at ``address`` = ``(index, sub)`` (an :mod:`.od_addresses`
-        constant; cached, every write to the data store clears the cache)."""
+        """Present parameter value at ``address`` = ``(index, sub)`` (resolved by name from the
+        EDS view, ``load_od().address(name)``; cached, every write to the data store clears the
+        cache)."""
         try:
             return self._cache[address]
         except KeyError:

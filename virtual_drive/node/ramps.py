@@ -17,26 +17,27 @@ from collections.abc import Callable
 from typing import Any
 
 from firmware_protocol.cia402 import CW_HALT
+from firmware_protocol.od import load_od
 
 from . import cia402 as sm
 from .cia402 import Cia402StateMachine
-from .od_addresses import (
-    HALT_OPTION,
-    MAX_CURRENT,
-    MOTOR_K_RPM,
-    MOTOR_RATED_CURRENT,
-    PROFILE_ACCELERATION,
-    PROFILE_DECELERATION,
-    QUICK_STOP_DECELERATION,
-    SETPOINT_I_P_REF,
-    SIM_LOAD_J,
-    SPEED_CURRENT_LIMIT,
-    TARGET_TORQUE,
-    TARGET_VELOCITY,
-    TORQUE_SLOPE,
-)
 from .od_maps import MODE_PROFILE_TORQUE, MODE_PROFILE_VELOCITY, SPEED_ZERO_RPM
 from .runner import TS
+
+_OD = load_od()  # where the objects are: the EDS, through firmware_protocol's view
+MOTOR_K_RPM = _OD.address("motor.K_rpm")
+SPEED_CURRENT_LIMIT = _OD.address("speed_controller.current_limit")
+SETPOINT_I_P_REF = _OD.address("setpoints.i_p_ref")
+SIM_LOAD_J = _OD.address("sim_load.J")
+HALT_OPTION = _OD.address("halt_option_code")
+TARGET_TORQUE = _OD.address("target_torque")
+MAX_CURRENT = _OD.address("max_current")
+MOTOR_RATED_CURRENT = _OD.address("motor_rated_current")
+PROFILE_ACCELERATION = _OD.address("profile_acceleration")
+PROFILE_DECELERATION = _OD.address("profile_deceleration")
+QUICK_STOP_DECELERATION = _OD.address("quick_stop_deceleration")
+TORQUE_SLOPE = _OD.address("torque_slope")
+TARGET_VELOCITY = _OD.address("target_velocity")
 
 __all__ = ["SetpointRamps", "ramp_towards"]
 

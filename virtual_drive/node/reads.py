@@ -12,32 +12,42 @@ import math
 from collections.abc import Callable
 from typing import Any
 
-from .od_addresses import (
-    CURRENT_ACTUAL_VALUE,
-    DC_LINK_VOLTAGE,
-    ERROR_CODE,
-    ERROR_HISTORY_COUNT,
-    ERROR_HISTORY_FIELDS,
-    ERROR_REGISTER,
-    MEASUREMENTS_INDEX,
-    MODES_OF_OPERATION_DISPLAY,
-    MOTOR_RATED_CURRENT,
-    MOTOR_RATED_TORQUE,
-    SIM_INFO_SPEED_FACTOR,
-    SIM_INFO_TIME,
-    STATUSWORD,
-    STORE_STATUS,
-    TORQUE_ACTUAL_VALUE,
-    TPDO_MISSED_EVENTS,
-    TRACE_CAPACITY,
-    TRACE_DATA,
-    TRACE_PRE_TRIGGER_FILLED,
-    TRACE_STATE,
-    TRACE_TRIGGER_POSITION,
-    VELOCITY_ACTUAL_VALUE,
-)
+from firmware_protocol.od import load_od
+
 from .od_maps import MEASUREMENTS
 from .parts import DriveParts
+
+_OD = load_od()  # where the objects are: the EDS, through firmware_protocol's view
+ERROR_REGISTER = _OD.address("error_register")
+ERROR_HISTORY_INDEX = _OD.index_of("pre_defined_error_field")
+ERROR_HISTORY_COUNT = _OD.address("pre_defined_error_field.number_of_errors")
+#: the standard error fields, newest first (sub 1, 2, ...)
+ERROR_HISTORY_FIELDS: tuple[tuple[int, int], ...] = tuple(
+    (ERROR_HISTORY_INDEX, sub) for sub in sorted(_OD.sub_names("pre_defined_error_field"))
+)
+MEASUREMENTS_INDEX = _OD.index_of("measurements")
+STORE_STATUS = _OD.address("store_status")
+#: missed event periods of TPDO 1, 2, ... (sub 1, 2, ...)
+TPDO_MISSED_EVENTS: tuple[tuple[int, int], ...] = tuple(
+    _OD.address(f"tpdo_missed_events.{name}")
+    for _sub, name in sorted(_OD.sub_names("tpdo_missed_events").items())
+)
+TRACE_STATE = _OD.address("trace_config.state")
+TRACE_TRIGGER_POSITION = _OD.address("trace_config.trigger_position")
+TRACE_CAPACITY = _OD.address("trace_config.capacity")
+TRACE_PRE_TRIGGER_FILLED = _OD.address("trace_config.pre_trigger_filled")
+TRACE_DATA = _OD.address("trace_data")
+SIM_INFO_TIME = _OD.address("sim_info.sim_time")
+SIM_INFO_SPEED_FACTOR = _OD.address("sim_info.speed_factor")
+ERROR_CODE = _OD.address("error_code")
+STATUSWORD = _OD.address("statusword")
+MODES_OF_OPERATION_DISPLAY = _OD.address("modes_of_operation_display")
+VELOCITY_ACTUAL_VALUE = _OD.address("velocity_actual_value")
+MOTOR_RATED_CURRENT = _OD.address("motor_rated_current")
+MOTOR_RATED_TORQUE = _OD.address("motor_rated_torque")
+TORQUE_ACTUAL_VALUE = _OD.address("torque_actual_value")
+CURRENT_ACTUAL_VALUE = _OD.address("current_actual_value")
+DC_LINK_VOLTAGE = _OD.address("dc_link_circuit_voltage")
 
 __all__ = ["clamp_int", "make_live_getters"]
 

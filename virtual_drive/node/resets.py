@@ -14,12 +14,15 @@ from __future__ import annotations
 import logging
 
 from firmware_protocol.enums import StoreStatus
+from firmware_protocol.od import load_od
 
 from .emcy import DATA_SET_LOST, HEARTBEAT_LOSS, NMT_CONNECTION_LOSS
 from .nmt import CMD_RESET_COMMUNICATION, CMD_RESET_NODE
-from .od_addresses import ABORT_CONNECTION_OPTION
 from .od_maps import RESET_BRAKE_LIMIT_S
 from .parts import DriveParts
+
+_OD = load_od()  # where the objects are: the EDS, through firmware_protocol's view
+ABORT_CONNECTION_OPTION = _OD.address("abort_connection_option_code")
 
 __all__ = ["Resets"]
 

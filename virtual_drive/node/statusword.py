@@ -18,18 +18,19 @@ from collections.abc import Callable
 from typing import Any
 
 from firmware_protocol.cia402 import CW_HALT, OPERATION_ENABLED, QUICK_STOP_ACTIVE, SW_SPEED_ZERO
+from firmware_protocol.od import load_od
 
 from .cia402 import Cia402StateMachine
-from .od_addresses import (
-    SPEED_CURRENT_LIMIT,
-    TARGET_VELOCITY,
-    VELOCITY_THRESHOLD,
-    VELOCITY_THRESHOLD_TIME,
-    VELOCITY_WINDOW,
-    VELOCITY_WINDOW_TIME,
-)
 from .od_maps import CURRENT_WINDOW_A, MODE_PROFILE_VELOCITY
 from .ramps import SetpointRamps
+
+_OD = load_od()  # where the objects are: the EDS, through firmware_protocol's view
+SPEED_CURRENT_LIMIT = _OD.address("speed_controller.current_limit")
+VELOCITY_WINDOW = _OD.address("velocity_window")
+VELOCITY_WINDOW_TIME = _OD.address("velocity_window_time")
+VELOCITY_THRESHOLD = _OD.address("velocity_threshold")
+VELOCITY_THRESHOLD_TIME = _OD.address("velocity_threshold_time")
+TARGET_VELOCITY = _OD.address("target_velocity")
 
 __all__ = ["StatusWord"]
 

@@ -17,22 +17,9 @@ from typing import Any
 from canopen.sdo import SdoAbortedError
 
 from firmware_protocol import abort_codes
+from firmware_protocol.od import load_od
 
 from .local_node import DriveLocalNode
-from .od_addresses import (
-    MEASUREMENTS_INDEX,
-    TRACE_CHANNEL_COUNT,
-    TRACE_CHANNELS_INDEX,
-    TRACE_COMMAND_SUB,
-    TRACE_DIVIDER,
-    TRACE_LENGTH,
-    TRACE_PRE_TRIGGER,
-    TRACE_TRIGGER_EDGE,
-    TRACE_TRIGGER_LEVEL,
-    TRACE_TRIGGER_MODE,
-    TRACE_TRIGGER_SOURCE,
-    TRACE_TRIGGER_SOURCE_SUB,
-)
 from .od_maps import MEASUREMENTS
 from .recorder import (
     ARMED,
@@ -43,6 +30,20 @@ from .recorder import (
     TraceConfigError,
     TraceRecorder,
 )
+
+_OD = load_od()  # where the objects are: the EDS, through firmware_protocol's view
+MEASUREMENTS_INDEX = _OD.index_of("measurements")
+TRACE_CHANNEL_COUNT = _OD.address("trace_config.channel_count")
+TRACE_DIVIDER = _OD.address("trace_config.divider")
+TRACE_LENGTH = _OD.address("trace_config.length")
+TRACE_PRE_TRIGGER = _OD.address("trace_config.pre_trigger")
+TRACE_TRIGGER_SOURCE = _OD.address("trace_config.trigger_source")
+TRACE_TRIGGER_SOURCE_SUB = TRACE_TRIGGER_SOURCE[1]
+TRACE_TRIGGER_LEVEL = _OD.address("trace_config.trigger_level")
+TRACE_TRIGGER_EDGE = _OD.address("trace_config.trigger_edge")
+TRACE_TRIGGER_MODE = _OD.address("trace_config.trigger_mode")
+TRACE_COMMAND_SUB = _OD.address("trace_config.command")[1]
+TRACE_CHANNELS_INDEX = _OD.index_of("trace_channels")
 
 __all__ = ["TraceConfig"]
 

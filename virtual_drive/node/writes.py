@@ -29,38 +29,45 @@ from firmware_protocol import abort_codes
 from firmware_protocol.cia402 import OPERATION_ENABLED
 from firmware_protocol.cob_id import check_cob_id, check_heartbeat_consumers, check_sync_cob_id
 from firmware_protocol.entry import LimitError
+from firmware_protocol.od import load_od
 
 from . import plant, storage
-from .od_addresses import (
-    COB_ID_EMCY,
-    COB_ID_EMCY_INDEX,
-    COB_ID_SYNC_INDEX,
-    CONSUMER_HEARTBEAT_INDEX,
-    CONTROLWORD_INDEX,
-    ERROR_HISTORY_INDEX,
-    GAIN_SET_APPLY_INDEX,
-    MAX_CURRENT_INDEX,
-    MODES_OF_OPERATION_INDEX,
-    MOTOR_RATED_CURRENT_INDEX,
-    PRODUCER_HEARTBEAT_INDEX,
-    RESTORE_DEFAULTS_INDEX,
-    SDO_SERVER_2_INDEX,
-    SDO_SERVER_2_RX,
-    SDO_SERVER_2_TX,
-    SIM_FAULT_INDEX,
-    SIM_FAULT_INJECT_SUB,
-    SIM_FAULT_SUPPLY_SUB,
-    SIM_INFO_INDEX,
-    SIM_INFO_MODEL_SUB,
-    SPEED_CONTROLLER_INDEX,
-    SPEED_CURRENT_LIMIT_SUB,
-    STORE_PARAMETERS_INDEX,
-    TRACE_CHANNELS_INDEX,
-    TRACE_CONFIG_INDEX,
-)
 from .od_maps import SUPPORTED_MODES
 from .parts import DriveParts
 from .pdo import is_pdo_config
+
+_OD = load_od()  # where the objects are: the EDS, through firmware_protocol's view
+ERROR_HISTORY_INDEX = _OD.index_of("pre_defined_error_field")
+STORE_PARAMETERS_INDEX = _OD.index_of("store_parameters")
+RESTORE_DEFAULTS_INDEX = _OD.index_of("restore_default_parameters")
+COB_ID_EMCY = _OD.address("cob_id_emcy")
+COB_ID_EMCY_INDEX = COB_ID_EMCY[0]
+COB_ID_SYNC = _OD.address("cob_id_sync")
+COB_ID_SYNC_INDEX = COB_ID_SYNC[0]
+CONSUMER_HEARTBEAT_INDEX = _OD.index_of("consumer_heartbeat_time")
+PRODUCER_HEARTBEAT = _OD.address("producer_heartbeat_time")
+PRODUCER_HEARTBEAT_INDEX = PRODUCER_HEARTBEAT[0]
+SDO_SERVER_2_INDEX = _OD.index_of("sdo_server_2")
+SDO_SERVER_2_RX = _OD.address("sdo_server_2.cob_id_client_to_server")
+SDO_SERVER_2_TX = _OD.address("sdo_server_2.cob_id_server_to_client")
+SPEED_CONTROLLER_INDEX = _OD.index_of("speed_controller")
+SPEED_CURRENT_LIMIT = _OD.address("speed_controller.current_limit")
+SPEED_CURRENT_LIMIT_SUB = SPEED_CURRENT_LIMIT[1]
+GAIN_SET_APPLY = _OD.address("gain_set_apply")
+GAIN_SET_APPLY_INDEX = GAIN_SET_APPLY[0]
+TRACE_CONFIG_INDEX = _OD.index_of("trace_config")
+TRACE_CHANNELS_INDEX = _OD.index_of("trace_channels")
+SIM_FAULT_INDEX = _OD.index_of("sim_fault")
+SIM_FAULT_INJECT_SUB = _OD.address("sim_fault.inject")[1]
+SIM_FAULT_SUPPLY_SUB = _OD.address("sim_fault.V_dc_supply")[1]
+SIM_INFO_INDEX = _OD.index_of("sim_info")
+SIM_INFO_MODEL_SUB = _OD.address("sim_info.model")[1]
+CONTROLWORD_INDEX = _OD.index_of("controlword")
+MODES_OF_OPERATION_INDEX = _OD.index_of("modes_of_operation")
+MAX_CURRENT = _OD.address("max_current")
+MAX_CURRENT_INDEX = MAX_CURRENT[0]
+MOTOR_RATED_CURRENT = _OD.address("motor_rated_current")
+MOTOR_RATED_CURRENT_INDEX = MOTOR_RATED_CURRENT[0]
 
 __all__ = ["COMMANDS", "HANDLERS", "PRE_CHECKS", "Handler", "WriteResult", "before_write"]
 
