@@ -15,19 +15,20 @@ gains and setpoints take effect at a chunk (sample) boundary.
 Object values: parameters live in the canopen LocalNode's data store (raw bytes, defaults from
 the EDS); live values (statusword, measurements, trace data, error objects) are computed on read.
 
-The node is split by job; this module assembles it (services, lifecycle, bus, parameter
-access, CiA 402 hooks, the pacing loop's chunk):
+The node is composed of parts that own their state (node README, "Who owns what"); this
+module assembles them and wires them through their public methods (lifecycle, the CiA 402
+hooks, the pacing loop's chunk):
 
-- :mod:`.local_node` the canopen LocalNode whose reads and writes go through the drive;
+- :class:`.DriveLocalNode` the parameter store: values, cache, write lock, live getters;
 - :mod:`.writes` every write: checks, then a table of handlers by object index;
-- :mod:`.parameters` load / push to the simulator / store / restore the parameter set;
-- :mod:`.communication` communication objects (heartbeat, EMCY, SDO server 2, PDOs), NMT reset
-  communication; :mod:`.resets` reset node (deferred while braking), 0x6007 reactions;
-- :mod:`.gain_sets` the staged gain set 0x20F0/0x20F1 and the current limit;
-- :mod:`.trace_config` trace configuration writes and the recorder's set-up;
-- :mod:`.ramps` setpoints, profile and stop ramps of the next chunk;
-- :mod:`.statusword` 0x6041 and its velocity window / threshold timers;
-- :mod:`.reads` objects computed on read; :mod:`.od_maps` measurement and mode maps.
+- :class:`.ParameterSet` load / push to the simulator / store / restore the parameter set;
+- :class:`.Communication` communication objects (heartbeat, EMCY, SDO server 2, PDOs), NMT
+  reset communication; :class:`.Resets` reset node (deferred while braking), 0x6007 reactions;
+- :class:`.GainSets` the staged gain set 0x20F0/0x20F1 and the current limit;
+- :class:`.TraceConfig` trace configuration writes and the recorder's set-up;
+- :class:`.SetpointRamps` setpoints, profile and stop ramps of the next chunk;
+- :class:`.StatusWord` 0x6041 and its velocity window / threshold timers;
+- :class:`.Transmitter` every frame sent; :mod:`.reads` objects computed on read.
 """
 
 from __future__ import annotations
