@@ -260,7 +260,7 @@ def main() -> int:
         client = "python-can socketcand" if args.python_can else type(bus).__name__
         print(f"measured {wall:.1f} s wall, mode {args.mode}, PWM-exact model, bus {client}")
         print(f"TPDOs sent: {sent} ({sent / wall:.0f} frames/s), tx errors {drive.tx_errors}")
-        period = drive.runner._pacer.period if drive.runner._pacer else drive.runner.period
+        period = drive.runner.pacer.period if drive.runner.pacer else drive.runner.period
         print(
             f"pacing: one wake-up per {period * 1e3:g} ms"
             + (", TPDOs sent with their bus times" if drive.timed_sends else "")

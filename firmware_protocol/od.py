@@ -156,6 +156,29 @@ class ObjectDictionaryView:
             hint = f"; did you mean: {', '.join(close)}?" if close else ""
             raise KeyError(f"no object named {name!r} in the drive OD{hint}") from None
 
+    def address(self, name: str) -> tuple[int, int]:
+        """``(index, sub)`` of the object ``name`` (e.g. ``"trace_config.state"``)."""
+        e = self.entry(name)
+        return e.index, e.subindex
+
+    def index_of(self, object_name: str) -> int:
+        """Index of the object (record, array or variable) called ``object_name``."""
+        for e in self._entries:
+            if e.object_name == object_name:
+                return e.index
+        raise KeyError(f"no object named {object_name!r} in the drive OD")
+
+    def sub_names(self, object_name: str) -> dict[int, str]:
+        """Sub-index -> sub-object name of a record or array (sub 0 left out)."""
+        subs = {
+            e.subindex: e.sub_name
+            for e in self._entries
+            if e.object_name == object_name and e.subindex
+        }
+        if not subs:
+            raise KeyError(f"no record named {object_name!r} in the drive OD")
+        return subs
+
     def by_index(self, index: int, sub: int = 0) -> Entry:
         """Entry at ``index``/``sub`` (``KeyError`` if the drive has no such object)."""
         try:

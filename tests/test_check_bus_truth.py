@@ -61,7 +61,7 @@ def test_pdo_rates_fails_a_drive_that_drops_periods_and_counts_them(parts):
 
     def choke() -> None:
         while not stop.is_set():
-            with vd._send_lock:
+            with vd.tx.send_lock:
                 time.sleep(0.015)
             time.sleep(0.005)
 

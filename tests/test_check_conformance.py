@@ -89,7 +89,7 @@ def test_od_vs_eds_fails_on_a_const_object_off_its_default(drive):
         for e in view
         if e.access == "const"
         and e.data_type == 5  # UNSIGNED8: a highest sub-index
-        and (e.index, e.subindex) not in vd._live_getters
+        and (e.index, e.subindex) not in vd.node.live_getters
     )
     vd.node.data_store.setdefault(e.index, {})[e.subindex] = struct.pack("<B", int(e.default) + 1)
     ok, detail = one(d, "od_vs_eds")
@@ -115,7 +115,7 @@ def test_sdo_aborts_fails_on_a_drive_answering_range_errors_with_the_general_cod
 
 def test_sync_pdo_fails_on_a_drive_deaf_to_sync(drive):
     vd, d = drive
-    vd.network.unsubscribe(vd._sync_can_id, vd.pdo.on_sync)
+    vd.network.unsubscribe(vd.comm.sync_can_id, vd.pdo.on_sync)
     ok, detail = one(d, "sync_pdo")
     assert not ok and "0 TPDO1 for 20 SYNC" in detail, detail
 

@@ -224,7 +224,7 @@ def test_a_tick_that_read_the_clock_before_a_read_caught_up_runs_nothing_twice()
         time.sleep(0.005)
         assert runner.catch_up()
         t_sim = drive.sim.time
-        runner._tick(stale)  # the pacer's tick with its clock read before the catch-up
+        runner.tick(stale)  # the pacer's tick with its clock read before the catch-up
         # (the pacer's own tick may come between: simulated time may have moved on, never back)
         assert drive.sim.time >= t_sim
         assert drive.sim.time == pytest.approx(runner._done * 20e-6, abs=1e-9)

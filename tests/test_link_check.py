@@ -144,17 +144,15 @@ def test_nmt_reaction_fails_on_a_drive_without_the_0x6007_reaction(virtual_node,
 
 
 def test_halt_fails_on_a_drive_that_ignores_bit_8(virtual_node, capsys, monkeypatch):
-    _, ch = virtual_node
-    from virtual_drive.node import drive_node
+    vd, ch = virtual_node
+    real = vd.node.before_write
 
-    real = drive_node.VirtualDrive._before_write
-
-    def no_halt(self, index, sub, obj, data):
+    def no_halt(index, sub, obj, data):
         if index == 0x6040 and len(data) == 2:
             data = bytes([data[0], data[1] & ~0x01])  # bit 8 never reaches the drive
-        return real(self, index, sub, obj, data)
+        return real(index, sub, obj, data)
 
-    monkeypatch.setattr(drive_node.VirtualDrive, "_before_write", no_halt)
+    monkeypatch.setattr(vd.node, "before_write", no_halt)
     argv = ["check", "--interface", "virtual", "--channel", ch, "--node", "4"]
     rc = cli.main([*argv, "--only", "halt"])
     line = capsys.readouterr().out.splitlines()[0]

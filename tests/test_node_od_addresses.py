@@ -1,4 +1,5 @@
-"""The virtual drive's node code addresses objects by EDS name, never by literal index (issue 13).
+"""The virtual drive's node code addresses objects by EDS name, never by literal index (issue 13),
+through the one Python view of the EDS (``load_od().address/index_of/sub_names``, issue 25).
 
 Truth: the EDS (``firmware_protocol/bldc_drive.eds``) and the CiA 301/402 index map
 (:mod:`firmware_protocol.index_ranges`). The scan finds hex literals in the OD's index range in the
@@ -13,15 +14,18 @@ import io
 import tokenize
 from pathlib import Path
 
+import canopen
 import pytest
 
+import firmware_protocol
 from firmware_protocol import load_od
 from firmware_protocol.index_ranges import COMMUNICATION, PROFILE
-from virtual_drive.node import od_addresses, plant
+from virtual_drive.node import pdo, plant, ramps, reads, trace_config
 
 pytestmark = pytest.mark.unit
 
-NODE_DIR = Path(od_addresses.__file__).parent
+NODE_DIR = Path(plant.__file__).parent
+EDS = Path(firmware_protocol.__file__).parent / "bldc_drive.eds"
 
 #: (module, literal): hex numbers in the index range that are not object indices.
 NOT_INDICES = {
@@ -67,9 +71,9 @@ def test_node_code_has_no_literal_object_index(path: Path) -> None:
     left = [
         f"{path.name}:{line}: {text}"
         for line, text in _index_literals(path)
-        if (path.name, text) not in NOT_INDICES and path.name != "od_addresses.py"
+        if (path.name, text) not in NOT_INDICES
     ]
-    hint = "object indices written as literals (use virtual_drive.node.od_addresses)"
+    hint = "object indices written as literals (use load_od().address(name) / index_of(name))"
     assert not left, hint + ":\n" + "\n".join(left)
 
 
@@ -81,20 +85,31 @@ def test_the_scan_sees_a_literal_index(tmp_path: Path) -> None:
 
 
 def test_addresses_are_the_eds_objects() -> None:
-    """Each address constant is the EDS object of that name (spot checks against the EDS)."""
-    od = load_od()
+    """The addresses the node resolves through the view are the EDS objects of those names, as
+    canopen's own EDS reader (an independent parser) finds them."""
+    od = canopen.import_od(str(EDS), 1)
+
+    def at(name: str) -> tuple[int, int]:
+        obj, _, sub = name.partition(".")
+        return (od[obj].index, od[obj][sub].subindex) if sub else (od[obj].index, 0)
+
     for name, constant in [
-        ("statusword", od_addresses.STATUSWORD),
-        ("trace_config.pre_trigger_filled", od_addresses.TRACE_PRE_TRIGGER_FILLED),
-        ("speed_controller.current_limit", od_addresses.SPEED_CURRENT_LIMIT),
-        ("sim_load.J", od_addresses.SIM_LOAD_J),
+        ("statusword", reads.STATUSWORD),
+        ("trace_config.pre_trigger_filled", reads.TRACE_PRE_TRIGGER_FILLED),
+        ("speed_controller.current_limit", ramps.SPEED_CURRENT_LIMIT),
+        ("sim_load.J", ramps.SIM_LOAD_J),
     ]:
-        e = od.entry(name)
-        assert constant == (e.index, e.subindex)
-    assert od_addresses.N_TPDO == len(
-        {e.index for e in od if e.object_name.startswith("tpdo") and "communication" in e.name}
+        assert constant == at(name), name
+    assert trace_config.TRACE_CHANNELS_INDEX == od["trace_channels"].index
+    assert pdo.N_TPDO == sum(
+        1 for o in od.values() if o.name.startswith("tpdo") and o.name.endswith("_communication")
     )
+    view = load_od()
+    for record in ("gain_set", "trace_config", "current_controller", "pre_defined_error_field"):
+        assert view.index_of(record) == od[record].index
+        subs = {sub: v.name for sub, v in od[record].subindices.items() if sub}
+        assert view.sub_names(record) == subs, record
     # plant maps: the EDS sub names are the simulator's keywords
     for index, (_setter, kw) in plant.SETTERS.items():
         for sub, key in kw.items():
-            assert od.by_index(index, sub).sub_name == key
+            assert od[index][sub].name == key

@@ -118,7 +118,7 @@ def test_stalled_periods_are_counted_not_burst(bench):
     bench.nmt(0x01)
     time.sleep(0.2)
     before = bench.read("tpdo_missed_events.tpdo2")
-    with bench.drive._send_lock:
+    with bench.drive.tx.send_lock:
         t_stall = time.time()
         time.sleep(0.05)
         t_release = time.time()

@@ -16,12 +16,10 @@ The names below are imported on first use, so ``import virtual_drive.hub`` stays
 from __future__ import annotations
 
 import importlib
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-if TYPE_CHECKING:
-    from .launch import BusSettings, virtual_bench
-    from .node import VirtualDrive
-
+# (no import of them here, not even for the type checker: the simulator imports this package's
+# C core, so the package must not depend on the node that depends on the simulator)
 __all__ = ["BusSettings", "VirtualDrive", "virtual_bench"]
 
 _HOMES = {

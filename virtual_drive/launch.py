@@ -47,6 +47,11 @@ class BusSettings(dict):
     stores: dict[int, Path]
     _respawn: Any = None
 
+    def set_respawn(self, respawn: Any) -> None:
+        """``respawn(node_id) -> DriveProcess``: how :meth:`restart_drive` starts a child
+        again (set by :func:`virtual_bench` for child-process drives)."""
+        self._respawn = respawn
+
     def restart_drive(self, node_id: int) -> Any:
         """Stop the ``virtual-drive run`` child serving node ``node_id`` (SIGTERM; with several
         nodes in one child, all of them) and start it again on the same parameter files;
@@ -284,7 +289,7 @@ def _spawn_all(
             settings.drives[m] = proc
         return proc
 
-    settings._respawn = respawn
+    settings.set_respawn(respawn)
     stack.callback(_stop_drives, settings)  # SIGTERM each, then SIGKILL after 10 s
     results: dict[int, Any] = {}
 

@@ -28,6 +28,7 @@ import socket
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import can
 import can.cli
@@ -84,15 +85,46 @@ _SHORT_HELP = {
 _BUS_KEYS = ("interface", "channel", "bitrate", "fd", "data_bitrate", "timing", "host", "port")
 
 
+class _RecordingParser:
+    """Stands in for a parser while python-can adds its bus options: the argument groups are
+    the parser's own, and every action they add is kept in :attr:`actions` (to shorten their
+    help texts)."""
+
+    def __init__(self, parser: argparse.ArgumentParser) -> None:
+        self.parser = parser
+        self.actions: list[argparse.Action] = []
+
+    def add_argument_group(self, *args: Any, **kwargs: Any) -> _RecordingGroup:
+        return _RecordingGroup(self.parser.add_argument_group(*args, **kwargs), self.actions)
+
+    def add_argument(self, *args: Any, **kwargs: Any) -> argparse.Action:
+        action = self.parser.add_argument(*args, **kwargs)
+        self.actions.append(action)
+        return action
+
+
+class _RecordingGroup:
+    """An argument group that keeps the actions it adds (see :class:`_RecordingParser`)."""
+
+    def __init__(self, group: Any, actions: list[argparse.Action]) -> None:
+        self.group = group
+        self.actions = actions
+
+    def add_argument(self, *args: Any, **kwargs: Any) -> argparse.Action:
+        action = self.group.add_argument(*args, **kwargs)
+        self.actions.append(action)
+        return action
+
+
 def add_run_arguments(p: argparse.ArgumentParser) -> None:
     """The options of ``virtual-drive run``: python-can's own bus options
     (:func:`can.cli.add_bus_arguments`, the spelling drive-link shares: ``-i/--interface``,
     ``-c/--channel``, ``-b/--bitrate``, ``--fd``, ``--data-bitrate``, ``--timing``,
     ``--bus-kwargs``), the loopback hub's ``--host``/``--port``/``--hub``/``--hub-port``, then
     the node options."""
-    before = len(p._actions)
-    can.cli.add_bus_arguments(p, group_title=BUS_GROUP_TITLE)
-    for action in p._actions[before:]:
+    recording = _RecordingParser(p)
+    can.cli.add_bus_arguments(recording, group_title=BUS_GROUP_TITLE)  # type: ignore[arg-type]
+    for action in recording.actions:
         action.help = _SHORT_HELP.get(action.dest, action.help)
         if action.dest == "interface":
             # no choices: can.Bus names an unknown interface itself (one line, exit 1) and
@@ -357,9 +389,11 @@ def run_command(args: argparse.Namespace) -> int:
                 )
             except Exception as exc:
                 return _fail(f"cannot start the drive (node {node_id}): {exc}")
-            if drive.store_error:
+            if drive.parameters.store_error:
                 logger.error(
-                    "node %d parameter file: %s (defaults used)", node_id, drive.store_error
+                    "node %d parameter file: %s (defaults used)",
+                    node_id,
+                    drive.parameters.store_error,
                 )
             pacer.adopt(drive.runner)  # one pacing thread for all nodes
             if hasattr(bus, "rx_wanted"):

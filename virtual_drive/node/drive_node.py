@@ -15,27 +15,26 @@ gains and setpoints take effect at a chunk (sample) boundary.
 Object values: parameters live in the canopen LocalNode's data store (raw bytes, defaults from
 the EDS); live values (statusword, measurements, trace data, error objects) are computed on read.
 
-The node is split by job; this module assembles it (services, lifecycle, bus, parameter
-access, CiA 402 hooks, the pacing loop's chunk):
+The node is composed of parts that own their state (node README, "Who owns what"); this
+module assembles them and wires them through their public methods (lifecycle, the CiA 402
+hooks, the pacing loop's chunk):
 
-- :mod:`.local_node` the canopen LocalNode whose reads and writes go through the drive;
+- :class:`.DriveLocalNode` the parameter store: values, cache, write lock, live getters;
 - :mod:`.writes` every write: checks, then a table of handlers by object index;
-- :mod:`.parameters` load / push to the simulator / store / restore the parameter set;
-- :mod:`.communication` communication objects (heartbeat, EMCY, SDO server 2, PDOs), NMT reset
-  communication; :mod:`.resets` reset node (deferred while braking), 0x6007 reactions;
-- :mod:`.gain_sets` the staged gain set 0x20F0/0x20F1 and the current limit;
-- :mod:`.trace_config` trace configuration writes and the recorder's set-up;
-- :mod:`.ramps` setpoints, profile and stop ramps of the next chunk;
-- :mod:`.statusword` 0x6041 and its velocity window / threshold timers;
-- :mod:`.reads` objects computed on read; :mod:`.od_maps` measurement and mode maps.
+- :class:`.ParameterSet` load / push to the simulator / store / restore the parameter set;
+- :class:`.Communication` communication objects (heartbeat, EMCY, SDO server 2, PDOs), NMT
+  reset communication; :class:`.Resets` reset node (deferred while braking), 0x6007 reactions;
+- :class:`.GainSets` the staged gain set 0x20F0/0x20F1 and the current limit;
+- :class:`.TraceConfig` trace configuration writes and the recorder's set-up;
+- :class:`.SetpointRamps` setpoints, profile and stop ramps of the next chunk;
+- :class:`.StatusWord` 0x6041 and its velocity window / threshold timers;
+- :class:`.Transmitter` every frame sent; :mod:`.reads` objects computed on read.
 """
 
 from __future__ import annotations
 
-import errno
 import logging
 import threading
-import time
 from collections.abc import Callable
 from functools import partial
 from pathlib import Path
@@ -43,7 +42,6 @@ from typing import Any
 
 import can
 import canopen
-from canopen import objectdictionary as odm
 
 from firmware_protocol import abort_codes
 from firmware_protocol.enums import StoreStatus
@@ -51,18 +49,14 @@ from firmware_protocol.od import load_od
 from virtual_drive.hub_protocol import SENDAT_MAX_BACKDATE_S
 from virtual_drive.sim.signals import SIGNALS
 
-from . import communication, parameters, ramps, resets, statusword, storage, writes
+from . import writes
 from .cia402 import Cia402StateMachine
+from .communication import Communication
 from .emcy import EmcyManager
+from .gain_sets import GainSets
 from .heartbeat import HeartbeatConsumer, HeartbeatProducer
 from .local_node import DriveLocalNode, RpdoRefusedError
 from .nmt import OPERATIONAL, NmtSlave
-from .od_addresses import (
-    DISABLE_OPERATION_OPTION,
-    FAULT_REACTION_OPTION,
-    QUICK_STOP_OPTION,
-    SHUTDOWN_OPTION,
-)
 from .od_maps import (
     CURRENT_WINDOW_A,
     MEASUREMENTS,
@@ -73,14 +67,25 @@ from .od_maps import (
     SPEED_ZERO_RPM,
     SUPPORTED_MODES,
 )
+from .parameters import ParameterSet
 from .params import ParamChecker
 from .pdo import PdoEngine
+from .ramps import SetpointRamps
 from .reads import make_live_getters
 from .recorder import ARMED, RECORDING, TraceRecorder
 from .remote import RemoteRequests
+from .resets import Resets
 from .runner import TS, Runner
 from .sdo_block import BlockSdoServer
-from .tx import make_send_many
+from .statusword import StatusWord
+from .trace_config import TraceConfig
+from .tx import Transmitter
+
+_OD = load_od()  # where the objects are: the EDS, through firmware_protocol's view
+QUICK_STOP_OPTION = _OD.address("quick_stop_option_code")
+SHUTDOWN_OPTION = _OD.address("shutdown_option_code")
+DISABLE_OPERATION_OPTION = _OD.address("disable_operation_option_code")
+FAULT_REACTION_OPTION = _OD.address("fault_reaction_option_code")
 
 __all__ = [
     "CURRENT_WINDOW_A",
@@ -147,7 +152,7 @@ class VirtualDrive:
             raise ValueError(f"node_id must be 1..127, got {node_id}")
         self.bus = bus
         self.node_id = node_id
-        self.store_path = Path(store_path) if store_path is not None else None
+        self._store_path = Path(store_path) if store_path is not None else None
         self.speed = float(speed)
         self.view = load_od(node_id=node_id)
         self.od = self.view.canopen_od(node_id)
@@ -156,77 +161,72 @@ class VirtualDrive:
 
             sim = Simulator()
         self.sim = sim
-        self.sim_lock = threading.RLock()
-        self._write_lock = threading.RLock()
-        self._send_lock = threading.Lock()
-        self.tx_errors = 0
-        self.last_tx_ok = time.monotonic()  #: time of the last frame the bus accepted
+        self.sim_lock = sim_lock = threading.RLock()
+        self.tx = tx = Transmitter(bus)  # the send side: lock, error count, batched sends
+        self.timed_sends = tx.timed_sends
         self.taps: list[Callable[[dict], None]] = []
         self.live: dict[str, float] = {name: 0.0 for name in MEASUREMENTS.values()}
         self.live["hall_sector"] = 1
-        self.store_error: str | None = None
-        self.store_status = StoreStatus.DEFAULTS  #: 0x2060, set by every parameter load
-        self._pcache: dict[tuple[int, int], Any] = {}
+        self._started = False
+        self._last_fault: Any = None  # the simulator's trip last acted on
 
         self.network = canopen.Network(bus)
-        self.node = DriveLocalNode(node_id, self.od, self)
-        self.network.add_node(self.node)
+        # the object dictionary and parameter store; wired to the drive's checks below
+        self.node = node = DriveLocalNode(node_id, self.od)
+        self.network.add_node(node)
+        self.resets = resets = Resets(self)  # reset node, 0x6007 reactions
         self.nmt = NmtSlave(
             node_id,
-            self._send,
-            on_reset_node=partial(resets.reset_application, self),
-            on_reset_communication=partial(communication.reset_communication, self),
+            tx.send,
+            on_reset_node=resets.reset_application,
+            on_reset_communication=self._reset_communication,
             on_state_change=self._on_nmt_change,
-            on_abort_connection=partial(resets.on_nmt_abort_connection, self),
-            on_boot=partial(resets.on_boot, self),
+            on_abort_connection=resets.on_nmt_abort_connection,
+            on_boot=resets.on_boot,
         )
         # default COB-IDs of this node-ID from the EDS (0x80+N, 0x600+N, 0x580+N); 0x1014 is
         # applied by the parameter load below, the first SDO server's are fixed
         self.emcy = EmcyManager(
-            int(self.view.entry("cob_id_emcy").default), self._send, self.nmt.emcy_allowed
+            int(self.view.entry("cob_id_emcy").default), tx.send, self.nmt.emcy_allowed
         )
         self.sdo = BlockSdoServer(
             int(self.view.entry("sdo_server_1.cob_id_client_to_server").default),
             int(self.view.entry("sdo_server_1.cob_id_server_to_client").default),
-            self.node,
+            node,
             self.nmt.sdo_allowed,
-            send=self._send,
+            send=tx.send,
         )
-        self.node.sdo = self.sdo
-        self.sdo2: BlockSdoServer | None = None
-        self.timed_sends = bool(getattr(bus, "timed_sends", False))
-        send_many = make_send_many(self)
+        node.sdo = self.sdo
         self.hb_producer = HeartbeatProducer(
             node_id,
-            self._send,
+            tx.send,
             lambda: self.nmt.state,
-            send_at=(lambda cob_id, data, at: send_many([(cob_id, data)], at))
-            if self.timed_sends
-            else None,
+            send_at=tx.send_at if self.timed_sends else None,
         )
         self.hb_consumer = HeartbeatConsumer(
             self.network.subscribe,
             self.network.unsubscribe,
-            partial(resets.on_heartbeat_lost, self),
-            partial(resets.on_heartbeat_back, self),
+            resets.on_heartbeat_lost,
+            resets.on_heartbeat_back,
         )
         self.pdo = PdoEngine(
-            self.node,
-            self._send,
+            node,
+            tx.send,
             self.network.subscribe,
             self.network.unsubscribe,
             self.nmt.pdo_allowed,
             lambda: self.nmt.state,
-            lambda i, s: self._live_getters.get((i, s)),
+            lambda i, s: node.live_getters.get((i, s)),
             report=self.emcy.raise_error,
             clear=self.emcy.clear_error,
-            send_many=send_many,
+            send_many=tx.send_many,
             align=lambda t: self.runner.align(t),
             # (a bus time the hub still takes after the frames' trip to it)
             stamp_max_age=0.8 * SENDAT_MAX_BACKDATE_S,
         )
         self.cia402 = Cia402StateMachine(self._options, self._reset_fault)
         self.recorder = TraceRecorder()
+        self.trace = TraceConfig(node, self.recorder)
         self.checker = ParamChecker(self.view, self._current_by_name)
         # the pacing thread also sends the event-driven TPDOs (one wake-up per tick); on a bus
         # that takes frames with their bus time (the loopback hub) the ticks are TIMED_PERIOD
@@ -240,34 +240,41 @@ class VirtualDrive:
             period=period,
             timer=self.pdo.tick,
             timer_at=self.pdo.tick_at if self.timed_sends else None,
-            flush=self._flush_timed if self.timed_sends else None,
+            flush=tx.flush if self.timed_sends else None,
             step_timed=self._step_timed if self.timed_sends else None,
             due_times=self.pdo.due_times,
         )
-        self._live_getters = make_live_getters(self)
         # control state (touched by the runner between chunks)
-        self._mode = MODE_PROFILE_VELOCITY
-        self._sim_mode = "off"
-        self._speed_ref = 0.0  # profile output (rpm) fed to the IP loop
-        self._i_ref = 0.0  # torque-profile output (A) in the current modes
-        self._i_target = 0.0  # where _i_ref is heading (A)
-        # since when (sim time, s) |speed - target| <= 0x606D / |speed| <= 0x606F, and for
-        # which velocity target the window was measured
-        self._window_since: float | None = None
-        self._window_target = 0.0
-        self._threshold_since: float | None = None
-        self._last_fault = None
-        self._started = False
-        self._reset_deferred_at: float | None = None  # sim time of a deferred reset node
-        #: sim time (s) of the TPDO instant a timed tick is at (None: the simulator's clock)
-        self._t_point: float | None = None
-        if self.store_path is not None:
-            storage.remove_stale_temps(self.store_path)  # left by a kill during a store
-        self._load_parameters()
+        self.ramps = SetpointRamps(sim, node.param, self.live)
+        self.status = StatusWord(sim, node.param, self.live, self.ramps)
+        self.gains = GainSets(node, self.checker, sim, sim_lock)
+        self.comm = Communication(
+            node,
+            self.network,
+            self.hb_producer,
+            self.hb_consumer,
+            self.emcy,
+            self.pdo,
+            self.nmt.sdo_allowed,
+            tx.send,
+            self.store_path,
+        )
+        self.parameters = ParameterSet(
+            node,
+            self.checker,
+            self.store_path,
+            sim,
+            sim_lock,
+            self.emcy,
+            self.gains,
+            self.comm.configure,
+        )
+        node.bind(partial(writes.before_write, self), make_live_getters(self), self.runner.catch_up)
+        self.parameters.load()
         # frames reach these only while start() has a Notifier running
         self.network.subscribe(0x000, self.nmt.on_command)
         self.network.subscribe(self.sdo.rx_cobid, self.sdo.on_request)
-        communication.bind_sync(self)  # SYNC on 0x1005's CAN-ID
+        self.comm.bind_sync()  # SYNC on 0x1005's CAN-ID
 
     # -- lifecycle ------------------------------------------------------------------------
     def start(self) -> VirtualDrive:
@@ -307,97 +314,65 @@ class VirtualDrive:
         self.stop()
 
     # -- bus ------------------------------------------------------------------------------
-    def _send(self, cob_id: int, data: bytes) -> None:
-        """Put one frame on the bus; never raises (errors are counted in ``tx_errors``).
+    @property
+    def tx_errors(self) -> int:
+        """Frames the bus refused (:attr:`.Transmitter.tx_errors`)."""
+        return self.tx.tx_errors
 
-        A full transmit queue (SocketCAN's ENOBUFS with the default ``txqueuelen 10``, e.g. in
-        a 127-frame block-upload burst) is retried for up to 10 ms before the frame is dropped.
-        """
-        msg = can.Message(arbitration_id=cob_id, data=data, is_extended_id=False)
-        for attempt in range(21):
-            try:
-                with self._send_lock:
-                    self.bus.send(msg)
-                self.last_tx_ok = time.monotonic()
-                return
-            except (can.CanError, OSError) as exc:
-                full = getattr(exc, "errno", None) == errno.ENOBUFS or "No buffer space" in str(exc)
-                if full and attempt < 20:
-                    time.sleep(0.0005)
-                    continue
-                self.tx_errors += 1
-                if self.tx_errors < 10 or self.tx_errors % 1000 == 0:
-                    logger.warning("send 0x%03X failed: %s", cob_id, exc)
-                return
+    @property
+    def last_tx_ok(self) -> float:
+        """Monotonic time of the last frame the bus accepted."""
+        return self.tx.last_tx_ok
 
     # -- parameters -----------------------------------------------------------------------
-    def _flush_timed(self) -> None:
-        """End of a timed tick: the bus writes the TPDOs it held (one write per tick)."""
-        try:
-            with self._send_lock:
-                self.bus.flush()
-            self.last_tx_ok = time.monotonic()
-        except (can.CanError, OSError) as exc:
-            self.tx_errors += 1
-            if self.tx_errors < 10 or self.tx_errors % 1000 == 0:
-                logger.warning("send of the tick's frames failed: %s", exc)
-
     def _current_by_name(self, name: str) -> float | int:
         e = self.view.entry(name)
         return self.node.stored(e.index, e.subindex)
 
-    def _param(self, address: tuple[int, int]) -> Any:
-        """Present parameter value at ``address`` = ``(index, sub)`` (an :mod:`.od_addresses`
-        constant; cached, every write to the data store clears the cache)."""
-        try:
-            return self._pcache[address]
-        except KeyError:
-            value = self._pcache[address] = self.node.stored(*address)
-            return value
+    @property
+    def store_path(self) -> Path | None:
+        """The parameter file for 0x1010/0x1011 (None: store refused)."""
+        return self._store_path
 
-    def _value(self, index: int, sub: int = 0) -> Any:
-        """Present parameter value at ``index``/``sub`` (as :meth:`_param`)."""
-        key = (index, sub)
-        try:
-            return self._pcache[key]
-        except KeyError:
-            value = self._pcache[key] = self.node.stored(index, sub)
-            return value
-
-    def _load_parameters(self) -> None:
-        """Stored parameters (or defaults) into the data store and the simulator."""
-        parameters.load_parameters(self)
+    @property
+    def store_status(self) -> StoreStatus:
+        """0x2060 as the last parameter load found the store (:class:`.ParameterSet`)."""
+        return self.parameters.store_status
 
     def save_parameters(self) -> None:
         """0x1010 "save": persistent objects' present values to the store file (atomic)."""
-        parameters.save_parameters(self)
+        self.parameters.save()
 
     def restore_defaults(self) -> None:
         """0x1011 "load": defaults apply after the next reset node / restart."""
-        parameters.restore_defaults(self)
+        self.parameters.restore_defaults()
+
+    def _reset_communication(self) -> None:
+        """NMT reset communication (0x1016 kept where one controlword can enable the
+        motor: :meth:`.Communication.reset`)."""
+        self.comm.reset(keep_1016=self.cia402.can_reach_operation)
 
     # -- reads ----------------------------------------------------------------------------
     def statusword(self) -> int:
-        """0x6041 from the CiA 402 state and the live values (:mod:`.statusword`)."""
-        return statusword.statusword(self)
-
-    # -- writes ---------------------------------------------------------------------------
-    def _before_write(
-        self, index: int, sub: int, obj: odm.ODVariable, data: bytes
-    ) -> tuple[bool, Callable[[], None] | None]:
-        """Check a write and say whether to store it and what to do after storing
-        (:func:`.writes.before_write`: the table of write handlers). Raises SdoAbortedError to
-        refuse it (nothing changes)."""
-        return writes.before_write(self, index, sub, obj, data)
+        """0x6041 from the CiA 402 state and the live values (:class:`.StatusWord`)."""
+        return self.status.statusword(self.cia402, warning=bool(self.hb_consumer.lost))
 
     # -- 402 hooks ------------------------------------------------------------------------
     def _options(self) -> dict[str, int]:
         return {
-            "quick_stop": self._param(QUICK_STOP_OPTION),
-            "shutdown": self._param(SHUTDOWN_OPTION),
-            "disable_operation": self._param(DISABLE_OPERATION_OPTION),
-            "fault_reaction": self._param(FAULT_REACTION_OPTION),
+            "quick_stop": self.node.param(QUICK_STOP_OPTION),
+            "shutdown": self.node.param(SHUTDOWN_OPTION),
+            "disable_operation": self.node.param(DISABLE_OPERATION_OPTION),
+            "fault_reaction": self.node.param(FAULT_REACTION_OPTION),
         }
+
+    def reset_state_machine(self) -> None:
+        """Reset node: a fresh CiA 402 machine (SWITCH ON DISABLED)."""
+        self.cia402 = Cia402StateMachine(self._options, self._reset_fault)
+
+    def forget_trip(self) -> None:
+        """The simulator's trip was reset: a new one is acted on again."""
+        self._last_fault = None
 
     def _reset_fault(self) -> bool:
         # Called with the CiA 402 lock held: take no drive lock here (the pacing loop takes
@@ -405,7 +380,7 @@ class VirtualDrive:
         if self.sim.fault_persists():  # refused at once, as the DSP's next 20 µs sample would
             return False  # (a starved virtual drive otherwise showed SWITCH ON DISABLED first)
         self.sim.reset_fault()  # leaves the bridge off
-        self._sim_mode = "off"
+        self.ramps.bridge_off()
         self._last_fault = None
         self.emcy.clear_all()
         return True
@@ -417,9 +392,9 @@ class VirtualDrive:
     # -- the loop -------------------------------------------------------------------------
     def _step(self, n: int) -> None:
         """``n`` samples (runner thread). A stop ramp decides its brake current from the speed
-        once per chunk (:func:`ramps.ramp_step`), so while one runs the samples go in pieces of
-        at most :data:`RAMP_CHUNK` (1 ms) whatever the pacing period: a 10 ms tick (as in
-        User-Mode Linux) otherwise braked through zero to -27 rpm."""
+        once per chunk (:meth:`.SetpointRamps.ramp_step`), so while one runs the samples go in
+        pieces of at most :data:`RAMP_CHUNK` (1 ms) whatever the pacing period: a 10 ms tick
+        (as in User-Mode Linux) otherwise braked through zero to -27 rpm."""
         if self.cia402.ramp is None:
             self._step_chunk(n)
             return
@@ -438,7 +413,7 @@ class VirtualDrive:
         recorder = self.recorder
         need_rec = bool(self.taps) or recorder.state in (ARMED, RECORDING)
         with self.sim_lock:
-            ramps.prepare_chunk(self, n)
+            self.ramps.prepare_chunk(self.cia402, n)
             if need_rec:
                 rec = self.sim.run(n, record=True)
             else:  # the last values only, no dict built or copied
@@ -448,11 +423,11 @@ class VirtualDrive:
         if need_rec:
             for name in MEASUREMENTS.values():
                 live[name] = float(rec[name][-1])
-        statusword.update_windows(self)
+        self.status.update_windows(self.cia402)
         if fault is not None and fault != self._last_fault:
             self._on_trip(fault)
         if need_rec:
-            setpoint = "speed_ref" if self._mode == MODE_PROFILE_VELOCITY else "i_p_ref"
+            setpoint = "speed_ref" if self.ramps.mode == MODE_PROFILE_VELOCITY else "i_p_ref"
             recorder.feed(rec, setpoint=setpoint)
             for tap in self.taps:
                 tap(rec)
@@ -462,7 +437,7 @@ class VirtualDrive:
         are those of the instant ``at[j]`` samples in when ``at_point(j)`` runs (it sends the
         TPDOs due then), and the velocity windows and a trip are seen at those instants, as
         :meth:`_step_chunk` pieces ending there would see them. Returns False (nothing done)
-        while that cannot be: a setpoint ramps (:func:`ramps.ramping`: it moves every
+        while that cannot be: a setpoint ramps (:meth:`.SetpointRamps.ramping`: it moves every
         piece), the recorder or a tap needs the full-rate arrays, or the simulator has no
         ``run_points`` (or not for that many instants)."""
         run_points = getattr(self.sim, "run_points", None)
@@ -471,11 +446,11 @@ class VirtualDrive:
             or len(at) > getattr(self.sim, "MAX_POINTS", 0)
             or self.taps
             or self.recorder.state in (ARMED, RECORDING)
-            or ramps.ramping(self)
+            or self.ramps.ramping(self.cia402)
         ):
             return False
         with self.sim_lock:
-            ramps.prepare_chunk(self, n)
+            self.ramps.prepare_chunk(self.cia402, n)
             t0 = float(self.sim.time)
             rows = run_points(n, at)
             fault = self.sim.fault
@@ -484,21 +459,22 @@ class VirtualDrive:
         live = self.live
         # the velocity window / threshold timers only show in profile velocity (bits 10, 12):
         # in the other modes they follow at the end of the tick
-        windows = self._mode == MODE_PROFILE_VELOCITY
+        windows = self.ramps.mode == MODE_PROFILE_VELOCITY
+        status = self.status
         try:
             for j, k in enumerate(at):
-                t = self._t_point = t0 + min(k, n) * TS
+                t = status.t_point = t0 + min(k, n) * TS
                 if fault is not None and t > fault.t:
                     self._on_trip(fault)  # from its own sample on, as a 1-sample piece would
                     fault = None
                 live.update(zip(SIGNALS, rows[j], strict=True))
                 if windows:
-                    statusword.update_windows(self)
+                    self.status.update_windows(self.cia402)
                 at_point(j)
         finally:
-            self._t_point = None
+            status.t_point = None
         live.update(zip(SIGNALS, rows[-1], strict=True))
-        statusword.update_windows(self)
+        self.status.update_windows(self.cia402)
         if fault is not None:
             self._on_trip(fault)
         return True
@@ -518,10 +494,10 @@ class VirtualDrive:
             self.emcy.raise_error(int(fault.code))
             self.cia402.fault(int(fault.code), tripped=True)
         with self.sim_lock:
-            ramps.set_sim_mode(self, "off")
+            self.ramps.set_sim_mode("off")
 
     def _periodic(self, now: float) -> None:
-        if self._reset_deferred_at is not None:
-            resets.finish_deferred_reset(self)
+        if self.resets.deferred_at is not None:
+            self.resets.finish_deferred_reset()
         self.hb_consumer.tick(now)
         self.hb_producer.tick(now)

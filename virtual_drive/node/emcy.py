@@ -26,8 +26,15 @@ from firmware_protocol.emcy_codes import (  # the codes of OD.md / the C header
     RPDO_LENGTH,
     RPDO_VALUE,
 )
+from firmware_protocol.od import load_od
 
-from .od_addresses import ERROR_HISTORY_FIELDS
+_OD = load_od()  # where the objects are: the EDS, through firmware_protocol's view
+ERROR_HISTORY_INDEX = _OD.index_of("pre_defined_error_field")
+#: the standard error fields, newest first (sub 1, 2, ...)
+ERROR_HISTORY_FIELDS: tuple[tuple[int, int], ...] = tuple(
+    (ERROR_HISTORY_INDEX, sub) for sub in sorted(_OD.sub_names("pre_defined_error_field"))
+)
+
 
 __all__ = [
     "DATA_SET_LOST",

@@ -249,6 +249,12 @@ class HubBus(can.BusABC):
                 self._sock.sendall(b"".join(lines))
         return len(lines)
 
+    def send_lines(self, data: bytes) -> None:
+        """Write already formatted socketcand elements (one ``sendall``, under the send
+        lock): a :class:`HubConnection` sends its nodes' frames through it."""
+        with self._send_lock:
+            self._sock.sendall(data)
+
     def flush(self) -> None:
         """Write the frames held by :meth:`send_many` (``at`` given) in one ``sendall``."""
         if self._held:
@@ -451,16 +457,18 @@ class HubConnection:
                 held.sort(key=_first)
             data = b"".join([b"".join(lines) for _, lines in held])
             try:
-                with self._bus._send_lock:
-                    self._bus._sock.sendall(data)
+                self._bus.send_lines(data)
             except OSError as exc:  # reported once; lost() says why
                 if self._broken is None:
                     self._broken = f"socketcand connection failed: {exc}"
                     logger.warning("hub connection: %s", exc)
 
-    def _send_from(
+    def send_from(
         self, src: HubPort, frames: list[tuple[int, bytes, bool]], at: float | None = None
     ) -> None:
+        """Frames ``(cob_id, data, extended)`` port ``src`` sends (due at ``at``, monotonic s):
+        to the server (held for :meth:`flush` on the batching thread) and to the sibling
+        ports that want them."""
         if at is not None and self._bus.timed_sends:
             head = _sendat_head(at)
             lines = [head + _sendat_tail(cob_id, data, ext) for cob_id, data, ext in frames]
@@ -469,8 +477,7 @@ class HubConnection:
         if threading.get_ident() == self._batch_ident:
             self._held.append((time.monotonic() if at is None else at, lines))
         else:
-            with self._bus._send_lock:
-                self._bus._sock.sendall(b"".join(lines))
+            self._bus.send_lines(b"".join(lines))
         ports = self._ports
         if len(ports) > 1:  # local delivery: the other nodes of this process see them too
             stamp = time.time() if at is None else at + _WALL_OFFSET
@@ -488,7 +495,7 @@ class HubConnection:
                             is_rx=True,
                             channel=self.channel,
                         )
-                        p._deliver(msg)
+                        p.deliver(msg)
 
     def _read(self) -> None:
         bus = self._bus
@@ -511,13 +518,19 @@ class HubConnection:
                     or msg.is_error_frame
                     or msg.is_remote_frame
                 ):
-                    p._deliver(msg)
+                    p.deliver(msg)
+
+    @property
+    def timed_sends(self) -> bool:
+        """The server takes ``< sendat >`` (see :meth:`HubBus.send_many`)."""
+        return self._bus.timed_sends
 
     def lost(self) -> str | None:
         """Why the shared connection is gone, or None (as :meth:`HubBus.lost`)."""
         return self._bus.lost() or self._broken
 
-    def _detach(self, p: HubPort) -> None:
+    def detach(self, p: HubPort) -> None:
+        """Port ``p`` shut down: the connection closes with its last port."""
         with self._lock:
             self._ports = [q for q in self._ports if q is not p]
             last = not self._ports
@@ -544,7 +557,8 @@ class HubPort(can.BusABC):
         self.channel_info = conn.channel_info
         super().__init__(channel=conn.channel)
 
-    def _deliver(self, msg: can.Message) -> None:
+    def deliver(self, msg: can.Message) -> None:
+        """A frame for this node (from the server or a sibling port on the connection)."""
         with self._ready:
             self._queue.append(msg)
             self._ready.notify()
@@ -558,12 +572,12 @@ class HubPort(can.BusABC):
         return None, False
 
     def send(self, msg: can.Message, timeout: float | None = None) -> None:
-        self._conn._send_from(self, [(msg.arbitration_id, bytes(msg.data), msg.is_extended_id)])
+        self._conn.send_from(self, [(msg.arbitration_id, bytes(msg.data), msg.is_extended_id)])
 
     @property
     def timed_sends(self) -> bool:
         """The server takes ``< sendat >`` (see :meth:`HubBus.send_many`)."""
-        return self._conn._bus.timed_sends
+        return self._conn.timed_sends
 
     def flush(self) -> None:
         """Nothing: frames are sent at once, or held by the connection for the pacer's
@@ -572,7 +586,7 @@ class HubPort(can.BusABC):
     def send_many(self, frames: Iterable[tuple[int, bytes]], at: float | None = None) -> int:
         batch = [(cob_id, data, False) for cob_id, data in frames]
         if batch:
-            self._conn._send_from(self, batch, at)
+            self._conn.send_from(self, batch, at)
         return len(batch)
 
     def lost(self) -> str | None:
@@ -580,4 +594,4 @@ class HubPort(can.BusABC):
 
     def shutdown(self) -> None:
         super().shutdown()
-        self._conn._detach(self)
+        self._conn.detach(self)

@@ -39,7 +39,11 @@ from typing import Any
 
 import can
 
-from .od_addresses import IDENTITY_INDEX
+from firmware_protocol.od import load_od
+
+_OD = load_od()  # where the objects are: the EDS, through firmware_protocol's view
+IDENTITY_INDEX = _OD.index_of("identity")
+
 
 __all__ = ["BIT_TIMING_TABLE", "LSS_RX", "LSS_TX", "UNCONFIGURED", "LssSlave"]
 

@@ -49,18 +49,30 @@ from firmware_protocol.cob_id import CAN_ID_MASK, COB_BIT30, COB_INVALID, check_
 from firmware_protocol.emcy_codes import RPDO_LENGTH, RPDO_VALUE
 from firmware_protocol.entry import LimitError
 from firmware_protocol.index_ranges import RPDO_COMM, RPDO_MAP, TPDO_COMM, TPDO_MAP
+from firmware_protocol.od import load_od
 
 from .nmt import OPERATIONAL
-from .od_addresses import (
-    N_RPDO,
-    N_TPDO,
-    PDO_COB_ID_SUB,
-    PDO_EVENT_TIMER_SUB,
-    PDO_INHIBIT_TIME_SUB,
-    PDO_MAPPED_COUNT_SUB,
-    PDO_MAX_MAPPED,
-    PDO_TRANSMISSION_TYPE_SUB,
-)
+
+_OD = load_od()  # where the objects are: the EDS, through firmware_protocol's view
+N_RPDO = int(_OD.device_info["NrOfRXPDO"])
+N_TPDO = int(_OD.device_info["NrOfTXPDO"])
+PDO_COB_ID_SUB = _OD.address("tpdo1_communication.cob_id")[1]
+PDO_TRANSMISSION_TYPE_SUB = _OD.address("tpdo1_communication.transmission_type")[1]
+PDO_INHIBIT_TIME_SUB = _OD.address("tpdo1_communication.inhibit_time")[1]
+PDO_EVENT_TIMER_SUB = _OD.address("tpdo1_communication.event_timer")[1]
+PDO_MAPPED_COUNT_SUB = _OD.address("tpdo1_mapping.number_of_mapped_objects")[1]
+PDO_MAX_MAPPED = len(_OD.sub_names("tpdo1_mapping"))
+"""Mapping entries a PDO has (sub 1..8)."""
+for _kind, _n in (("rpdo", N_RPDO), ("tpdo", N_TPDO)):  # every PDO: the same sub-indices
+    for _k in range(1, _n + 1):
+        if (
+            _OD.address(f"{_kind}{_k}_communication.cob_id")[1] != PDO_COB_ID_SUB
+            or _OD.address(f"{_kind}{_k}_communication.transmission_type")[1]
+            != PDO_TRANSMISSION_TYPE_SUB
+            or _OD.address(f"{_kind}{_k}_communication.inhibit_time")[1] != PDO_INHIBIT_TIME_SUB
+            or len(_OD.sub_names(f"{_kind}{_k}_mapping")) != PDO_MAX_MAPPED
+        ):
+            raise ValueError(f"{_kind.upper()}{_k}'s parameters are laid out unlike TPDO1's")
 
 __all__ = ["PDO_INVALID", "PdoEngine", "is_pdo_config"]
 
@@ -198,7 +210,7 @@ class PdoEngine:
 
     # -- helpers --------------------------------------------------------------------------
     def _u(self, index: int, sub: int) -> int:
-        obj = self.node._find_object(index, sub)
+        obj = self.node.find_object(index, sub)
         return obj.decode_raw(self.node.get_data(index, sub))
 
     def _mapped(self, map_index: int) -> list[tuple[int, int, int]]:
@@ -237,7 +249,7 @@ class PdoEngine:
             fmt = "<"
             getters = []
             for index, sub, _bits in self._mapped(TPDO_MAP + k):
-                obj = self.node._find_object(index, sub)
+                obj = self.node.find_object(index, sub)
                 fmt += _FMT[obj.data_type]
                 getters.append(self._getter(index, sub, obj))
             event_ms = self._u(TPDO_COMM + k, PDO_EVENT_TIMER_SUB)
@@ -313,7 +325,7 @@ class PdoEngine:
         for s in range(1, value + 1):
             entry = self._u(index, s)
             m_index, m_sub, bits = (entry >> 16) & 0xFFFF, (entry >> 8) & 0xFF, entry & 0xFF
-            obj = self.node._find_object(m_index, m_sub)  # 0x06020000 / 0x06090011
+            obj = self.node.find_object(m_index, m_sub)  # 0x06020000 / 0x06090011
             if not obj.pdo_mappable or len(obj) != bits or obj.data_type not in _FMT:
                 raise SdoAbortedError(ABORT_CANNOT_MAP)
             if (receive and not obj.writable) or (not receive and not obj.readable):

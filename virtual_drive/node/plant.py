@@ -11,15 +11,16 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from .od_addresses import (
-    CURRENT_CONTROLLER_INDEX,
-    MOTOR_INDEX,
-    PROTECTION_INDEX,
-    SIM_INVERTER_INDEX,
-    SIM_LOAD_INDEX,
-    SPEED_CONTROLLER_INDEX,
-    sub_names,
-)
+from firmware_protocol.od import load_od
+
+_OD = load_od()  # where the objects are: the EDS, through firmware_protocol's view
+MOTOR_INDEX = _OD.index_of("motor")
+CURRENT_CONTROLLER_INDEX = _OD.index_of("current_controller")
+SPEED_CONTROLLER_INDEX = _OD.index_of("speed_controller")
+PROTECTION_INDEX = _OD.index_of("protection")
+SIM_LOAD_INDEX = _OD.index_of("sim_load")
+SIM_INVERTER_INDEX = _OD.index_of("sim_inverter")
+
 
 __all__ = [
     "CURRENT_KW",
@@ -36,16 +37,16 @@ __all__ = [
 
 # {sub: keyword} of each record: the EDS names the sub-objects after the simulator's keywords
 # (docs/contracts.md §1/§2), so the maps are read from it
-CURRENT_KW = sub_names("current_controller")
-SPEED_KW = sub_names("speed_controller")
-MOTOR_KW = sub_names("motor")
-PROTECTION_KW = sub_names("protection")
-LOAD_KW = sub_names("sim_load")
-INVERTER_KW = sub_names("sim_inverter")
+CURRENT_KW = _OD.sub_names("current_controller")
+SPEED_KW = _OD.sub_names("speed_controller")
+MOTOR_KW = _OD.sub_names("motor")
+PROTECTION_KW = _OD.sub_names("protection")
+LOAD_KW = _OD.sub_names("sim_load")
+INVERTER_KW = _OD.sub_names("sim_inverter")
 #: staged speed gains: gain_set sub -> set_speed_gains keyword (``speed_k_p`` -> ``k_p``)
 GAIN_SET_SPEED_KW = {
     sub: name.removeprefix("speed_")
-    for sub, name in sub_names("gain_set").items()
+    for sub, name in _OD.sub_names("gain_set").items()
     if name.startswith("speed_")
 }
 

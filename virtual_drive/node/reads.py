@@ -10,58 +10,67 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-from .od_addresses import (
-    CURRENT_ACTUAL_VALUE,
-    DC_LINK_VOLTAGE,
-    ERROR_CODE,
-    ERROR_HISTORY_COUNT,
-    ERROR_HISTORY_FIELDS,
-    ERROR_REGISTER,
-    MEASUREMENTS_INDEX,
-    MODES_OF_OPERATION_DISPLAY,
-    MOTOR_RATED_CURRENT,
-    MOTOR_RATED_TORQUE,
-    SIM_INFO_SPEED_FACTOR,
-    SIM_INFO_TIME,
-    STATUSWORD,
-    STORE_STATUS,
-    TORQUE_ACTUAL_VALUE,
-    TPDO_MISSED_EVENTS,
-    TRACE_CAPACITY,
-    TRACE_DATA,
-    TRACE_PRE_TRIGGER_FILLED,
-    TRACE_STATE,
-    TRACE_TRIGGER_POSITION,
-    VELOCITY_ACTUAL_VALUE,
-)
+from firmware_protocol.od import load_od
+
 from .od_maps import MEASUREMENTS
+from .parts import DriveParts
 
-if TYPE_CHECKING:
-    from .drive_node import VirtualDrive
+_OD = load_od()  # where the objects are: the EDS, through firmware_protocol's view
+ERROR_REGISTER = _OD.address("error_register")
+ERROR_HISTORY_INDEX = _OD.index_of("pre_defined_error_field")
+ERROR_HISTORY_COUNT = _OD.address("pre_defined_error_field.number_of_errors")
+#: the standard error fields, newest first (sub 1, 2, ...)
+ERROR_HISTORY_FIELDS: tuple[tuple[int, int], ...] = tuple(
+    (ERROR_HISTORY_INDEX, sub) for sub in sorted(_OD.sub_names("pre_defined_error_field"))
+)
+MEASUREMENTS_INDEX = _OD.index_of("measurements")
+STORE_STATUS = _OD.address("store_status")
+#: missed event periods of TPDO 1, 2, ... (sub 1, 2, ...)
+TPDO_MISSED_EVENTS: tuple[tuple[int, int], ...] = tuple(
+    _OD.address(f"tpdo_missed_events.{name}")
+    for _sub, name in sorted(_OD.sub_names("tpdo_missed_events").items())
+)
+TRACE_STATE = _OD.address("trace_config.state")
+TRACE_TRIGGER_POSITION = _OD.address("trace_config.trigger_position")
+TRACE_CAPACITY = _OD.address("trace_config.capacity")
+TRACE_PRE_TRIGGER_FILLED = _OD.address("trace_config.pre_trigger_filled")
+TRACE_DATA = _OD.address("trace_data")
+SIM_INFO_TIME = _OD.address("sim_info.sim_time")
+SIM_INFO_SPEED_FACTOR = _OD.address("sim_info.speed_factor")
+ERROR_CODE = _OD.address("error_code")
+STATUSWORD = _OD.address("statusword")
+MODES_OF_OPERATION_DISPLAY = _OD.address("modes_of_operation_display")
+VELOCITY_ACTUAL_VALUE = _OD.address("velocity_actual_value")
+MOTOR_RATED_CURRENT = _OD.address("motor_rated_current")
+MOTOR_RATED_TORQUE = _OD.address("motor_rated_torque")
+TORQUE_ACTUAL_VALUE = _OD.address("torque_actual_value")
+CURRENT_ACTUAL_VALUE = _OD.address("current_actual_value")
+DC_LINK_VOLTAGE = _OD.address("dc_link_circuit_voltage")
 
 __all__ = ["clamp_int", "make_live_getters"]
 
 
-def make_live_getters(d: VirtualDrive) -> dict[tuple[int, int], Callable[[], Any]]:
+def make_live_getters(d: DriveParts) -> dict[tuple[int, int], Callable[[], Any]]:
     """The live objects of drive ``d``: CiA 301 error objects, CiA 402 actual values (0x6041,
     0x6061, 0x606C rpm, 0x6077/0x6078 per mille of rated, 0x6079 mV), 0x2040 measurements, the
     recorder's read-only objects and the simulator's clock."""
     live = d.live
+    param = d.node.param
     g: dict[tuple[int, int], Callable[[], Any]] = {
         ERROR_REGISTER: lambda: d.emcy.error_register,
-        STORE_STATUS: lambda: int(d.store_status),
+        STORE_STATUS: lambda: int(d.parameters.store_status),
         ERROR_HISTORY_COUNT: lambda: len(d.emcy.history),
         ERROR_CODE: lambda: d.emcy.last_code,
         STATUSWORD: d.statusword,
-        MODES_OF_OPERATION_DISPLAY: lambda: d._mode,
+        MODES_OF_OPERATION_DISPLAY: lambda: d.ramps.mode,
         VELOCITY_ACTUAL_VALUE: lambda: clamp_int(live["speed"], 32),
         TORQUE_ACTUAL_VALUE: lambda: clamp_int(
-            live["T_e"] / (d._param(MOTOR_RATED_TORQUE) / 1000.0) * 1000.0, 16
+            live["T_e"] / (param(MOTOR_RATED_TORQUE) / 1000.0) * 1000.0, 16
         ),
         CURRENT_ACTUAL_VALUE: lambda: clamp_int(
-            live["i_p"] / (d._param(MOTOR_RATED_CURRENT) / 1000.0) * 1000.0, 16
+            live["i_p"] / (param(MOTOR_RATED_CURRENT) / 1000.0) * 1000.0, 16
         ),
         DC_LINK_VOLTAGE: lambda: max(0, round(live["V_dc"] * 1000.0)),
         TRACE_STATE: lambda: d.recorder.state,

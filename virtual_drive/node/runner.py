@@ -112,18 +112,19 @@ class Runner:
         self.error: BaseException | None = None
         self._pacer = pacer
         self._own_pacer = pacer is None
-        self._active = False
+        #: ticked by its pacer (False before start, after stop or a failure)
+        self.active = False
         self._t0 = 0.0
         self._done = 0
         self._max_n = 1
         self._chunk_n = 1
-        self._timer_due = 0.0  #: monotonic time the timer wants to run next
+        self.timer_due = 0.0  #: monotonic time the timer wants to run next
         #: held while a tick runs the simulation (the pacer's, or :meth:`catch_up`'s)
         self._tick_lock = threading.Lock()
 
     # -- lifecycle ------------------------------------------------------------------------
     def start(self) -> None:
-        if self._active:
+        if self.active:
             return
         if self._pacer is None:
             self._pacer = Pacer(self.period)
@@ -136,22 +137,22 @@ class Runner:
         self._chunk_n = max(
             round(self.max_chunk / TS), math.ceil(4 * self._pacer.period * self.speed / TS)
         )
-        self._timer_due = self._t0 if self.timer_at is not None else 0.0
-        self._active = True
+        self.timer_due = self._t0 if self.timer_at is not None else 0.0
+        self.active = True
         self._pacer.add(self)
         self._pacer.start()
 
     def stop(self, timeout: float = 5.0) -> None:
         if self._pacer is None:
             return
-        self._active = False
+        self.active = False
         self._pacer.remove(self, timeout)
         if self._own_pacer:
             self._pacer.stop(timeout)
 
     @property
     def running(self) -> bool:
-        return self._active and self._pacer is not None and self._pacer.running
+        return self.active and self._pacer is not None and self._pacer.running
 
     def align(self, t: float) -> float:
         """The first tick of this runner's pacer at or after ``t`` (monotonic s); ``t`` itself
@@ -169,21 +170,21 @@ class Runner:
         gives up after ``timeout`` s when a tick is running (a busy host): the value is then
         the one the running tick leaves. Returns True when it ran."""
         pacer = self._pacer
-        if not self._active or pacer is None or threading.get_ident() == pacer.thread_ident:
+        if not self.active or pacer is None or threading.get_ident() == pacer.thread_ident:
             return False
         if not self._tick_lock.acquire(timeout=timeout):
             return False
         try:
-            if self._active:
+            if self.active:
                 self._run_sim(time.monotonic())
         except Exception as exc:  # as on the pacer: the runner stops and says why
-            self._fail(exc)
+            self.fail(exc)
         finally:
             self._tick_lock.release()
         return True
 
     # -- one tick (pacer thread) ----------------------------------------------------------
-    def _tick(self, now: float) -> None:
+    def tick(self, now: float) -> None:
         with self._tick_lock:
             self._run_sim(now)
             self._periodic(time.monotonic())
@@ -230,7 +231,7 @@ class Runner:
         # the whole tick in one simulator call, the timer run at each due point; else in pieces
         if behind or self._step_timed is None or not self._run_points(end, now):
             while not behind:
-                due = self._timer_due
+                due = self.timer_due
                 if due > now:
                     break
                 k = math.ceil((due - t0) * scale - 1e-9)  # the sample that reaches `due`
@@ -263,10 +264,10 @@ class Runner:
 
         def at_point(j: int) -> None:  # (_run_timer_at inlined: this runs at every due point)
             try:
-                self._timer_due = timer_at(dues[j])  # type: ignore[misc]
+                self.timer_due = timer_at(dues[j])  # type: ignore[misc]
             except Exception:  # the timer never dies: log, retry in 10 ms
                 logger.exception("pacer timer")
-                self._timer_due = now + 0.01
+                self.timer_due = now + 0.01
 
         if not self._step_timed(end - done, at, at_point):  # type: ignore[misc]
             return False
@@ -292,24 +293,42 @@ class Runner:
 
     def _run_timer_at(self, at: float, now: float) -> None:
         try:
-            self._timer_due = self.timer_at(at)  # type: ignore[misc]
+            self.timer_due = self.timer_at(at)  # type: ignore[misc]
         except Exception:  # the timer never dies: log, retry in 10 ms
             logger.exception("pacer timer")
-            self._timer_due = now + 0.01
+            self.timer_due = now + 0.01
 
-    def _behind(self, now: float) -> bool:
+    def behind(self, now: float) -> bool:
         """More than one chunk of backlog (catch-up: no sleeping)."""
         return (now - self._t0) * self.speed / TS - self._done > self._chunk_n
 
-    def _service_timer(self, now: float) -> float:
-        """Run the timer (it sends what is due); returns when it is due next (monotonic s)."""
+    def service_timer(self, now: float) -> float:
+        """Run the timer (it sends what is due); returns when it is due next (monotonic s).
+        The timer never dies: an error is logged and it is retried in 10 ms."""
         if self.timer is None:
             return math.inf
-        return time.monotonic() + self.timer(now)
+        try:
+            self.timer_due = time.monotonic() + self.timer(now)  # type: ignore[misc]
+        except Exception:
+            logger.exception("pacer timer")
+            self.timer_due = now + 0.01
+        return self.timer_due
 
-    def _fail(self, exc: BaseException) -> None:
+    def join_pacer(self, pacer: Pacer) -> None:
+        """Run on ``pacer`` (shared with other runners) from :meth:`start` on."""
+        if self.active:
+            raise RuntimeError("adopt a runner before it starts")
+        self._pacer = pacer
+        self._own_pacer = False
+
+    @property
+    def pacer(self) -> Pacer | None:
+        """The pacer this runner runs on (None before :meth:`start` without a shared one)."""
+        return self._pacer
+
+    def fail(self, exc: BaseException) -> None:
         self.error = exc
-        self._active = False
+        self.active = False
         logger.exception("pacing loop stopped")
 
 
@@ -335,10 +354,7 @@ class Pacer:
 
     def adopt(self, runner: Runner) -> Runner:
         """Let ``runner`` (not started yet) run on this pacer when it starts."""
-        if runner._active:
-            raise RuntimeError("adopt a runner before it starts")
-        runner._pacer = self
-        runner._own_pacer = False
+        runner.join_pacer(self)
         return runner
 
     def add(self, runner: Runner) -> None:
@@ -411,24 +427,21 @@ class Pacer:
             # frames due now go first (with the values of the last chunk): a frame due on
             # its exact time (inhibit) never waits for a simulation chunk
             for r in runners:
-                if r._active and r.timer is not None and now >= r._timer_due:
+                if r.active and r.timer is not None and now >= r.timer_due:
                     if r.timer_at is None:  # (timed runners run theirs inside the chunk)
-                        wake = min(wake, self._service(r, now))
+                        wake = min(wake, r.service_timer(now))
             if self.flush_hooks:
                 self._flush()
             if now >= next_tick:
                 behind = False
                 for r in runners:
-                    if not r._active:
+                    if not r.active:
                         continue
                     try:
-                        r._tick(now)
-                        # (Runner._behind inlined: more than one chunk of backlog)
-                        behind = behind or (
-                            (time.monotonic() - r._t0) * r.speed / TS - r._done > r._chunk_n
-                        )
+                        r.tick(now)
+                        behind = behind or r.behind(time.monotonic())
                     except BaseException as exc:
-                        r._fail(exc)
+                        r.fail(exc)
                 self._k += 1
                 if not behind:
                     next_tick += period
@@ -441,23 +454,14 @@ class Pacer:
                 now = time.monotonic()
                 wake = math.inf
                 for r in runners:
-                    if r._active and r.timer is not None and r.timer_at is None:
-                        wake = min(wake, self._service(r, now))
+                    if r.active and r.timer is not None and r.timer_at is None:
+                        wake = min(wake, r.service_timer(now))
             else:
                 for r in runners:
-                    if r._active and r.timer is not None and r.timer_at is None:
-                        wake = min(wake, r._timer_due)
+                    if r.active and r.timer is not None and r.timer_at is None:
+                        wake = min(wake, r.timer_due)
             if self.flush_hooks:
                 self._flush()
             delay = min(wake, next_tick) - time.monotonic()
             if delay > 0:
                 self._stop.wait(delay) if delay > 0.02 else time.sleep(delay)
-
-    @staticmethod
-    def _service(r: Runner, now: float) -> float:
-        try:  # (Runner._service_timer inlined: this runs twice per tick)
-            r._timer_due = time.monotonic() + r.timer(now)  # type: ignore[misc]
-        except Exception:  # the timer never dies: log, retry in 10 ms
-            logger.exception("pacer timer")
-            r._timer_due = now + 0.01
-        return r._timer_due

@@ -333,7 +333,7 @@ class BlockSdoServer(SdoServer):
             self._node.set_data(index, subindex, req[4 : 4 + size], check_writable=True)
             self.send_response(resp)
             return
-        obj = self._node._find_object(index, subindex)
+        obj = self._node.find_object(index, subindex)
         if not obj.writable:
             raise SdoAbortedError(ABORT_READ_ONLY)
         if command & 0x01:
@@ -465,7 +465,7 @@ class BlockSdoServer(SdoServer):
         if cs != _CS_INITIATE:
             raise self._no_transfer()
         index, subindex = self._begin(req)
-        obj = self._node._find_object(index, subindex)
+        obj = self._node.find_object(index, subindex)
         if not obj.writable:
             raise SdoAbortedError(ABORT_READ_ONLY)
         if req[0] & BLOCK_SIZE_SPECIFIED:

@@ -20,7 +20,7 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable, Mapping
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from canopen import objectdictionary as odm
 from canopen.sdo import SdoAbortedError
@@ -29,41 +29,45 @@ from firmware_protocol import abort_codes
 from firmware_protocol.cia402 import OPERATION_ENABLED
 from firmware_protocol.cob_id import check_cob_id, check_heartbeat_consumers, check_sync_cob_id
 from firmware_protocol.entry import LimitError
+from firmware_protocol.od import load_od
 
-from . import communication, gain_sets, parameters, plant, storage
-from .od_addresses import (
-    COB_ID_EMCY,
-    COB_ID_EMCY_INDEX,
-    COB_ID_SYNC_INDEX,
-    CONSUMER_HEARTBEAT_INDEX,
-    CONTROLWORD_INDEX,
-    ERROR_HISTORY_INDEX,
-    GAIN_SET_APPLY_INDEX,
-    MAX_CURRENT_INDEX,
-    MODES_OF_OPERATION_INDEX,
-    MOTOR_RATED_CURRENT_INDEX,
-    PRODUCER_HEARTBEAT_INDEX,
-    RESTORE_DEFAULTS_INDEX,
-    SDO_SERVER_2_INDEX,
-    SDO_SERVER_2_RX,
-    SDO_SERVER_2_TX,
-    SIM_FAULT_INDEX,
-    SIM_FAULT_INJECT_SUB,
-    SIM_FAULT_SUPPLY_SUB,
-    SIM_INFO_INDEX,
-    SIM_INFO_MODEL_SUB,
-    SPEED_CONTROLLER_INDEX,
-    SPEED_CURRENT_LIMIT_SUB,
-    STORE_PARAMETERS_INDEX,
-    TRACE_CHANNELS_INDEX,
-    TRACE_CONFIG_INDEX,
-)
+from . import plant, storage
 from .od_maps import SUPPORTED_MODES
+from .parts import DriveParts
 from .pdo import is_pdo_config
-from .trace_config import check_trace_channel, trace_config_write
 
-if TYPE_CHECKING:
-    from .drive_node import VirtualDrive
+_OD = load_od()  # where the objects are: the EDS, through firmware_protocol's view
+ERROR_HISTORY_INDEX = _OD.index_of("pre_defined_error_field")
+STORE_PARAMETERS_INDEX = _OD.index_of("store_parameters")
+RESTORE_DEFAULTS_INDEX = _OD.index_of("restore_default_parameters")
+COB_ID_EMCY = _OD.address("cob_id_emcy")
+COB_ID_EMCY_INDEX = COB_ID_EMCY[0]
+COB_ID_SYNC = _OD.address("cob_id_sync")
+COB_ID_SYNC_INDEX = COB_ID_SYNC[0]
+CONSUMER_HEARTBEAT_INDEX = _OD.index_of("consumer_heartbeat_time")
+PRODUCER_HEARTBEAT = _OD.address("producer_heartbeat_time")
+PRODUCER_HEARTBEAT_INDEX = PRODUCER_HEARTBEAT[0]
+SDO_SERVER_2_INDEX = _OD.index_of("sdo_server_2")
+SDO_SERVER_2_RX = _OD.address("sdo_server_2.cob_id_client_to_server")
+SDO_SERVER_2_TX = _OD.address("sdo_server_2.cob_id_server_to_client")
+SPEED_CONTROLLER_INDEX = _OD.index_of("speed_controller")
+SPEED_CURRENT_LIMIT = _OD.address("speed_controller.current_limit")
+SPEED_CURRENT_LIMIT_SUB = SPEED_CURRENT_LIMIT[1]
+GAIN_SET_APPLY = _OD.address("gain_set_apply")
+GAIN_SET_APPLY_INDEX = GAIN_SET_APPLY[0]
+TRACE_CONFIG_INDEX = _OD.index_of("trace_config")
+TRACE_CHANNELS_INDEX = _OD.index_of("trace_channels")
+SIM_FAULT_INDEX = _OD.index_of("sim_fault")
+SIM_FAULT_INJECT_SUB = _OD.address("sim_fault.inject")[1]
+SIM_FAULT_SUPPLY_SUB = _OD.address("sim_fault.V_dc_supply")[1]
+SIM_INFO_INDEX = _OD.index_of("sim_info")
+SIM_INFO_MODEL_SUB = _OD.address("sim_info.model")[1]
+CONTROLWORD_INDEX = _OD.index_of("controlword")
+MODES_OF_OPERATION_INDEX = _OD.index_of("modes_of_operation")
+MAX_CURRENT = _OD.address("max_current")
+MAX_CURRENT_INDEX = MAX_CURRENT[0]
+MOTOR_RATED_CURRENT = _OD.address("motor_rated_current")
+MOTOR_RATED_CURRENT_INDEX = MOTOR_RATED_CURRENT[0]
 
 __all__ = ["COMMANDS", "HANDLERS", "PRE_CHECKS", "Handler", "WriteResult", "before_write"]
 
@@ -71,12 +75,12 @@ logger = logging.getLogger(__name__)
 
 WriteResult = tuple[bool, Callable[[], None] | None]
 """(store the written bytes?, follow-up to run once they are stored)."""
-Handler = Callable[["VirtualDrive", int, Any], WriteResult]
+Handler = Callable[[DriveParts, int, Any], WriteResult]
 """``handler(drive, sub, value)``; raises SdoAbortedError to refuse the write."""
 
 
 def before_write(
-    d: VirtualDrive, index: int, sub: int, obj: odm.ODVariable, data: bytes
+    d: DriveParts, index: int, sub: int, obj: odm.ODVariable, data: bytes
 ) -> WriteResult:
     """Check a write of ``data`` to ``index:sub`` and say whether to store it and what to do
     after storing. Raises SdoAbortedError to refuse it (nothing changes)."""
@@ -102,33 +106,33 @@ def before_write(
 
 
 # -- commands (never stored) ------------------------------------------------------------------
-def _clear_error_history(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+def _clear_error_history(d: DriveParts, sub: int, value: Any) -> WriteResult:
     """0x1003: only sub 0 := 0 (clear the pre-defined error field), CiA 301."""
     if sub != 0 or value != 0:
         raise SdoAbortedError(abort_codes.INVALID_VALUE)
     return False, d.emcy.clear_history
 
 
-def _store_parameters(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+def _store_parameters(d: DriveParts, sub: int, value: Any) -> WriteResult:
     """0x1010: "save" stores the persistent objects."""
     if value != storage.SAVE_SIGNATURE:
         raise SdoAbortedError(abort_codes.STORE)
-    parameters.save_parameters(d)
+    d.parameters.save()
     return False, None
 
 
-def _restore_defaults(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+def _restore_defaults(d: DriveParts, sub: int, value: Any) -> WriteResult:
     """0x1011: "load" restores the defaults (after the next reset)."""
     if value != storage.LOAD_SIGNATURE:
         raise SdoAbortedError(abort_codes.STORE)
-    parameters.restore_defaults(d)
+    d.parameters.restore_defaults()
     return False, None
 
 
-def _apply_gain_set(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+def _apply_gain_set(d: DriveParts, sub: int, value: Any) -> WriteResult:
     """0x20F1: apply the staged gain set 0x20F0 (1 current, 2 speed, 3 both)."""
     d.checker.check(GAIN_SET_APPLY_INDEX, sub, value)
-    gain_sets.apply_gain_set(d, int(value))
+    d.gains.apply_gain_set(int(value))
     return False, None
 
 
@@ -142,7 +146,7 @@ COMMANDS: Mapping[int, Handler] = {
 
 
 # -- checks before the EDS check ------------------------------------------------------------
-def _check_mode(d: VirtualDrive, sub: int, value: Any) -> None:
+def _check_mode(d: DriveParts, sub: int, value: Any) -> None:
     """0x6060: not while OPERATION ENABLED (0x08000022); a supported mode (0x06090030)."""
     if d.cia402.state == OPERATION_ENABLED:
         raise SdoAbortedError(abort_codes.DEVICE_STATE)
@@ -150,7 +154,7 @@ def _check_mode(d: VirtualDrive, sub: int, value: Any) -> None:
         raise SdoAbortedError(abort_codes.INVALID_VALUE)
 
 
-PRE_CHECKS: Mapping[int, Callable[[VirtualDrive, int, Any], None]] = {
+PRE_CHECKS: Mapping[int, Callable[[DriveParts, int, Any], None]] = {
     MODES_OF_OPERATION_INDEX: _check_mode
 }
 """Checks that precede the EDS check (their abort code wins)."""
@@ -164,57 +168,58 @@ def _limit_error_to_abort(fn: Callable[[], None]) -> None:
         raise SdoAbortedError(exc.abort_code) from exc
 
 
-def _heartbeat_consumers(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+def _heartbeat_consumers(d: DriveParts, sub: int, value: Any) -> WriteResult:
     """0x1016: node-ID 1..127, one entry per node, reserved bits 0 (CiA 301)."""
-    entries = communication.consumer_entries(d, sub, value)
+    entries = d.comm.consumer_entries(sub, value)
     _limit_error_to_abort(lambda: check_heartbeat_consumers(entries, own_node_id=d.node_id))
     return True, lambda: d.hb_consumer.configure(entries)
 
 
-def _heartbeat_producer(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+def _heartbeat_producer(d: DriveParts, sub: int, value: Any) -> WriteResult:
     """0x1017: producer heartbeat time (ms), effective at once."""
     return True, lambda: d.hb_producer.set_period(value, time.monotonic())
 
 
-def _emcy_cob_id(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+def _emcy_cob_id(d: DriveParts, sub: int, value: Any) -> WriteResult:
     """0x1014: EMCY COB-ID (CiA 301 rules: :func:`firmware_protocol.cob_id.check_cob_id`)."""
-    _limit_error_to_abort(lambda: check_cob_id("emcy", value, d._param(COB_ID_EMCY)))
+    _limit_error_to_abort(lambda: check_cob_id("emcy", value, d.node.param(COB_ID_EMCY)))
     return True, lambda: d.emcy.set_cob_id(value)
 
 
-def _sync_cob_id(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+def _sync_cob_id(d: DriveParts, sub: int, value: Any) -> WriteResult:
     """0x1005: the SYNC this node consumes (:func:`firmware_protocol.cob_id.check_sync_cob_id`)."""
     _limit_error_to_abort(lambda: check_sync_cob_id(value))
-    return True, lambda: communication.bind_sync(d, value)
+    return True, lambda: d.comm.bind_sync(value)
 
 
-def _sdo_server2(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+def _sdo_server2(d: DriveParts, sub: int, value: Any) -> WriteResult:
     """0x1201: the second SDO server's COB-IDs; rebinds it."""
     if (SDO_SERVER_2_INDEX, sub) in (SDO_SERVER_2_RX, SDO_SERVER_2_TX):
-        _limit_error_to_abort(lambda: check_cob_id("sdo", value, d._value(SDO_SERVER_2_INDEX, sub)))
-    return True, lambda: communication.bind_sdo2(d)
+        old = d.node.value(SDO_SERVER_2_INDEX, sub)
+        _limit_error_to_abort(lambda: check_cob_id("sdo", value, old))
+    return True, d.comm.bind_sdo2
 
 
-def _controlword(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+def _controlword(d: DriveParts, sub: int, value: Any) -> WriteResult:
     """0x6040: the CiA 402 state machine."""
     return True, lambda: d.cia402.write_controlword(value)
 
 
-def _mode(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+def _mode(d: DriveParts, sub: int, value: Any) -> WriteResult:
     """0x6060: the mode of operation, effective at the next chunk."""
-    return True, lambda: setattr(d, "_mode", int(value))
+    return True, lambda: d.ramps.set_mode(int(value))
 
 
-def _current_limit(d: VirtualDrive, sub: int, value: Any, index: int) -> WriteResult:
+def _current_limit(d: DriveParts, sub: int, value: Any, index: int) -> WriteResult:
     """0x6073 / 0x6075: the speed loop's current limit follows."""
-    return True, gain_sets.after_limit_change(d, index, sub, value)
+    return True, d.gains.after_limit_change(index, sub, value)
 
 
 def _plant(index: int) -> Handler:
     """Handler of a plant/controller object ``index`` (:data:`plant.SETTERS`): the simulator
     takes the value at a chunk boundary or refuses it (abort 0x06090030)."""
 
-    def handler(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+    def handler(d: DriveParts, sub: int, value: Any) -> WriteResult:
         with d.sim_lock:
             try:
                 plant.apply(d.sim, index, sub, value)
@@ -226,20 +231,20 @@ def _plant(index: int) -> Handler:
     return handler
 
 
-def _speed_controller(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+def _speed_controller(d: DriveParts, sub: int, value: Any) -> WriteResult:
     """0x2020: gains go to the simulator; sub 3 (current limit) also re-applies the limit."""
     if sub == SPEED_CURRENT_LIMIT_SUB:
         return _current_limit(d, sub, value, SPEED_CONTROLLER_INDEX)
     return _plant(SPEED_CONTROLLER_INDEX)(d, sub, value)
 
 
-def _trace_channel(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+def _trace_channel(d: DriveParts, sub: int, value: Any) -> WriteResult:
     """0x2101: a trace channel is a 0x2040 measurement (or 0)."""
-    check_trace_channel(d, value)
+    d.trace.check_channel(value)
     return True, None
 
 
-def _sim_fault(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+def _sim_fault(d: DriveParts, sub: int, value: Any) -> WriteResult:
     """0x5010: 1 inject (0 none, 1 overcurrent, 2 overvoltage, 3 undervoltage), 2 supply V."""
     with d.sim_lock:
         try:
@@ -252,7 +257,7 @@ def _sim_fault(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
     return True, None
 
 
-def _sim_info(d: VirtualDrive, sub: int, value: Any) -> WriteResult:
+def _sim_info(d: DriveParts, sub: int, value: Any) -> WriteResult:
     """0x5030:3: the simulation model (0 PWM-exact, 1 averaged), switched after the store."""
     if sub != SIM_INFO_MODEL_SUB:
         return True, None
@@ -275,7 +280,7 @@ HANDLERS: Mapping[int, Handler] = {
     PRODUCER_HEARTBEAT_INDEX: _heartbeat_producer,
     SDO_SERVER_2_INDEX: _sdo_server2,
     SPEED_CONTROLLER_INDEX: _speed_controller,
-    TRACE_CONFIG_INDEX: lambda d, sub, value: trace_config_write(d, sub, value),
+    TRACE_CONFIG_INDEX: lambda d, sub, value: d.trace.write(sub, value),
     TRACE_CHANNELS_INDEX: _trace_channel,
     SIM_FAULT_INDEX: _sim_fault,
     SIM_INFO_INDEX: _sim_info,
