@@ -16,26 +16,17 @@ from __future__ import annotations
 
 import threading
 import time
-from dataclasses import asdict, dataclass, fields
 from typing import Any
 
 import can
 
 from firmware_protocol import load_od
 from firmware_protocol.cia301 import LOAD_SIGNATURE, SAVE_SIGNATURE
-from firmware_protocol.constraints import CONSTRAINTS
-from firmware_protocol.current_stability import (
-    CURRENT_KEYS,
-    MOTOR_KEYS,
-    check_cascade,
-    check_current_gains,
-)
-from firmware_protocol.entry import LimitError
-from firmware_protocol.entry import f32 as _f32
 from firmware_protocol.enums import StoreStatus
 
-from . import _connection, cia402
+from . import _connection, _gain_set, _rules, cia402
 from ._emcy import Emcy, EmcyListener
+from ._gain_set import GAIN_FIELDS, Gains
 from ._live import LiveStreams, TpdoConfig, read_tpdo_configs
 from ._nmt import HeartbeatMonitor, HeartbeatProducer, send_command
 from ._objects import ObjectInfo, ObjectTable, default_table
@@ -59,65 +50,15 @@ __all__ = [
 #: 0x2060 store_status (U8, ro) values → name (the EDS enumeration, :class:`StoreStatus`).
 STORE_STATUS: dict[int, str] = {int(s): s.name.lower() for s in StoreStatus}
 STORE_STATUS_INDEX = load_od().entry("store_status").index
-_LOOP_NAMES = frozenset(
-    [f"current_controller.{k}" for k in CURRENT_KEYS]
-    + [f"motor.{k}" for k in MOTOR_KEYS]
-    + ["speed_controller.k_p", "speed_controller.k_i"]
-)
-"""Objects whose write the current-loop/cascade rule checks (as the drive does)."""
 CONSUMER_MIN_MS = 1000
 """Shortest default heartbeat consumer time (ms) :meth:`Drive.configure_heartbeat_consumer`
 sets: max(CONSUMER_MIN_MS, 3 x the host producer period). 3 x 100 ms was too tight: at load 25
 the host's producer thread stalled > 300 ms and the drive quick-stopped with the host alive."""
 
-#: Gains field → (current/speed set, OD name of the active value, OD name of the staged value).
-_GAIN_OBJECTS: dict[str, tuple[int, str, str]] = {
-    **{
-        f: (1, f"current_controller.{f}", f"gain_set.{f}")
-        for f in CURRENT_KEYS  # the current-loop set, as the drive's rule names it
-    },
-    "speed_k_p": (2, "speed_controller.k_p", "gain_set.speed_k_p"),
-    "speed_k_i": (2, "speed_controller.k_i", "gain_set.speed_k_i"),
-    "speed_current_limit": (2, "speed_controller.current_limit", "gain_set.speed_current_limit"),
-}
-
-
 #: NMT commands confirmed by the next heartbeat, and the state it must report
 _NMT_CONFIRM = {"start": "OPERATIONAL", "stop": "STOPPED", "pre-operational": "PRE-OPERATIONAL"}
 #: How long Drive.nmt waits for the drive's first heartbeat before it can confirm a command, s.
 FIRST_HEARTBEAT_S = 1.5
-
-
-@dataclass(frozen=True)
-class Gains:
-    """Controller gains as the drive holds them (SI units).
-
-    Current loop (0x2010): ``type`` (0 deadbeat eq. 15, 1 PI eq. 22, 2 predictive eq. 23/25),
-    ``L_c`` (H), ``R_c`` (Ω), ``k_p``/``k_i`` (V/A, PI), ``T_BT``/``T_DD``/``T_SD`` (s),
-    ``V_G`` (V), ``emf_feedforward`` (0/1). Speed loop (0x2020): ``speed_k_p`` (A/rpm),
-    ``speed_k_i`` (1/sample), ``speed_current_limit`` (A).
-    """
-
-    type: int
-    L_c: float
-    R_c: float
-    k_p: float
-    k_i: float
-    T_BT: float
-    T_DD: float
-    T_SD: float
-    V_G: float
-    emf_feedforward: int
-    speed_k_p: float
-    speed_k_i: float
-    speed_current_limit: float
-
-    def to_dict(self) -> dict[str, float | int]:
-        """Plain dict of every field."""
-        return asdict(self)
-
-
-GAIN_FIELDS: tuple[str, ...] = tuple(f.name for f in fields(Gains))
 
 
 class Drive:
@@ -159,7 +100,8 @@ class Drive:
         self._consumer_configured = False
         self._live: LiveStreams | None = None
         self._live_lock = threading.Lock()
-        self._gains_lock = threading.RLock()  # stage + apply + read back as one operation
+        #: held by the gain path (drive_link.gains.apply_gains): read, stage, apply, read back
+        self.gains_lock = threading.RLock()
         self._closed = False
         self.host_id: int | None = None
         #: quick stops sent and the blocks they forbid re-enabling in (drive_link._stop_guard)
@@ -322,44 +264,41 @@ class Drive:
 
     def write(self, name: str, value: float | int | str | bytes) -> None:
         """Write an object by name after a client-side type and limit check (the drive
-        re-checks and may abort: :class:`SdoAbort`)."""
+        re-checks and may abort: :class:`SdoAbort`).
+
+        An active controller gain (current_controller.*, speed_controller.k_p/k_i/current_limit)
+        changes through the one gain path, :func:`drive_link.gains.apply_gains` (its stability
+        and margin policy; :class:`drive_link.GainsRefused` if refused, nothing sent); a raw
+        write of gain_set_apply (0x20F1) is refused (:class:`InvalidValue`): apply a set with
+        :func:`drive_link.gains.apply_gains`."""
         obj = self.table[name]
         if not obj.writable:
             raise InvalidValue(f"{name} is read-only")
+        if name == _gain_set.APPLY_NAME:
+            raise InvalidValue(
+                f"{name}: gain sets are applied by drive_link.gains.apply_gains "
+                "(drive-link set-gains), which checks the set's stability and margins first"
+            )
         data = obj.encode(value)
         v = obj.check(value)
         if isinstance(v, int | float):
-            self._check_rules({name: v})
-            if name in _LOOP_NAMES:
-                self._check_loops({name: v})
+            _rules.check_rules(self.read, {name: v})
+        field = _gain_set.ACTIVE_GAIN_FIELD.get(name)
+        if field is not None and isinstance(v, int | float):
+            from .gains import GainsRefused, apply_gains  # the one gain path, loaded on use
+
+            try:
+                apply_gains(self, {field: v})
+            except GainsRefused as exc:
+                raise GainsRefused(
+                    f"{name}: {exc} (gains change through drive_link.gains.apply_gains: "
+                    f"drive-link set-gains {field}=... [--force])",
+                    exc.check,
+                ) from None
+            return
+        if isinstance(v, int | float) and name in _rules.LOOP_NAMES:
+            _rules.check_loops(self.read, {name: v})
         self.sdo.download(obj.index, obj.subindex, data, name)
-
-    def _check_loops(self, values: dict[str, float | int]) -> None:
-        """Client-side current-loop and cascade rule (firmware_protocol.current_stability),
-        the drive's present set read back with ``values`` in place."""
-        def present(n: str) -> Any:
-            return values[n] if n in values else self.read(n)
-
-        g = {k: present(f"current_controller.{k}") for k in CURRENT_KEYS}
-        m = {k: present(f"motor.{k}") for k in MOTOR_KEYS}
-        k_p, k_i = present("speed_controller.k_p"), present("speed_controller.k_i")
-        try:
-            check_current_gains(g, m)
-            check_cascade(g, m, k_p, k_i)
-        except LimitError as exc:
-            raise InvalidValue(f"refused before sending: {exc}") from None
-
-    def _check_rules(self, values: dict[str, float | int]) -> None:
-        """Client-side check of the OD's cross-object rules (firmware_protocol.CONSTRAINTS,
-        e.g. L_c < 2 motor.L) triggered by ``values``; other operands are read from the drive."""
-        for c in CONSTRAINTS:
-            if not any(n in values for n in c.triggers):
-                continue
-            operands = {n: values[n] if n in values else self.read(n) for n in c.names}
-            if c.holds(operands):
-                continue
-            shown = ", ".join(f"{n} = {operands[n]:.6g}" for n in c.names)
-            raise InvalidValue(f"refused before sending: {c} does not hold ({shown}): {c.reason}")
 
     # ------------------------------------------------------------------ NMT / heartbeat
     @property
@@ -538,49 +477,9 @@ class Drive:
 
     # ------------------------------------------------------------------ gains
     def read_gains(self) -> Gains:
-        """The active controller gains (0x2010, 0x2020)."""
-        return Gains(**{f: self.read(_GAIN_OBJECTS[f][1]) for f in GAIN_FIELDS})
-
-    def apply_gains(self, **changes: float | int) -> Gains:
-        """Change gains atomically: stage the whole set in gain_set (0x20F0), apply with
-        gain_set_apply (0x20F1: 1 current set, 2 speed set, 3 both), return the read-back.
-
-        The drive validates the set as a whole and aborts with nothing changed if any value is
-        refused (:class:`SdoAbort`).
-        """
-        unknown = [k for k in changes if k not in _GAIN_OBJECTS]
-        if unknown:
-            raise InvalidValue(
-                f"unknown gain(s) {', '.join(unknown)}; known: {', '.join(GAIN_FIELDS)}"
-            )
-        if not changes:
-            return self.read_gains()
-        for k, v in changes.items():
-            self.table[_GAIN_OBJECTS[k][2]].check(v)
-        # the staged set is checked as the objects it becomes (the drive checks it so at apply)
-        self._check_rules({_GAIN_OBJECTS[k][1]: v for k, v in changes.items()})
-        sets = 0
-        for k in changes:
-            sets |= _GAIN_OBJECTS[k][0]
-        with self._gains_lock:
-            return self._stage_and_apply(changes, sets)
-
-    def _stage_and_apply(self, changes: dict[str, float | int], sets: int) -> Gains:
-        current = self.read_gains().to_dict()
-        merged = {**current, **changes}
-        for f in GAIN_FIELDS:
-            if _GAIN_OBJECTS[f][0] & sets:
-                staged = _GAIN_OBJECTS[f][2]
-                obj = self.table[staged]
-                self.sdo.download(obj.index, obj.subindex, obj.encode(merged[f]), staged)
-        self.write("gain_set_apply", sets)
-        back = self.read_gains()
-        for k, v in changes.items():
-            got = getattr(back, k)
-            want = _f32(float(v)) if isinstance(got, float) else int(v)
-            if got != want:
-                raise DriveError(f"gain {k}: drive reads back {got!r} after applying {v!r}")
-        return back
+        """The active controller gains (0x2010, 0x2020). To change them:
+        :func:`drive_link.gains.apply_gains` (the one gain path)."""
+        return _gain_set.read_gains(self)
 
     # ------------------------------------------------------------------ store / restore
     def store(self) -> None:
