@@ -67,7 +67,6 @@ class Gains:
 
 
 GAIN_FIELDS: tuple[str, ...] = tuple(f.name for f in fields(Gains))
-_INTEGER_FIELDS = frozenset(f.name for f in fields(Gains) if f.type in ("int", int))
 
 #: Gains field → (current/speed set bit, OD name of the active value, OD name of the staged one).
 GAIN_OBJECTS: dict[str, tuple[int, str, str]] = {
@@ -106,8 +105,25 @@ class GainSetDrive(Protocol):
 
 def read_gains(drive: GainSetDrive) -> Gains:
     """The active controller gains (0x2010, 0x2020), one SDO upload each."""
-    values = {f: drive.read(GAIN_OBJECTS[f][1]) for f in GAIN_FIELDS}
-    return Gains(**{f: int(v) if f in _INTEGER_FIELDS else float(v) for f, v in values.items()})
+
+    def read(f: str) -> Any:
+        return drive.read(GAIN_OBJECTS[f][1])
+
+    return Gains(
+        type=int(read("type")),
+        L_c=float(read("L_c")),
+        R_c=float(read("R_c")),
+        k_p=float(read("k_p")),
+        k_i=float(read("k_i")),
+        T_BT=float(read("T_BT")),
+        T_DD=float(read("T_DD")),
+        T_SD=float(read("T_SD")),
+        V_G=float(read("V_G")),
+        emf_feedforward=int(read("emf_feedforward")),
+        speed_k_p=float(read("speed_k_p")),
+        speed_k_i=float(read("speed_k_i")),
+        speed_current_limit=float(read("speed_current_limit")),
+    )
 
 
 def stage_and_apply(

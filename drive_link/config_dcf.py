@@ -279,7 +279,7 @@ def read_dcf(path: Source, node_id: int = 1, table: ObjectTable | None = None) -
 
 def read_config(drive: Drive) -> dict[str, float | int]:
     """The drive's configuration as it reports it now (object name → value)."""
-    return {o.name: drive.read(o.name) for o in config_objects(drive.table)}
+    return {o.name: drive.read_number(o.name) for o in config_objects(drive.table)}
 
 
 def save(

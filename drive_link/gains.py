@@ -137,7 +137,7 @@ class GainsRefused(InvalidValue):
         self.unstable = bool(check.refusals)
 
 
-def _controller(value: Any) -> tuple[int, str]:
+def _controller(value: Any) -> tuple[int, design.ControllerName]:
     """(code, name) of a controller given as 0..2 or "deadbeat"/"pi"/"predictive"."""
     if isinstance(value, str) and not value.strip().lstrip("-").isdigit():
         name = value.strip().lower()
@@ -145,7 +145,8 @@ def _controller(value: Any) -> tuple[int, str]:
             raise InvalidValue(
                 f"type: {value!r} is not a controller ({', '.join(design.CONTROLLERS)} or 0..2)"
             )
-        return design.CONTROLLERS.index(name), name
+        code = design.CONTROLLERS.index(name)
+        return code, design.CONTROLLERS[code]
     code = int(value)
     if not 0 <= code < len(design.CONTROLLERS):
         raise InvalidValue(f"type: {code} is not a controller code (0..2)")

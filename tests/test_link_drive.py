@@ -18,7 +18,15 @@ import numpy as np
 import pytest
 from conftest import RunQueueProbe, min_rate
 
-from drive_link import Drive, InvalidValue, NodeNotFound, SdoAbort, StateError, scan
+from drive_link import (
+    Drive,
+    InvalidValue,
+    ModeOfOperation,
+    NodeNotFound,
+    SdoAbort,
+    StateError,
+    scan,
+)
 from drive_link.gains import apply_gains
 from drive_link.trace import Trigger
 
@@ -94,6 +102,11 @@ def test_cia402_enable_disable_quick_stop(drive):
     assert drive.state == "SWITCH ON DISABLED"
     with pytest.raises(InvalidValue, match="mode 'position'"):
         drive.set_mode("position")
+    # the package's enum is taken where a mode is (CiA 402: 0x6061 shows -1, 3)
+    drive.set_mode(ModeOfOperation.PSEUDO_CURRENT)
+    assert drive.read("modes_of_operation_display") == -1 and drive.mode == "current"
+    drive.set_mode(ModeOfOperation.PROFILE_VELOCITY)
+    assert drive.read("modes_of_operation_display") == 3 and drive.mode == "speed"
 
 
 def test_fault_emcy_history_and_reset(drive):
