@@ -31,13 +31,13 @@ from collections.abc import Callable, Iterator
 
 import can
 import canopen
-from canopen.sdo.client import SdoClient
 from canopen.sdo.exceptions import SdoAbortedError, SdoCommunicationError
 
 from firmware_protocol import abort_codes
 
 from . import _sdo_segmented
 from ._sdo_block import block_upload
+from ._sdo_client import ChannelClient
 from ._sdo_segmented import NoAnswer, NodeGone
 from .errors import BusError, DriveTimeout, SdoAbort
 from .errors import NodeGone as NodeGoneError
@@ -86,45 +86,6 @@ def stamps_host_time(bus: object) -> bool:
     )
 
 
-class _Client(SdoClient):
-    """canopen's client without the abort frame after a response timeout, and deaf to frames
-    received before the present transfer began.
-
-    After a lost frame canopen sends an abort (0x05040000) and, on a retry, the new request
-    right behind it; nothing requires that abort (the server times the transfer out itself and
-    every initiate request starts afresh, CiA 301 §7.2.4.3), and on a lossy or slow link the
-    back-to-back pair only adds load. Other aborts (CRC, protocol errors) are still sent.
-
-    An answer cannot precede its request. On a starved host the bus thread may hand over
-    frames seconds after the kernel received them: another client's answer on the same
-    channel (a ``drive-link`` command run beside a session) or a late duplicate, for the same
-    object, can then look like the answer to a request sent after it (seen in the SocketCAN
-    lane: a gain read back as it was before a set that had been applied). Where the bus stamps
-    frames with this host's clock (:func:`stamps_host_time`), a frame stamped before
-    ``not_before`` (set when a transfer starts, :mod:`drive_link._sdo_segmented`) is dropped
-    and counted in ``stale_dropped``.
-    """
-
-    def __init__(self, *args: object, host_clock: bool = False) -> None:
-        super().__init__(*args)
-        self.host_clock = host_clock
-        #: host time (s) before which received frames belong to earlier transfers
-        self.not_before = 0.0
-        #: frames dropped as older than the transfer they arrived in
-        self.stale_dropped = 0
-
-    def on_response(self, can_id: int, data: bytes, timestamp: float) -> None:
-        if self.host_clock and timestamp and timestamp < self.not_before:
-            self.stale_dropped += 1
-            return
-        super().on_response(can_id, data, timestamp)
-
-    def abort(self, abort_code: int = 0x08000000) -> None:
-        if abort_code == 0x05040000:
-            return
-        super().abort(abort_code)
-
-
 class SdoChannel:
     """One SDO client channel (request COB-ID ``rx_cobid``, response COB-ID ``tx_cobid``).
 
@@ -153,7 +114,7 @@ class SdoChannel:
         self.deadline_s = deadline_s
         self.lock = threading.RLock()
         self._network = network
-        self.client = _Client(
+        self.client = ChannelClient(
             rx_cobid, tx_cobid, canopen.ObjectDictionary(),
             host_clock=stamps_host_time(network.bus),
         )  # fmt: skip

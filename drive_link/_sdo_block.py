@@ -37,18 +37,29 @@ import struct
 import time
 from collections.abc import Callable
 
-from canopen.sdo.client import SdoClient
 from canopen.sdo.exceptions import SdoAbortedError, SdoCommunicationError
 
 from firmware_protocol import abort_codes
 
+from ._sdo_client import (
+    ABORT,
+    BLOCK_ACK,
+    BLOCK_END,
+    BLOCK_INITIATE,
+    BLOCK_SEQNO_MASK,
+    BLOCK_SIZE_SPECIFIED,
+    BLOCK_START,
+    BLOCK_SUBCOMMAND_MASK,
+    CRC_SUPPORTED,
+    CS_MASK,
+    LAST_BLOCK_SEGMENT,
+    REQUEST_BLOCK_UPLOAD,
+    RESPONSE_BLOCK_UPLOAD,
+    RESPONSE_UPLOAD,
+    ChannelClient,
+)
 from ._sdo_segmented import Exchange, NoAnswer, continue_upload, upload
 
-CCS_BLOCK_UPLOAD = 0xA0  # client command specifier 5
-SCS_BLOCK_UPLOAD = 0xC0  # server command specifier 6
-CRC_SUPPORTED = 0x04
-SIZE_INDICATED = 0x02
-CS_INITIATE, CS_END, CS_ACK, CS_START = 0, 1, 2, 3
 ABORT_COMMAND = abort_codes.COMMAND
 ABORT_CRC = abort_codes.CRC
 MIN_BLKSIZE = 16
@@ -61,7 +72,7 @@ last_stats: dict[str, int] = {}
 
 
 def block_upload(
-    client: SdoClient,
+    client: ChannelClient,
     index: int,
     subindex: int,
     progress: Callable[[int, int | None], None] | None = None,
@@ -88,13 +99,13 @@ def block_upload(
     (the upload lost sync, CRC or length mismatch, deadline).
     """
     ex = Exchange(client, index, subindex)
-    init = struct.pack(
-        "<BHBBB2x", CCS_BLOCK_UPLOAD | CRC_SUPPORTED | CS_INITIATE, index, subindex, blksize, 0
-    )
+    cmd = REQUEST_BLOCK_UPLOAD | CRC_SUPPORTED | BLOCK_INITIATE
+    init = struct.pack("<BHBBB2x", cmd, index, subindex, blksize, 0)
 
     def initiate_answer(r: bytes) -> bool:
         same = struct.unpack_from("<HB", r, 1) == (index, subindex)
-        return same and (r[0] & 0xE1 == SCS_BLOCK_UPLOAD | CS_INITIATE or r[0] & 0xE0 == 0x40)
+        block = r[0] & (CS_MASK | BLOCK_END) == RESPONSE_BLOCK_UPLOAD | BLOCK_INITIATE
+        return same and (block or r[0] & CS_MASK == RESPONSE_UPLOAD)
 
     try:
         resp = ex.request(init, initiate_answer, timeout, resends, initial=True)
@@ -103,7 +114,7 @@ def block_upload(
             raise
         # the server has no block transfer: read the object by segmented upload
         return upload(client, index, subindex, timeout, resends)
-    if resp[0] & 0xE0 == 0x40:  # protocol switch: a normal upload follows
+    if resp[0] & CS_MASK == RESPONSE_UPLOAD:  # protocol switch: a normal upload follows
         return continue_upload(ex, resp, timeout, resends)
     return _receive(
         ex, resp, progress, blksize, min(ack_wait, timeout), ack_resends, escalate_after,
@@ -122,7 +133,7 @@ def _receive(
     silence_s: float,
     deadline: float | None,
 ) -> bytes:
-    size = struct.unpack_from("<I", resp, 4)[0] if resp[0] & SIZE_INDICATED else None
+    size = struct.unpack_from("<I", resp, 4)[0] if resp[0] & BLOCK_SIZE_SPECIFIED else None
     crc_on = bool(resp[0] & CRC_SUPPORTED)
     stats = dict.fromkeys(("acks", "gaps", "silences", "resends", "leftovers", "duplicates"), 0)
     stats["frames"] = 0
@@ -137,7 +148,7 @@ def _receive(
     awaiting = True  # no segment of the next sub-block seen yet
     old_max = 127  # while awaiting: seqnos above this are leftovers of the previous sub-block
     finished = False  # the last segment arrived in sequence and was acknowledged
-    pending = bytes([CCS_BLOCK_UPLOAD | CS_START]) + bytes(7)  # sent again when unanswered
+    pending = bytes([REQUEST_BLOCK_UPLOAD | BLOCK_START]) + bytes(7)  # sent again when unanswered
     wait = ack_wait
     quiet = 0
     prev = b""  # the previous frame (a duplicate of it is dropped)
@@ -145,7 +156,7 @@ def _receive(
     def send_ack(seq: int) -> None:
         nonlocal pending
         # CiA 301 §7.2.4.3.14: ackseq, blksize, bytes 3..7 reserved (always 0)
-        pending = bytes([CCS_BLOCK_UPLOAD | CS_ACK, seq, blk, 0, 0, 0, 0, 0])
+        pending = bytes([REQUEST_BLOCK_UPLOAD | BLOCK_ACK, seq, blk, 0, 0, 0, 0, 0])
         ex.send(pending)
     ex.send(pending)
     if progress:
@@ -197,13 +208,14 @@ def _receive(
             continue
         prev = frame
         if finished:
-            if frame[0] & 0xE3 == SCS_BLOCK_UPLOAD | CS_END and (
+            end = frame[0] & (CS_MASK | BLOCK_SUBCOMMAND_MASK) == RESPONSE_BLOCK_UPLOAD | BLOCK_END
+            if end and (
                 size is None or (frame[0] >> 2) & 0x07 == (7 - size % 7) % 7
             ):
                 break
             stats["leftovers"] += 1
             continue
-        seqno, last = frame[0] & 0x7F, bool(frame[0] & 0x80)
+        seqno, last = frame[0] & BLOCK_SEQNO_MASK, bool(frame[0] & LAST_BLOCK_SEGMENT)
         if awaiting:
             if seqno == 0 or seqno > old_max:
                 old_max = max(old_max, seqno)
@@ -224,18 +236,18 @@ def _receive(
             acknowledge(clean=False)
         # seqno <= ackseq: the same segment twice (a duplicate frame): ignored
     last_stats.update(stats)
-    n_unused = (frame[0] >> 2) & 0x07
+    n_unused = (frame[0] >> 2) & 0x07  # n: bytes of the last segment without data
     if n_unused:
         del data[-n_unused:]
     if size is not None and len(data) != size:
-        ex.send(struct.pack("<BHBI", 0x80, ex.index, ex.subindex, ABORT_COMMAND))
+        ex.send(struct.pack("<BHBI", ABORT, ex.index, ex.subindex, ABORT_COMMAND))
         raise SdoCommunicationError(f"block upload returned {len(data)} of {size} bytes")
     if crc_on:
         crc = struct.unpack_from("<H", frame, 1)[0]
         if binascii.crc_hqx(bytes(data), 0) != crc:
-            ex.send(struct.pack("<BHBI", 0x80, ex.index, ex.subindex, ABORT_CRC))
+            ex.send(struct.pack("<BHBI", ABORT, ex.index, ex.subindex, ABORT_CRC))
             raise SdoCommunicationError("block upload CRC mismatch")
-    ex.send(bytes([CCS_BLOCK_UPLOAD | CS_END]) + bytes(7))
+    ex.send(bytes([REQUEST_BLOCK_UPLOAD | BLOCK_END]) + bytes(7))
     if progress:
         progress(len(data), size)
     return bytes(data)

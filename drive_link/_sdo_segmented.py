@@ -32,20 +32,34 @@ import struct
 import time
 from collections.abc import Callable
 
-from canopen.sdo.client import SdoClient
 from canopen.sdo.exceptions import SdoAbortedError, SdoCommunicationError
 
+from ._sdo_client import (
+    ABORT,
+    CS_MASK,
+    EXPEDITED,
+    NO_MORE_SEGMENTS,
+    REQUEST_DOWNLOAD,
+    REQUEST_SEGMENT_DOWNLOAD,
+    REQUEST_SEGMENT_UPLOAD,
+    REQUEST_UPLOAD,
+    RESPONSE_DOWNLOAD,
+    RESPONSE_SEGMENT_DOWNLOAD,
+    RESPONSE_SEGMENT_UPLOAD,
+    RESPONSE_UPLOAD,
+    SIZE_SPECIFIED,
+    TOGGLE_BIT,
+    ChannelClient,
+)
+
 #: s a host-clock frame timestamp may lie before the request it answers (clock steps,
-#: rounding); frames stamped earlier are dropped (see drive_link._sdo._Client)
+#: rounding); frames stamped earlier are dropped (see drive_link._sdo_client.ChannelClient)
 CLOCK_TOLERANCE_S = 0.002
 
 __all__ = [
     "CLOCK_TOLERANCE_S", "Exchange", "NoAnswer", "NodeGone", "check_gone", "continue_upload",
     "download", "upload", "wait_slice",
 ]  # fmt: skip
-
-ABORT = 0x80
-TOGGLE = 0x10
 
 
 class NoAnswer(SdoCommunicationError):  # noqa: N818 (named like canopen's errors)
@@ -62,28 +76,20 @@ class NoAnswer(SdoCommunicationError):  # noqa: N818 (named like canopen's error
 
 
 class NodeGone(SdoCommunicationError):  # noqa: N818
-    """The node's heartbeat stopped while a request waited (``client.gone_at`` said so)."""
+    """The node's heartbeat stopped while a request waited (``client.gone_at()`` said so)."""
 
 
-def _gone_at(client: SdoClient) -> float | None:
-    """Monotonic time at which the node counts as gone (``client.gone_at()``, set by a
-    supervised channel; None: no heartbeat watch)."""
-    fn = getattr(client, "gone_at", None)
-    return fn() if fn is not None else None
-
-
-def check_gone(client: SdoClient) -> None:
+def check_gone(client: ChannelClient) -> None:
     """Raise :class:`NodeGone` if the node's heartbeat watch says it is gone now."""
-    at = _gone_at(client)
+    at = client.gone_at()
     if at is not None and time.monotonic() >= at - 0.001:  # (a wait may end a hair early)
-        why = getattr(client, "gone_reason", None)
-        raise NodeGone(why() if why is not None else "heartbeat stopped")
+        raise NodeGone(client.gone_reason())
 
 
-def wait_slice(client: SdoClient, left: float, floor: float = 0.0) -> float:
+def wait_slice(client: ChannelClient, left: float, floor: float = 0.0) -> float:
     """``left`` s, or less if the node counts as gone sooner (to fail then, not later), but
     not before ``floor`` (monotonic s)."""
-    at = _gone_at(client)
+    at = client.gone_at()
     return left if at is None else max(0.0, min(left, max(at, floor) - time.monotonic()))
 
 
@@ -91,17 +97,17 @@ class Exchange:
     """Requests and responses of one transfer on ``client``'s COB-IDs (object
     ``index``:``subindex``; an abort frame naming another object is ignored)."""
 
-    def __init__(self, client: SdoClient, index: int, subindex: int) -> None:
+    def __init__(self, client: ChannelClient, index: int, subindex: int) -> None:
         self.client = client
         self.index = index
         self.subindex = subindex
         self.requests_sent = 0
-        # frames stamped before now answer earlier requests (drive_link._sdo._Client)
-        client.not_before = time.time() - CLOCK_TOLERANCE_S  # type: ignore[attr-defined]
+        # frames stamped before now answer earlier requests (ChannelClient.on_response)
+        client.not_before = time.time() - CLOCK_TOLERANCE_S
         self.drain()
         #: (frame, how many more may come): late duplicates of the last transfer's answer
-        self.stale: tuple[bytes, int] | None = getattr(client, "stale_answer", None)
-        client.stale_answer = None  # type: ignore[attr-defined]
+        self.stale: tuple[bytes, int] | None = client.stale_answer
+        client.stale_answer = None
         self.abort_frame = b""
         self._duplicates: tuple[bytes, int] | None = None  # of the last request's answer
         #: frames :meth:`next` skipped as late copies during the present :meth:`request`
@@ -210,7 +216,7 @@ class Exchange:
     def finish(self) -> None:
         """The transfer ended with the last request's answer: the next transfer on the client
         skips that many identical late copies of it (see the module doc)."""
-        self.client.stale_answer = self._duplicates  # type: ignore[attr-defined]
+        self.client.stale_answer = self._duplicates
 
 
 def _same_object(frame: bytes, index: int, subindex: int) -> bool:
@@ -219,11 +225,11 @@ def _same_object(frame: bytes, index: int, subindex: int) -> bool:
 
 def _segment_of(scs: int, toggle: int) -> Callable[[bytes], bool]:
     """Accepts a segment response (server command ``scs``) with the toggle bit ``toggle``."""
-    return lambda r: r[0] & 0xE0 == scs and r[0] & TOGGLE == toggle
+    return lambda r: r[0] & CS_MASK == scs and r[0] & TOGGLE_BIT == toggle
 
 
 def upload(
-    client: SdoClient, index: int, subindex: int, timeout: float = 0.3, resends: int = 2
+    client: ChannelClient, index: int, subindex: int, timeout: float = 0.3, resends: int = 2
 ) -> bytes:
     """Read ``index``:``subindex`` (expedited or segmented) and return its bytes.
 
@@ -231,10 +237,10 @@ def upload(
     :class:`SdoCommunicationError` (the data length disagrees with the announced size).
     """
     ex = Exchange(client, index, subindex)
-    init = struct.pack("<BHB4x", 0x40, index, subindex)
+    init = struct.pack("<BHB4x", REQUEST_UPLOAD, index, subindex)
     resp = ex.request(
         init,
-        lambda r: r[0] & 0xE0 == 0x40 and _same_object(r, index, subindex),
+        lambda r: r[0] & CS_MASK == RESPONSE_UPLOAD and _same_object(r, index, subindex),
         timeout,
         resends,
         initial=True,
@@ -245,22 +251,27 @@ def upload(
 def continue_upload(ex: Exchange, resp: bytes, timeout: float, resends: int) -> bytes:
     """The rest of an upload whose initiate response is ``resp`` (scs 2)."""
     cmd = resp[0]
-    if cmd & 0x02:  # expedited
-        n = 4 - ((cmd >> 2) & 0x03) if cmd & 0x01 else 4
+    if cmd & EXPEDITED:
+        n = 4 - ((cmd >> 2) & 0x03) if cmd & SIZE_SPECIFIED else 4  # n: bytes without data
         ex.finish()
         return bytes(resp[4 : 4 + n])
-    size = struct.unpack_from("<I", resp, 4)[0] if cmd & 0x01 else None
+    size = struct.unpack_from("<I", resp, 4)[0] if cmd & SIZE_SPECIFIED else None
     data = bytearray()
     toggle = 0
     while True:
-        seg = ex.request(bytes([0x60 | toggle]), _segment_of(0x00, toggle), timeout, resends)
-        n = 7 - ((seg[0] >> 1) & 0x07)
+        seg = ex.request(
+            bytes([REQUEST_SEGMENT_UPLOAD | toggle]),
+            _segment_of(RESPONSE_SEGMENT_UPLOAD, toggle),
+            timeout,
+            resends,
+        )
+        n = 7 - ((seg[0] >> 1) & 0x07)  # n: bytes without data
         data += seg[1 : 1 + n]
         if size is not None and len(data) > size:
             raise SdoCommunicationError(f"segmented upload sent more than {size} bytes announced")
-        if seg[0] & 0x01:
+        if seg[0] & NO_MORE_SEGMENTS:
             break
-        toggle ^= TOGGLE
+        toggle ^= TOGGLE_BIT
     if size is not None and len(data) != size:
         raise SdoCommunicationError(f"segmented upload returned {len(data)} of {size} bytes")
     ex.finish()
@@ -268,7 +279,7 @@ def continue_upload(ex: Exchange, resp: bytes, timeout: float, resends: int) -> 
 
 
 def download(
-    client: SdoClient,
+    client: ChannelClient,
     index: int,
     subindex: int,
     data: bytes,
@@ -283,15 +294,15 @@ def download(
     ex = Exchange(client, index, subindex)
 
     def confirmed(r: bytes) -> bool:
-        return r[0] == 0x60 and _same_object(r, index, subindex)
+        return r[0] == RESPONSE_DOWNLOAD and _same_object(r, index, subindex)
 
     if 0 < len(data) <= 4:
-        cmd = 0x23 | ((4 - len(data)) << 2)
+        cmd = REQUEST_DOWNLOAD | EXPEDITED | SIZE_SPECIFIED | ((4 - len(data)) << 2)
         frame = struct.pack("<BHB", cmd, index, subindex) + data.ljust(4, b"\0")
         ex.request(frame, confirmed, timeout, resends, initial=True)
         ex.finish()
         return
-    frame = struct.pack("<BHBI", 0x21, index, subindex, len(data))
+    frame = struct.pack("<BHBI", REQUEST_DOWNLOAD | SIZE_SPECIFIED, index, subindex, len(data))
     ex.request(frame, confirmed, timeout, resends, initial=True)
     toggle = 0
     pos = 0
@@ -299,10 +310,11 @@ def download(
         chunk = data[pos : pos + 7]
         pos += 7
         last = pos >= len(data)
-        cmd = toggle | ((7 - len(chunk)) << 1) | (1 if last else 0)
+        cmd = REQUEST_SEGMENT_DOWNLOAD | toggle | ((7 - len(chunk)) << 1)
+        cmd |= NO_MORE_SEGMENTS if last else 0
         frame = bytes([cmd]) + chunk.ljust(7, b"\0")
-        ex.request(frame, _segment_of(0x20, toggle), timeout, resends)
+        ex.request(frame, _segment_of(RESPONSE_SEGMENT_DOWNLOAD, toggle), timeout, resends)
         if last:
             ex.finish()
             return
-        toggle ^= TOGGLE
+        toggle ^= TOGGLE_BIT

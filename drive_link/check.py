@@ -37,6 +37,7 @@ from ._host_stall import StallProbe
 from ._nmt import HeartbeatProducer
 from .drive import Drive
 from .errors import DriveError, DriveTimeout, SdoAbort
+from .gains import apply_gains
 from .trace import TS as TRACE_TS
 
 __all__ = ["ITEMS", "CheckFailed", "CheckResult", "NotApplicable", "run_checks"]
@@ -391,16 +392,16 @@ def item_gain_set(d: Drive, opts: dict) -> str:
         staged_refused = True
     if not staged_refused:
         _expect_abort(
-            lambda: d.write("gain_set_apply", 1),
+            lambda: _raw_write(d, "gain_set_apply", 1),
             (ABORT_RANGE, ABORT_HIGH, ABORT_LOW, ABORT_STATE),
             "apply L_c = 2.5 L",
         )
     _expect(d.read_gains() == g0, "active gains changed by a refused gain set")
     try:
-        back = d.apply_gains(L_c=0.9 * L, R_c=g0.R_c)
-        _expect(back.L_c == _f32(0.9 * L), f"L_c read back {back.L_c}")
+        back = apply_gains(d, {"L_c": 0.9 * L, "R_c": g0.R_c}).gains
+        _expect(back["L_c"] == _f32(0.9 * L), f"L_c read back {back['L_c']}")
     finally:
-        d.apply_gains(L_c=g0.L_c)
+        apply_gains(d, {"L_c": g0.L_c}, force=True)  # the set as found
     how = "at staging" if staged_refused else "at apply"
     return f"invalid set refused {how} with nothing changed; valid set applied and read back"
 
@@ -431,14 +432,14 @@ def _put_back(
     first (the L_c/R_c rules read motor.L/R), gains as whole sets through gain_set (the speed-gain
     rule judges the pair), PDOs by the CiA 301 procedure, then the rest. ``now``: the present
     values if already read. Returns failures."""
-    from .drive import _GAIN_OBJECTS
+    from ._gain_set import ACTIVE_GAIN_FIELD
     from .supervision import RearmReport, pdo_group, write_pdo_group
 
     if now is None:
         now = {n: d.sdo.upload(d.table[n].index, d.table[n].subindex, n) for n in snapshot}
     differ = [n for n in snapshot if now[n] != snapshot[n]]
     failed: list[str] = []
-    gain_names = {v[1]: k for k, v in _GAIN_OBJECTS.items()}
+    gain_names = ACTIVE_GAIN_FIELD
 
     def raw_write(n: str) -> None:
         o = d.table[n]
@@ -453,7 +454,7 @@ def _put_back(
     gains = {gain_names[n]: d.table[n].decode(snapshot[n]) for n in differ if n in gain_names}
     if gains:
         try:
-            d.apply_gains(**gains)
+            apply_gains(d, gains, force=True)  # the set as found: margins as they were
         except DriveError as exc:
             failed.append(f"gains: {exc}")
     groups: dict[tuple[str, int], list[tuple[int, int]]] = {}

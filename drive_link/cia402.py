@@ -43,7 +43,7 @@ from firmware_protocol.cia402 import (
 from firmware_protocol.cia402 import NOT_READY_TO_SWITCH_ON as NOT_READY
 from firmware_protocol.enums import ModeOfOperation
 
-from .errors import DriveTimeout, StateError
+from .errors import DriveTimeout, InvalidValue, StateError
 
 __all__ = [
     "CW_DISABLE_OPERATION",
@@ -70,6 +70,7 @@ __all__ = [
     "SW_WARNING",
     "StateMachine",
     "mode_name",
+    "mode_value",
     "state_from_statusword",
 ]
 
@@ -86,6 +87,16 @@ MODES: dict[str, int] = {
     "current": int(ModeOfOperation.PSEUDO_CURRENT),
 }
 MODE_NAMES: dict[int, str] = {v: k for k, v in MODES.items()}
+
+
+def mode_value(mode: str | ModeOfOperation) -> int:
+    """modes_of_operation value of a host name ("speed", "current", "torque") or a
+    :class:`ModeOfOperation` member; :class:`InvalidValue` otherwise."""
+    if isinstance(mode, ModeOfOperation):
+        return int(mode)
+    if mode not in MODES:
+        raise InvalidValue(f"mode {mode!r}: one of {', '.join(MODES)}")
+    return MODES[mode]
 
 
 def mode_name(value: int) -> str:

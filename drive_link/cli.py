@@ -136,8 +136,8 @@ def _gain_value(name: str, text: str) -> float | int | str:
     """A typed gain (``L_c=20uH``, ``speed_current_limit=50A``) in its object's unit
     (:func:`drive_link.units.parse_value`); text that is no number passes through for
     ``type`` (``type=pi``)."""
+    from ._gain_set import GAIN_OBJECTS as _GAIN_OBJECTS
     from ._objects import default_table
-    from .drive import _GAIN_OBJECTS
 
     obj = default_table()[_GAIN_OBJECTS[name][1]]
     if name == "type" and _parse_value(text) == text:

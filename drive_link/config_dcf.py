@@ -16,11 +16,12 @@ object's limits (one line naming the first that is outside), the cross-object ru
 (e.g. L_c < 2 motor.L, the current-loop and cascade stability rule) on the final set, and the
 drive's state (objects marked ConfigOnly need the power stage off). Then only the objects that
 differ are written: the controller gains as one staged set through the gain-set objects
-(0x20F0/0x20F1, :meth:`Drive.apply_gains`), the others with the ordinary checked writes; if the
-drive refuses a write part-way, what was written is put back (rollback) before the error is
-raised. The dashboard calls :func:`save`, :func:`diff` and :func:`load` like the CLI does;
-for a browser download :func:`dcf_text` (``dcf_text(read_config(drive), drive.node_id)``), for
-an upload pass the text as an :class:`io.StringIO` to :func:`diff` / :func:`load`.
+(0x20F0/0x20F1) by :func:`drive_link.gains.apply_gains` (the one gain path), the others with
+the ordinary checked writes; if the drive refuses a write part-way, what was written is put
+back (rollback) before the error is raised. The dashboard calls :func:`save`, :func:`diff` and
+:func:`load` like the CLI does; for a browser download :func:`dcf_text`
+(``dcf_text(read_config(drive), drive.node_id)``), for an upload pass the text as an
+:class:`io.StringIO` to :func:`diff` / :func:`load`.
 """
 
 from __future__ import annotations
@@ -41,6 +42,8 @@ from firmware_protocol import EDS_PATH
 from firmware_protocol.generate import render_strict_eds
 from firmware_protocol.index_ranges import MANUFACTURER
 
+from . import _rules
+from ._gain_set import ACTIVE_GAIN_FIELD
 from ._objects import ObjectInfo, ObjectTable, default_table
 from .errors import DriveError, InvalidValue, StateError
 
@@ -83,10 +86,8 @@ def config_objects(table: ObjectTable | None = None) -> list[ObjectInfo]:
 
 
 def _gain_objects() -> dict[str, str]:
-    """OD name of each active gain object → its Gains field (from drive_link.drive)."""
-    from .drive import _GAIN_OBJECTS
-
-    return {active: field for field, (_set, active, _staged) in _GAIN_OBJECTS.items()}
+    """OD name of each active gain object → its Gains field."""
+    return ACTIVE_GAIN_FIELD
 
 
 def _text(obj: ObjectInfo, value: Any) -> str:
@@ -278,7 +279,7 @@ def read_dcf(path: Source, node_id: int = 1, table: ObjectTable | None = None) -
 
 def read_config(drive: Drive) -> dict[str, float | int]:
     """The drive's configuration as it reports it now (object name → value)."""
-    return {o.name: drive.read(o.name) for o in config_objects(drive.table)}
+    return {o.name: drive.read_number(o.name) for o in config_objects(drive.table)}
 
 
 def save(
@@ -424,10 +425,8 @@ def _check_rules(drive: Drive, changes: dict[str, float | int]) -> None:
     if not changes:
         return
     try:
-        drive._check_rules(changes)
-        loops = getattr(drive, "_check_loops", None)
-        if loops is not None:
-            loops(changes)
+        _rules.check_rules(drive.read, changes)
+        _rules.check_loops(drive.read, changes)
     except InvalidValue as exc:
         raise InvalidValue(f"nothing written: {exc}") from None
 

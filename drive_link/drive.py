@@ -16,33 +16,26 @@ from __future__ import annotations
 
 import threading
 import time
-from dataclasses import asdict, dataclass, fields
-from typing import Any
+from typing import Any, overload
 
 import can
 
-from firmware_protocol import load_od
 from firmware_protocol.cia301 import LOAD_SIGNATURE, SAVE_SIGNATURE
-from firmware_protocol.constraints import CONSTRAINTS
-from firmware_protocol.current_stability import (
-    CURRENT_KEYS,
-    MOTOR_KEYS,
-    check_cascade,
-    check_current_gains,
-)
-from firmware_protocol.entry import LimitError
-from firmware_protocol.entry import f32 as _f32
-from firmware_protocol.enums import StoreStatus
+from firmware_protocol.enums import ModeOfOperation
 
-from . import _connection, cia402
+from . import _connection, _drive_probe, _gain_set, _rules, cia402
+from ._drive_probe import STORE_STATUS
 from ._emcy import Emcy, EmcyListener
+from ._gain_set import GAIN_FIELDS, Gains
+from ._host_heartbeat import CONSUMER_MIN_MS, HostHeartbeat, confirm_nmt
 from ._live import LiveStreams, TpdoConfig, read_tpdo_configs
-from ._nmt import HeartbeatMonitor, HeartbeatProducer, send_command
+from ._nmt import HeartbeatMonitor
 from ._objects import ObjectInfo, ObjectTable, default_table
 from ._remote import remote_node
 from ._sdo import SdoChannel
 from ._stop_guard import StopGuard
-from .errors import DriveError, DriveTimeout, InvalidValue, NodeNotFound, StateError
+from .errors import DriveError, DriveTimeout, InvalidValue, NodeNotFound
+from .od_names import BytesName, FloatName, IntName, TextName
 from .supervision import SupervisedSdoChannel, Supervisor
 from .trace import Recorder
 
@@ -56,68 +49,8 @@ __all__ = [
     "Gains",
 ]
 
-#: 0x2060 store_status (U8, ro) values → name (the EDS enumeration, :class:`StoreStatus`).
-STORE_STATUS: dict[int, str] = {int(s): s.name.lower() for s in StoreStatus}
-STORE_STATUS_INDEX = load_od().entry("store_status").index
-_LOOP_NAMES = frozenset(
-    [f"current_controller.{k}" for k in CURRENT_KEYS]
-    + [f"motor.{k}" for k in MOTOR_KEYS]
-    + ["speed_controller.k_p", "speed_controller.k_i"]
-)
-"""Objects whose write the current-loop/cascade rule checks (as the drive does)."""
-CONSUMER_MIN_MS = 1000
-"""Shortest default heartbeat consumer time (ms) :meth:`Drive.configure_heartbeat_consumer`
-sets: max(CONSUMER_MIN_MS, 3 x the host producer period). 3 x 100 ms was too tight: at load 25
-the host's producer thread stalled > 300 ms and the drive quick-stopped with the host alive."""
-
-#: Gains field → (current/speed set, OD name of the active value, OD name of the staged value).
-_GAIN_OBJECTS: dict[str, tuple[int, str, str]] = {
-    **{
-        f: (1, f"current_controller.{f}", f"gain_set.{f}")
-        for f in CURRENT_KEYS  # the current-loop set, as the drive's rule names it
-    },
-    "speed_k_p": (2, "speed_controller.k_p", "gain_set.speed_k_p"),
-    "speed_k_i": (2, "speed_controller.k_i", "gain_set.speed_k_i"),
-    "speed_current_limit": (2, "speed_controller.current_limit", "gain_set.speed_current_limit"),
-}
-
-
-#: NMT commands confirmed by the next heartbeat, and the state it must report
-_NMT_CONFIRM = {"start": "OPERATIONAL", "stop": "STOPPED", "pre-operational": "PRE-OPERATIONAL"}
-#: How long Drive.nmt waits for the drive's first heartbeat before it can confirm a command, s.
-FIRST_HEARTBEAT_S = 1.5
-
-
-@dataclass(frozen=True)
-class Gains:
-    """Controller gains as the drive holds them (SI units).
-
-    Current loop (0x2010): ``type`` (0 deadbeat eq. 15, 1 PI eq. 22, 2 predictive eq. 23/25),
-    ``L_c`` (H), ``R_c`` (Ω), ``k_p``/``k_i`` (V/A, PI), ``T_BT``/``T_DD``/``T_SD`` (s),
-    ``V_G`` (V), ``emf_feedforward`` (0/1). Speed loop (0x2020): ``speed_k_p`` (A/rpm),
-    ``speed_k_i`` (1/sample), ``speed_current_limit`` (A).
-    """
-
-    type: int
-    L_c: float
-    R_c: float
-    k_p: float
-    k_i: float
-    T_BT: float
-    T_DD: float
-    T_SD: float
-    V_G: float
-    emf_feedforward: int
-    speed_k_p: float
-    speed_k_i: float
-    speed_current_limit: float
-
-    def to_dict(self) -> dict[str, float | int]:
-        """Plain dict of every field."""
-        return asdict(self)
-
-
-GAIN_FIELDS: tuple[str, ...] = tuple(f.name for f in fields(Gains))
+Value = float | int | str | bytes
+"""What an object holds (REAL32 float, integer int, VISIBLE_STRING str, DOMAIN bytes)."""
 
 
 class Drive:
@@ -134,16 +67,41 @@ class Drive:
         table: ObjectTable | None = None,
         sdo_timeout: float = 0.3,
         retries: int = 5,
+        heartbeat_ms: int | None = None,
+        host_id: int = 0x7F,
     ):
+        """A session with node ``node_id`` on ``conn`` (see :meth:`connect`, the way to make
+        one). Releases ``conn`` if it fails (:class:`NodeNotFound` if nobody answers)."""
+        try:
+            self._build(conn, node_id, table, sdo_timeout, retries)
+        except BaseException:
+            _connection.release(conn)
+            raise
+        try:
+            self._start(heartbeat_ms, host_id)
+        except BaseException:
+            self.close()
+            raise
+
+    def _build(
+        self,
+        conn: _connection.Connection,
+        node_id: int,
+        table: ObjectTable | None,
+        sdo_timeout: float,
+        retries: int,
+    ) -> None:
         if not 1 <= node_id <= 127:
             raise InvalidValue(f"node-ID {node_id} outside 1..127")
         self._conn = conn
         self.node_id = node_id
         self.table = table or default_table()
         net = conn.network
+        #: this host's heartbeat producer and the drive's consumer setting for it
+        self.host_heartbeat = HostHeartbeat(net, conn.bus)
         #: re-applies this session's supervision when the drive restarts (see supervision.py)
-        self.supervisor = Supervisor(net, node_id, restart_producer=self._restart_producer)
-        self.supervisor.send_heartbeat = self._send_host_heartbeat
+        self.supervisor = Supervisor(net, node_id, restart_producer=self.host_heartbeat.restart)
+        self.supervisor.send_heartbeat = self.host_heartbeat.send_now
         self.sdo = SupervisedSdoChannel(
             net, node_id, 0x600 + node_id, 0x580 + node_id, sdo_timeout, retries
         )
@@ -152,16 +110,19 @@ class Drive:
         self.heartbeat = HeartbeatMonitor(net, node_id)
         self.heartbeat.attach_reader(self.read)  # 0x1017 wait + SDO fallback of nmt_state
         #: canopen's view of the node: nmt, emcy, tpdo/rpdo; its sdo is our locked channel
-        self.node = remote_node(net, node_id, self.table.od or default_table().od, self.sdo)
-        self._emcy: EmcyListener = self.node.emcy
+        od = self.table.od or default_table().od
+        if od is None:
+            raise InvalidValue("the object table has no canopen dictionary")
+        self.node = remote_node(net, node_id, od, self.sdo)
+        emcy = self.node.emcy
+        assert isinstance(emcy, EmcyListener)  # remote_node's consumer
+        self._emcy = emcy
         self._emcy_cob = 0x80 + node_id
-        self._producer: HeartbeatProducer | None = None
-        self._consumer_configured = False
         self._live: LiveStreams | None = None
         self._live_lock = threading.Lock()
-        self._gains_lock = threading.RLock()  # stage + apply + read back as one operation
+        #: held by the gain path (drive_link.gains.apply_gains): read, stage, apply, read back
+        self.gains_lock = threading.RLock()
         self._closed = False
-        self.host_id: int | None = None
         #: quick stops sent and the blocks they forbid re-enabling in (drive_link._stop_guard)
         self.stops = StopGuard()
         self.sm = cia402.StateMachine(
@@ -170,6 +131,37 @@ class Drive:
         )
         self.trace = Recorder(self)
         conn.active_nodes[node_id] = None
+
+    def _start(self, heartbeat_ms: int | None, host_id: int) -> None:
+        """Probe the node (device_type 0x1000), attach supervision, use its second SDO server
+        and configured EMCY COB-ID, start the host heartbeat."""
+        try:
+            self.device_type = int(self.read("device_type"))
+        except DriveTimeout:
+            raise NodeNotFound(
+                f"no answer from node {self.node_id} (SDO to 0x{0x600 + self.node_id:03X})"
+            ) from None
+        self._conn.active_nodes[self.node_id] = self.device_type
+        self.supervisor.attach(self.sdo)
+        server = _drive_probe.trace_server(self.read)
+        if server is not None:
+            trace = SupervisedSdoChannel(
+                self._conn.network,
+                self.node_id,
+                *server,
+                self.sdo.client.RESPONSE_TIMEOUT,
+                self.sdo.retries,
+            )
+            trace.supervisor = self.supervisor
+            self.sdo_trace = trace
+        cob = _drive_probe.emcy_cob(self.read)
+        if cob is not None and cob != self._emcy_cob:  # listen where the drive sends
+            net = self._conn.network
+            net.unsubscribe(self._emcy_cob, self._emcy.on_emcy)
+            self._emcy_cob = cob
+            net.subscribe(self._emcy_cob, self._emcy.on_emcy)
+        if heartbeat_ms:
+            self.host_heartbeat.start(host_id, int(heartbeat_ms))
 
     # ------------------------------------------------------------------ lifecycle
     @classmethod
@@ -205,65 +197,14 @@ class Drive:
             port=port,
             **bus_kwargs,
         )
-        try:
-            drive = cls(conn, node_id, sdo_timeout=sdo_timeout, retries=retries)
-        except Exception:
-            _connection.release(conn)
-            raise
-        try:
-            drive._probe()
-            drive.supervisor.attach(drive.sdo)
-            drive._setup_trace_channel()
-            drive._setup_emcy()
-            if heartbeat_ms:
-                drive.host_id = host_id
-                drive._producer = HeartbeatProducer(conn.bus, host_id, int(heartbeat_ms))
-        except BaseException:
-            drive.close()
-            raise
-        return drive
-
-    def _probe(self) -> None:
-        try:
-            self.device_type = int(self.read("device_type"))
-            self._conn.active_nodes[self.node_id] = self.device_type
-        except DriveTimeout:
-            raise NodeNotFound(
-                f"no answer from node {self.node_id} (SDO to 0x{0x600 + self.node_id:03X})"
-            ) from None
-
-    def _setup_emcy(self) -> None:
-        """Listen on the drive's configured EMCY COB-ID (0x1014) if it is not 0x80 + N."""
-        try:
-            cob = int(self.read("cob_id_emcy"))
-        except DriveError:
-            return
-        if cob & 0x80000000 or (cob & 0x7FF) == self._emcy_cob:
-            return
-        net = self._conn.network
-        net.unsubscribe(self._emcy_cob, self._emcy.on_emcy)
-        self._emcy_cob = cob & 0x7FF
-        net.subscribe(self._emcy_cob, self._emcy.on_emcy)
-
-    def _setup_trace_channel(self) -> None:
-        """Use the drive's second SDO server (0x1201) for uploads if it has a valid one."""
-        try:
-            rx = int(self.read("sdo_server_2.cob_id_client_to_server"))
-            tx = int(self.read("sdo_server_2.cob_id_server_to_client"))
-        except DriveError:
-            return  # no second server: uploads share the first channel (still locked)
-        if rx & 0x80000000 or tx & 0x80000000:
-            return
-        trace = SupervisedSdoChannel(
-            self._conn.network,
-            self.node_id,
-            rx & 0x7FF,
-            tx & 0x7FF,
-            self.sdo.client.RESPONSE_TIMEOUT,
-            self.sdo.retries,
+        return cls(
+            conn,
+            node_id,
+            sdo_timeout=sdo_timeout,
+            retries=retries,
+            heartbeat_ms=heartbeat_ms,
+            host_id=host_id,
         )
-        trace.supervisor = self.supervisor
-        self.sdo_trace = trace
 
     def close(self) -> None:
         """Stop the host heartbeat (unconfiguring the drive's consumer if this host set it),
@@ -272,13 +213,12 @@ class Drive:
             return
         self._closed = True
         self.supervisor.close()
-        if self._consumer_configured:
+        if self.host_heartbeat.consumer_configured:
             try:
                 self.write("consumer_heartbeat_time.consumer_1", 0)
             except DriveError:
                 pass
-        if self._producer:
-            self._producer.stop()
+        self.host_heartbeat.stop()
         if self._live:
             self._live.close()
         self.heartbeat.close()
@@ -308,58 +248,77 @@ class Drive:
         """Type, unit and limits of an object."""
         return self.table[name]
 
-    def read(self, name: str) -> float | int | str | bytes:
-        """Read an object by name (SI units per the OD; REAL32 → float, integers → int)."""
+    @overload
+    def read(self, name: FloatName) -> float: ...
+    @overload
+    def read(self, name: IntName) -> int: ...
+    @overload
+    def read(self, name: TextName) -> str: ...
+    @overload
+    def read(self, name: BytesName) -> bytes: ...
+    @overload
+    def read(self, name: str) -> Value: ...
+
+    def read(self, name: str) -> Value:
+        """Read an object by name (SI units per the OD; REAL32 → float, integers → int,
+        VISIBLE_STRING → str, DOMAIN → bytes). Overloaded on the names of
+        :mod:`drive_link.od_names`: ``drive.read("measurements.speed")`` is a float to a type
+        checker."""
         obj = self.table[name]
         if not obj.readable:
             raise InvalidValue(f"{name} is write-only")
         raw = self.sdo.upload(obj.index, obj.subindex, name)
         return obj.decode(raw)
 
-    def read_many(self, names: list[str]) -> dict[str, float | int | str | bytes]:
+    def read_number(self, name: str) -> float | int:
+        """Read a numeric object (any name, e.g. one computed at run time): REAL32 → float,
+        integers → int; :class:`InvalidValue` for a string or domain object."""
+        v = self.read(name)
+        if isinstance(v, str | bytes):
+            raise InvalidValue(f"{name} is not a number ({self.table[name].type_name})")
+        return v
+
+    def read_many(self, names: list[str]) -> dict[str, Value]:
         """Read several objects (one SDO each)."""
         return {n: self.read(n) for n in names}
 
-    def write(self, name: str, value: float | int | str | bytes) -> None:
+    def write(self, name: str, value: Value) -> None:
         """Write an object by name after a client-side type and limit check (the drive
-        re-checks and may abort: :class:`SdoAbort`)."""
+        re-checks and may abort: :class:`SdoAbort`).
+
+        An active controller gain (current_controller.*, speed_controller.k_p/k_i/current_limit)
+        changes through the one gain path, :func:`drive_link.gains.apply_gains` (its stability
+        and margin policy; :class:`drive_link.GainsRefused` if refused, nothing sent); a raw
+        write of gain_set_apply (0x20F1) is refused (:class:`InvalidValue`): apply a set with
+        :func:`drive_link.gains.apply_gains`."""
         obj = self.table[name]
         if not obj.writable:
             raise InvalidValue(f"{name} is read-only")
+        if name == _gain_set.APPLY_NAME:
+            raise InvalidValue(
+                f"{name}: gain sets are applied by drive_link.gains.apply_gains "
+                "(drive-link set-gains), which checks the set's stability and margins first"
+            )
         data = obj.encode(value)
         v = obj.check(value)
         if isinstance(v, int | float):
-            self._check_rules({name: v})
-            if name in _LOOP_NAMES:
-                self._check_loops({name: v})
+            _rules.check_rules(self.read, {name: v})
+        field = _gain_set.ACTIVE_GAIN_FIELD.get(name)
+        if field is not None and isinstance(v, int | float):
+            from .gains import GainsRefused, apply_gains  # the one gain path, loaded on use
+
+            try:
+                apply_gains(self, {field: v})
+            except GainsRefused as exc:
+                raise GainsRefused(
+                    f"{name}: {exc} (gains change through drive_link.gains.apply_gains: "
+                    f"drive-link set-gains {field}=... [--force])",
+                    exc.check,
+                ) from None
+            return
+        if isinstance(v, int | float) and name in _rules.LOOP_NAMES:
+            _rules.check_loops(self.read, {name: v})
         self.sdo.download(obj.index, obj.subindex, data, name)
-
-    def _check_loops(self, values: dict[str, float | int]) -> None:
-        """Client-side current-loop and cascade rule (firmware_protocol.current_stability),
-        the drive's present set read back with ``values`` in place."""
-        def present(n: str) -> Any:
-            return values[n] if n in values else self.read(n)
-
-        g = {k: present(f"current_controller.{k}") for k in CURRENT_KEYS}
-        m = {k: present(f"motor.{k}") for k in MOTOR_KEYS}
-        k_p, k_i = present("speed_controller.k_p"), present("speed_controller.k_i")
-        try:
-            check_current_gains(g, m)
-            check_cascade(g, m, k_p, k_i)
-        except LimitError as exc:
-            raise InvalidValue(f"refused before sending: {exc}") from None
-
-    def _check_rules(self, values: dict[str, float | int]) -> None:
-        """Client-side check of the OD's cross-object rules (firmware_protocol.CONSTRAINTS,
-        e.g. L_c < 2 motor.L) triggered by ``values``; other operands are read from the drive."""
-        for c in CONSTRAINTS:
-            if not any(n in values for n in c.triggers):
-                continue
-            operands = {n: values[n] if n in values else self.read(n) for n in c.names}
-            if c.holds(operands):
-                continue
-            shown = ", ".join(f"{n} = {operands[n]:.6g}" for n in c.names)
-            raise InvalidValue(f"refused before sending: {c} does not hold ({shown}): {c.reason}")
 
     # ------------------------------------------------------------------ NMT / heartbeat
     @property
@@ -370,36 +329,11 @@ class Drive:
 
     def nmt(self, command: str) -> None:
         """Send an NMT command to this node: "start", "stop", "pre-operational",
-        "reset node", "reset communication" (waits while supervision is being re-armed)."""
+        "reset node", "reset communication" (waits while supervision is being re-armed);
+        start/stop/pre-operational are repeated until a heartbeat confirms them."""
         self.supervisor.wait_ready()
         self.supervisor.expect_nmt(command)
-        send_command(self.node.nmt, command)
-        target = _NMT_CONFIRM.get(command)
-        if target is None:
-            return  # resets are confirmed by the boot-up
-        if not self.heartbeat.last_time:
-            # a one-shot command may run before the drive's first heartbeat arrived: wait for
-            # one (a producer time is at most about 1 s in practice); none → nothing confirms
-            try:
-                self.heartbeat.wait_for(tuple(_NMT_CONFIRM.values()), FIRST_HEARTBEAT_S)
-            except DriveTimeout:
-                return
-        # An NMT command has no answer (CiA 301): on a lossy bus it is lost silently. Repeat it
-        # until a heartbeat sent after it reports the target state (idempotent in that state).
-        period = self.heartbeat.producer_time or 0.1
-        deadline = time.monotonic() + max(3.0, 6 * period)
-        while True:
-            sent = time.monotonic()
-            try:
-                self.heartbeat.wait_for((target,), max(0.3, 2.5 * period), after=sent)
-                return
-            except DriveTimeout:
-                if time.monotonic() >= deadline:
-                    raise DriveTimeout(
-                        f"node {self.node_id}: NMT {command} not confirmed by a heartbeat "
-                        f"reporting {target} within {deadline - sent + 2.5 * period:.1f} s"
-                    ) from None
-            send_command(self.node.nmt, command)
+        confirm_nmt(self.node.nmt, self.heartbeat, command, self.node_id)
 
     # ------------------------------------------------------------------ restart supervision
     @property
@@ -416,20 +350,6 @@ class Drive:
     def rearm_supervision(self):
         """Re-apply the session's heartbeat consumer, 0x6007 and PDO settings now."""
         return self.supervisor.rearm()
-
-    def _send_host_heartbeat(self) -> None:
-        """One host heartbeat now (besides the periodic ones), if this host produces one."""
-        if self._producer is None or self.host_id is None:
-            return
-        self._conn.network.send_message(0x700 + self.host_id, bytes([0x05]))
-
-    def _restart_producer(self) -> None:
-        """Start the host heartbeat again (its periodic task may have died with a bus error)."""
-        if self._producer is None or self.host_id is None:
-            return
-        period = self._producer.period_ms
-        self._producer.stop()
-        self._producer = HeartbeatProducer(self._conn.bus, self.host_id, period)
 
     def reset(self, communication_only: bool = False, timeout: float = 3.0) -> None:
         """NMT reset node (or communication) and wait for the boot-up message."""
@@ -456,22 +376,20 @@ class Drive:
         quick-stops the motor). The price: a host that really dies is noticed up to ~1 s after
         its last heartbeat instead of 0.3 s; pass a smaller ``timeout_ms`` on a quiet,
         real-time host where faster reaction matters more than false stops."""
-        if self._producer is None or self.host_id is None:
-            raise StateError("no host heartbeat is produced (connect with heartbeat_ms)")
-        default = max(CONSUMER_MIN_MS, 3 * self._producer.period_ms)
-        t = int(timeout_ms if timeout_ms is not None else default)
-        if not 0 < t <= 0xFFFF:
-            raise InvalidValue(f"heartbeat consumer time {t} ms outside 1..65535")
-        self.write("consumer_heartbeat_time.consumer_1", (self.host_id << 16) | t)
-        self._consumer_configured = True
+        entry = self.host_heartbeat.consumer_entry(timeout_ms)
+        self.write("consumer_heartbeat_time.consumer_1", entry)
+        self.host_heartbeat.consumer_configured = True
         # CiA 301: the consumer starts watching at the first heartbeat after its configuration
-        self._send_host_heartbeat()
+        self.host_heartbeat.send_now()
+
+    @property
+    def host_id(self) -> int | None:
+        """Node-ID of this host's heartbeat (0x700 + host_id); None if none is produced."""
+        return self.host_heartbeat.host_id
 
     def stop_host_heartbeat(self) -> None:
         """Stop sending the host heartbeat (e.g. to test the drive's consumer reaction)."""
-        if self._producer:
-            self._producer.stop()
-            self._producer = None
+        self.host_heartbeat.stop()
 
     # ------------------------------------------------------------------ CiA 402
     @property
@@ -507,12 +425,12 @@ class Drive:
         """Reset a fault (→ SWITCH ON DISABLED); :class:`StateError` if the fault persists."""
         return self.sm.fault_reset(timeout)
 
-    def set_mode(self, mode: str, timeout: float = 0.5) -> None:
+    def set_mode(self, mode: str | ModeOfOperation, timeout: float = 0.5) -> None:
         """Select "speed" (3, profile velocity), "current" (-1, pseudo-current) or "torque" (4)
-        and wait until modes_of_operation_display confirms it."""
-        if mode not in cia402.MODES:
-            raise InvalidValue(f"mode {mode!r}: one of {', '.join(cia402.MODES)}")
-        value = cia402.MODES[mode]
+        — or the :class:`~firmware_protocol.enums.ModeOfOperation` member — and wait until
+        modes_of_operation_display confirms it."""
+        value = cia402.mode_value(mode)
+        name = cia402.mode_name(value)
         if int(self.read("modes_of_operation_display")) == value:
             return
         self.write("modes_of_operation", value)
@@ -523,7 +441,7 @@ class Drive:
                 return
             if time.monotonic() >= deadline:
                 raise DriveTimeout(
-                    f"mode {mode} not confirmed within {timeout:g} s "
+                    f"mode {name} not confirmed within {timeout:g} s "
                     f"(drive shows {cia402.mode_name(shown)})"
                 )
             time.sleep(0.005)
@@ -538,49 +456,9 @@ class Drive:
 
     # ------------------------------------------------------------------ gains
     def read_gains(self) -> Gains:
-        """The active controller gains (0x2010, 0x2020)."""
-        return Gains(**{f: self.read(_GAIN_OBJECTS[f][1]) for f in GAIN_FIELDS})
-
-    def apply_gains(self, **changes: float | int) -> Gains:
-        """Change gains atomically: stage the whole set in gain_set (0x20F0), apply with
-        gain_set_apply (0x20F1: 1 current set, 2 speed set, 3 both), return the read-back.
-
-        The drive validates the set as a whole and aborts with nothing changed if any value is
-        refused (:class:`SdoAbort`).
-        """
-        unknown = [k for k in changes if k not in _GAIN_OBJECTS]
-        if unknown:
-            raise InvalidValue(
-                f"unknown gain(s) {', '.join(unknown)}; known: {', '.join(GAIN_FIELDS)}"
-            )
-        if not changes:
-            return self.read_gains()
-        for k, v in changes.items():
-            self.table[_GAIN_OBJECTS[k][2]].check(v)
-        # the staged set is checked as the objects it becomes (the drive checks it so at apply)
-        self._check_rules({_GAIN_OBJECTS[k][1]: v for k, v in changes.items()})
-        sets = 0
-        for k in changes:
-            sets |= _GAIN_OBJECTS[k][0]
-        with self._gains_lock:
-            return self._stage_and_apply(changes, sets)
-
-    def _stage_and_apply(self, changes: dict[str, float | int], sets: int) -> Gains:
-        current = self.read_gains().to_dict()
-        merged = {**current, **changes}
-        for f in GAIN_FIELDS:
-            if _GAIN_OBJECTS[f][0] & sets:
-                staged = _GAIN_OBJECTS[f][2]
-                obj = self.table[staged]
-                self.sdo.download(obj.index, obj.subindex, obj.encode(merged[f]), staged)
-        self.write("gain_set_apply", sets)
-        back = self.read_gains()
-        for k, v in changes.items():
-            got = getattr(back, k)
-            want = _f32(float(v)) if isinstance(got, float) else int(v)
-            if got != want:
-                raise DriveError(f"gain {k}: drive reads back {got!r} after applying {v!r}")
-        return back
+        """The active controller gains (0x2010, 0x2020). To change them:
+        :func:`drive_link.gains.apply_gains` (the one gain path)."""
+        return _gain_set.read_gains(self)
 
     # ------------------------------------------------------------------ store / restore
     def store(self) -> None:
@@ -658,20 +536,7 @@ class Drive:
         """Health of the drive's parameter store, 0x2060: "ok" (stored parameters loaded),
         "defaults" (no store), "damaged" / "unreadable" (stored parameters lost: defaults in
         use), or "unknown" (firmware without 0x2060)."""
-        from .errors import SdoAbort
-
-        if "store_status" not in self.table:
-            index, sub = STORE_STATUS_INDEX, 0
-        else:
-            obj = self.table["store_status"]
-            index, sub = obj.index, obj.subindex
-        try:
-            raw = self.sdo.upload(index, sub, "store_status")
-        except SdoAbort:
-            return "unknown"
-        if not raw:
-            return "unknown"
-        return STORE_STATUS.get(raw[0], f"code {raw[0]}")
+        return _drive_probe.store_status(self.sdo, self.table)
 
     def status(self) -> dict[str, Any]:
         """A snapshot for displays: NMT and 402 state, mode, key measurements, error register,

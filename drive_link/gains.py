@@ -15,7 +15,8 @@ else, so both follow one policy:
   ‖S‖∞ > 5.
 
 Applying stages the whole set in gain_set (0x20F0) and applies it with gain_set_apply (0x20F1)
-(:meth:`drive_link.Drive.apply_gains`), so the drive changes all values at once or none.
+(:func:`drive_link._gain_set.stage_and_apply`), so the drive changes all values at once or none.
+This is the one public way to change gains: ``Drive.write`` of a gain object comes here too.
 
 Units: L_c H, R_c Ω, current PI k_p/k_i V/A, T_BT/T_DD/T_SD s, V_G V, speed k_p A/rpm, speed
 k_i 1/sample, speed_current_limit A; motor R Ω, L H, rated_current A, V_dc_nominal V.
@@ -26,7 +27,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from firmware_protocol.current_stability import (
     CURRENT_KEYS,
@@ -38,10 +39,8 @@ from firmware_protocol.entry import LimitError
 from firmware_protocol.stability import A_IDENTIFIED, B_IDENTIFIED, check_ip_speed_gains
 
 from . import design
+from ._gain_set import GAIN_FIELDS, GainSetDrive, stage_and_apply
 from .errors import InvalidValue
-
-if TYPE_CHECKING:
-    from .drive import Drive
 
 __all__ = [
     "GAIN_MARGIN_MIN_DB",
@@ -138,7 +137,7 @@ class GainsRefused(InvalidValue):
         self.unstable = bool(check.refusals)
 
 
-def _controller(value: Any) -> tuple[int, str]:
+def _controller(value: Any) -> tuple[int, design.ControllerName]:
     """(code, name) of a controller given as 0..2 or "deadbeat"/"pi"/"predictive"."""
     if isinstance(value, str) and not value.strip().lstrip("-").isdigit():
         name = value.strip().lower()
@@ -146,7 +145,8 @@ def _controller(value: Any) -> tuple[int, str]:
             raise InvalidValue(
                 f"type: {value!r} is not a controller ({', '.join(design.CONTROLLERS)} or 0..2)"
             )
-        return design.CONTROLLERS.index(name), name
+        code = design.CONTROLLERS.index(name)
+        return code, design.CONTROLLERS[code]
     code = int(value)
     if not 0 <= code < len(design.CONTROLLERS):
         raise InvalidValue(f"type: {code} is not a controller code (0..2)")
@@ -255,14 +255,14 @@ def check_gains(
     return GainCheck(tuple(refusals), tuple(warnings), fig)
 
 
-def read_motor(drive: Drive) -> dict[str, float]:
+def read_motor(drive: GainSetDrive) -> dict[str, float]:
     """The motor parameters the rule needs, read from the drive (motor.R Ω, motor.L H,
     motor.rated_current A, motor.V_dc_nominal V)."""
     return {k: float(drive.read(f"motor.{k}")) for k in MOTOR_KEYS}
 
 
 def apply_gains(
-    drive: Drive,
+    drive: GainSetDrive,
     changes: Mapping[str, Any],
     *,
     force: bool = False,
@@ -278,8 +278,6 @@ def apply_gains(
     margins are poor and ``force`` is False; :class:`InvalidValue` for unknown names or
     non-numbers; :class:`drive_link.SdoAbort` if the drive still refuses.
     """
-    from .drive import GAIN_FIELDS
-
     unknown = [k for k in changes if k not in GAIN_FIELDS]
     if unknown:
         raise InvalidValue(f"unknown gain(s) {', '.join(unknown)}; known: {', '.join(GAIN_FIELDS)}")
@@ -307,5 +305,5 @@ def apply_gains(
             "refused: " + "; ".join(check.warnings) + " (force to apply anyway); nothing applied",
             check,
         )
-    back = drive.apply_gains(**wanted).to_dict()
+    back = stage_and_apply(drive, wanted).to_dict()
     return GainResult(back, previous, check, forced=bool(force and check.warnings))

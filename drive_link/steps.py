@@ -195,21 +195,6 @@ class Hooks:
             pass
 
 
-def _wait_done(drive: Drive, timeout: float, hooks: Hooks, poll_s: float = 0.02) -> None:
-    """Like ``Recorder.wait`` but sleeping through ``hooks`` (cancellable)."""
-    deadline = time.monotonic() + timeout
-    state = drive.trace.state
-    while state != "done":
-        if state == "idle":
-            raise StateError(
-                "trace recorder went idle before it was done (stopped or reconfigured)"
-            )
-        if time.monotonic() >= deadline:
-            raise DriveTimeout(f"trace not done after {timeout:g} s (recorder {state})")
-        hooks.sleep(poll_s)
-        state = drive.trace.state
-
-
 class NotSettled(DriveTimeout):
     """The start of a step did not settle: no metrics are computed from it."""
 
@@ -315,7 +300,7 @@ def record(
                 drive.trace.wait_ready(10.0 + 20.0 * pre_trigger * divider * TS, sleep=h.sleep)
             action()
         h.report(0.3, "recording")
-        _wait_done(drive, timeout, h)
+        drive.trace.wait(timeout, sleep=h.sleep)
         return _upload(drive, h)
 
 
@@ -356,7 +341,7 @@ def record_setpoint_step(
             set_after()
             h.report(0.3, "recording")
             try:
-                _wait_done(drive, timeout, h)
+                drive.trace.wait(timeout, sleep=h.sleep)
             except DriveTimeout:
                 if attempt + 1 == attempts or drive.trace.state != "armed":
                     raise
@@ -560,7 +545,7 @@ def _current_result(
     k0 = tr.trigger_index
     i_p = _column(tr, "i_p")
     e_L = float(np.mean(tr.signals["measurements.e_L"][: max(k0, 1)]))
-    controller = CONTROLLER_NAMES.get(int(g.type), "deadbeat")
+    controller = design.controller_name(g.type) if g.type in CONTROLLER_NAMES else "deadbeat"
     n_after = len(tr.t) - k0
     pred = design.predicted_step(
         controller,

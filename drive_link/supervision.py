@@ -156,14 +156,16 @@ class SupervisedSdoChannel(SdoChannel):
         super().__init__(*args, **kwargs)
         self._held = threading.local()  # depth > 0 while this thread holds it via patience()
         # a request to a node whose heartbeat stopped fails then (NodeGone), not after resends
-        self.client.gone_at = self._gone_at  # type: ignore[attr-defined]
-        self.client.gone_reason = self._gone_reason  # type: ignore[attr-defined]
+        self.client.watch = self
 
-    def _gone_at(self) -> float | None:
+    def gone_at(self) -> float | None:
+        """Monotonic time from which the node counts as gone (the supervisor's heartbeat
+        watch; None: none)."""
         sup = self.supervisor
         return None if sup is None else sup.gone_at()
 
-    def _gone_reason(self) -> str:
+    def gone_reason(self) -> str:
+        """Why the node counts as gone."""
         sup = self.supervisor
         return "heartbeat stopped" if sup is None else sup.gone_reason()
 

@@ -13,13 +13,15 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 
 from firmware_protocol import abort_codes, load_od
 from firmware_protocol.enums import TraceState, TraceTriggerEdge, TraceTriggerMode
 
+from ._objects import ObjectTable
+from ._sdo import SdoChannel
 from .errors import DriveTimeout, InvalidValue, SdoAbort, StateError
 
 __all__ = [
@@ -30,12 +32,25 @@ __all__ = [
     "TS",
     "Recorder",
     "Trace",
+    "TraceDrive",
     "Trigger",
     "od_reference",
 ]
 
-if TYPE_CHECKING:
-    from .drive import Drive
+
+
+class TraceDrive(Protocol):
+    """What the recorder needs of a drive (:class:`drive_link.Drive` is one)."""
+
+    @property
+    def table(self) -> ObjectTable: ...
+
+    @property
+    def sdo_trace(self) -> SdoChannel: ...
+
+    def read(self, name: str) -> Any: ...
+
+    def write(self, name: str, value: float | int | str | bytes) -> None: ...
 
 #: Control-loop sampling period of the drive, s (fs = 50 kHz; overview "control law").
 TS = 20e-6
@@ -155,7 +170,7 @@ def od_reference(index: int, subindex: int, bits: int = 32) -> int:
 class Recorder:
     """The trace recorder of one drive (use ``drive.trace``)."""
 
-    def __init__(self, drive: Drive):
+    def __init__(self, drive: TraceDrive):
         self._drive = drive
         self._channels: list[str] = []
         self._divider = 1
@@ -242,8 +257,12 @@ class Recorder:
         """Stop (command 0)."""
         self._drive.write("trace_config.command", 0)
 
-    def wait(self, timeout: float, poll_s: float = 0.02) -> None:
-        """Wait until the recorder is "done"; :class:`DriveTimeout` naming the state otherwise."""
+    def wait(
+        self, timeout: float, poll_s: float = 0.02, sleep: Callable[[float], None] = time.sleep
+    ) -> None:
+        """Wait until the recorder is "done"; :class:`DriveTimeout` naming the state otherwise,
+        :class:`StateError` if it went idle. ``sleep`` waits between polls (s; may raise to
+        cancel: the step tests pass their hooks')."""
         deadline = time.monotonic() + timeout
         state = self.state
         while state != "done":
@@ -253,7 +272,7 @@ class Recorder:
                 )
             if time.monotonic() >= deadline:
                 raise DriveTimeout(f"trace not done after {timeout:g} s (recorder {state})")
-            time.sleep(poll_s)
+            sleep(poll_s)
             state = self.state
 
     def wait_ready(

@@ -15,6 +15,7 @@ from conftest import RunQueueProbe, heartbeat_explained, min_rate
 
 from drive_link import cli
 from drive_link.check import ITEMS
+from drive_link.gains import apply_gains
 
 pytestmark = [pytest.mark.timeout(90), pytest.mark.unit]
 
@@ -184,7 +185,7 @@ def test_store_restore_puts_a_tuned_drive_back(virtual_node, capsys):
 
     _, ch = virtual_node
     with Drive.connect(interface="virtual", channel=ch, node_id=4, heartbeat_ms=None) as d:
-        d.apply_gains(speed_k_p=0.3, speed_k_i=4e-5)
+        apply_gains(d, {"speed_k_p": 0.3, "speed_k_i": 4e-5})
         d.write("tpdo1_communication.event_timer", 20)
         cob = int(d.read("tpdo4_communication.cob_id"))
         d.write("tpdo4_communication.cob_id", cob | 0x80000000)

@@ -18,7 +18,16 @@ import numpy as np
 import pytest
 from conftest import RunQueueProbe, min_rate
 
-from drive_link import Drive, InvalidValue, NodeNotFound, SdoAbort, StateError, scan
+from drive_link import (
+    Drive,
+    InvalidValue,
+    ModeOfOperation,
+    NodeNotFound,
+    SdoAbort,
+    StateError,
+    scan,
+)
+from drive_link.gains import apply_gains
 from drive_link.trace import Trigger
 
 pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
@@ -93,6 +102,11 @@ def test_cia402_enable_disable_quick_stop(drive):
     assert drive.state == "SWITCH ON DISABLED"
     with pytest.raises(InvalidValue, match="mode 'position'"):
         drive.set_mode("position")
+    # the package's enum is taken where a mode is (CiA 402: 0x6061 shows -1, 3)
+    drive.set_mode(ModeOfOperation.PSEUDO_CURRENT)
+    assert drive.read("modes_of_operation_display") == -1 and drive.mode == "current"
+    drive.set_mode(ModeOfOperation.PROFILE_VELOCITY)
+    assert drive.read("modes_of_operation_display") == 3 and drive.mode == "speed"
 
 
 def test_fault_emcy_history_and_reset(drive):
@@ -140,26 +154,29 @@ def test_limits_client_side_and_drive_side(drive):
 def test_apply_gains_atomic_and_read_back(drive):
     g0 = drive.read_gains()
     try:
-        g = drive.apply_gains(L_c=0.8 * L_MOTOR, k_p=0.5, speed_k_p=0.2)
+        res = apply_gains(drive, {"L_c": 0.8 * L_MOTOR, "k_p": 0.5, "speed_k_p": 0.2})
+        g = drive.read_gains()
+        assert res.gains == g.to_dict()
         assert g.L_c == pytest.approx(0.8 * L_MOTOR, rel=1e-6)
         assert g.k_p == pytest.approx(0.5, rel=1e-6) and g.speed_k_p == pytest.approx(0.2, rel=1e-6)
         assert drive.read("current_controller.L_c") == g.L_c
         with pytest.raises(InvalidValue, match="unknown gain"):
-            drive.apply_gains(Lc=1e-6)
+            apply_gains(drive, {"Lc": 1e-6})
         # a set the drive refuses as a whole changes nothing
         for f in ("L_c", "R_c", "k_p", "k_i"):
             o = drive.table[f"gain_set.{f}"]
             drive.sdo.download(o.index, o.subindex, o.encode(getattr(g, f)))
         o = drive.table["gain_set.L_c"]
+        apply_obj = drive.table["gain_set_apply"]
         try:
             drive.sdo.download(o.index, o.subindex, struct.pack("<f", 3 * L_MOTOR))
             with pytest.raises(SdoAbort):
-                drive.write("gain_set_apply", 1)
+                drive.sdo.download(apply_obj.index, apply_obj.subindex, bytes([1]))
         except SdoAbort:
             pass  # refused already when staged
         assert drive.read_gains() == g
     finally:
-        drive.apply_gains(L_c=g0.L_c, k_p=g0.k_p, speed_k_p=g0.speed_k_p)
+        apply_gains(drive, {"L_c": g0.L_c, "k_p": g0.k_p, "speed_k_p": g0.speed_k_p}, force=True)
 
 
 def test_trace_capture_csv_png_and_parallel_status(drive, tmp_path):

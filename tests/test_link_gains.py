@@ -18,7 +18,7 @@ import control
 import numpy as np
 import pytest
 
-from drive_link import Drive, cli
+from drive_link import Drive, InvalidValue, cli
 from drive_link.gains import GainsRefused, apply_gains, check_gains
 
 pytestmark = [pytest.mark.timeout(90), pytest.mark.unit]
@@ -107,3 +107,21 @@ def test_apply_gains_force_overrides_margins_only(node):
         apply_gains(d, {"Lc": L})
     with pytest.raises(ValueError, match="finite"):
         apply_gains(d, {"k_p": float("nan")})
+
+
+def test_a_write_of_a_gain_object_takes_the_one_gain_path(node):
+    """Drive.write of an active gain is judged by the same policy as apply_gains (the margin
+    rule too, not only stability), and applying a staged set is only the gain path's."""
+    _, d = node
+    before = d.read_gains()
+    with pytest.raises(GainsRefused) as exc:  # stable, GM 0.9 dB: refused like apply_gains'
+        d.write("current_controller.L_c", 1.8 * L)
+    assert not exc.value.unstable and "apply_gains" in str(exc.value)
+    with pytest.raises(InvalidValue, match="does not hold"):
+        d.write("current_controller.L_c", 2.2 * L)  # unstable: L_c < 2 L (eq. 17) first
+    with pytest.raises(InvalidValue, match="apply_gains"):
+        d.write("gain_set_apply", 1)
+    assert d.read_gains() == before  # nothing applied
+    d.write("current_controller.L_c", 0.9 * L)  # good margins: applied as one set
+    assert d.read("current_controller.L_c") == pytest.approx(0.9 * L, rel=1e-6)
+    d.write("current_controller.L_c", before.L_c)

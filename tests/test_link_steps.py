@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from drive_link import Drive, steps
+from drive_link.gains import apply_gains
 
 pytestmark = [pytest.mark.timeout(90), pytest.mark.unit]
 
@@ -58,7 +59,7 @@ def _bench():
 @pytest.mark.parametrize("ratio", [1.0, 1.5])
 def test_current_step_matches_paper_loop(drive, ratio):
     g0 = drive.read_gains()
-    drive.apply_gains(type=0, L_c=ratio * L, R_c=R)
+    apply_gains(drive, {"type": 0, "L_c": ratio * L, "R_c": R})
     try:
         for _ in range(4):
             res = steps.current_step(
@@ -89,7 +90,7 @@ def test_current_step_matches_paper_loop(drive, ratio):
         else:
             pytest.fail("every step was disturbed by a commutation")
     finally:
-        drive.apply_gains(L_c=g0.L_c)
+        apply_gains(drive, {"L_c": g0.L_c}, force=True)
     assert tr.t[k0] == 0.0
     assert tr.signals["measurements.i_p_ref"][k0 - 1] == 15.0
     assert tr.signals["measurements.i_p_ref"][k0] == 20.0

@@ -54,6 +54,7 @@ from ._common import (
     PI_KP_PAPER,
     R_TABLE2,
     ControllerName,
+    controller_name,
 )
 from .current_loop import (
     closed_loop_mismatch,
@@ -97,6 +98,7 @@ __all__ = [
     "PredictedStep",
     "analyse_current_loop",
     "closed_loop_mismatch",
+    "controller_name",
     "current_loop_response",
     "current_loop_tf",
     "eq25_compensation",

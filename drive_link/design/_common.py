@@ -7,7 +7,7 @@ sampling rate; the controller names of the current loop.
 from __future__ import annotations
 
 import math
-from typing import Literal
+from typing import Literal, get_args
 
 import numpy as np
 
@@ -22,6 +22,7 @@ __all__ = [
     "PI_KP_PAPER",
     "R_TABLE2",
     "ControllerName",
+    "controller_name",
 ]
 
 FS_DEFAULT = paper.FS
@@ -40,7 +41,20 @@ PI_KI_PAPER = paper.PI_KI
 """The paper's PI current gain k_i,i [V/A per sample] (Section IV-B)."""
 
 ControllerName = Literal["deadbeat", "pi", "predictive"]
-CONTROLLERS: tuple[str, ...] = tuple(CONTROLLER_TYPES)
+"""Host name of a current-controller law (0x2010:1 type 0, 1, 2)."""
+CONTROLLERS: tuple[ControllerName, ...] = tuple(
+    n for n in get_args(ControllerName) if n in CONTROLLER_TYPES
+)
+"""The names by code (the EDS enumeration's order: ``CONTROLLERS[code]``)."""
+if CONTROLLERS != tuple(sorted(CONTROLLER_TYPES, key=CONTROLLER_TYPES.__getitem__)):
+    raise ImportError(f"ControllerName {CONTROLLERS} disagrees with the EDS {CONTROLLER_TYPES}")
+
+
+def controller_name(code: int) -> ControllerName:
+    """The law of 0x2010:1 ``code`` (0 deadbeat, 1 PI, 2 predictive); ValueError otherwise."""
+    if not 0 <= int(code) < len(CONTROLLERS):
+        raise ValueError(f"controller type {code} is not 0..{len(CONTROLLERS) - 1}")
+    return CONTROLLERS[int(code)]
 
 
 # --------------------------------------------------------------------------- input checks

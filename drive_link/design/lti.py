@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import overload
 
 import numpy as np
 
@@ -39,30 +40,42 @@ def _trim(p: Sequence[float] | np.ndarray) -> np.ndarray:
     return a[nz[0] :] if nz.size else np.zeros(1)
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, init=False)
 class DiscreteTF:
     """A discrete-time transfer function ``num(z) / den(z)``.
 
     ``num`` and ``den`` are coefficient arrays in descending powers of ``z`` (numpy ``polyval``
-    order); ``Ts`` is the sampling period [s].
+    order; given as any sequence of numbers); ``Ts`` is the sampling period [s].
     """
 
     num: np.ndarray
     den: np.ndarray
-    Ts: float = 1.0 / FS_DEFAULT
+    Ts: float
 
-    def __post_init__(self) -> None:
-        num, den = _trim(self.num), _trim(self.den)
-        if not np.all(np.isfinite(num)) or not np.all(np.isfinite(den)):
+    def __init__(
+        self,
+        num: Sequence[float] | np.ndarray,
+        den: Sequence[float] | np.ndarray,
+        Ts: float = 1.0 / FS_DEFAULT,
+    ) -> None:
+        n, d = _trim(num), _trim(den)
+        if not np.all(np.isfinite(n)) or not np.all(np.isfinite(d)):
             raise ValueError("transfer-function coefficients must be finite")
-        if den.size == 1 and den[0] == 0.0:
+        if d.size == 1 and d[0] == 0.0:
             raise ValueError("denominator polynomial is zero")
-        object.__setattr__(self, "num", num)
-        object.__setattr__(self, "den", den)
+        object.__setattr__(self, "num", n)
+        object.__setattr__(self, "den", d)
+        object.__setattr__(self, "Ts", Ts)
+
+    @overload
+    def __call__(self, z: complex) -> complex: ...
+    @overload
+    def __call__(self, z: np.ndarray) -> np.ndarray: ...
 
     def __call__(self, z: complex | np.ndarray) -> complex | np.ndarray:
-        """Evaluate at complex ``z``."""
-        return np.polyval(self.num, z) / np.polyval(self.den, z)
+        """Evaluate at complex ``z`` (a number or an array of them)."""
+        value = np.polyval(self.num, z) / np.polyval(self.den, z)
+        return value if isinstance(z, np.ndarray) else complex(value)
 
     def __mul__(self, other: DiscreteTF) -> DiscreteTF:
         return DiscreteTF(np.polymul(self.num, other.num), np.polymul(self.den, other.den), self.Ts)
@@ -268,10 +281,10 @@ def _margins(loop: DiscreteTF, n_grid: int) -> Margins:
         )
     )
 
-    def Lz(t: float | np.ndarray) -> complex | np.ndarray:
-        return loop(np.exp(1j * np.asarray(t)))
+    def Lz(t: float) -> complex:
+        return loop(complex(np.exp(1j * t)))
 
-    H = Lz(theta)
+    H = loop(np.exp(1j * np.asarray(theta)))
     mag = np.abs(H)
     to_hz = 1.0 / (2.0 * math.pi * Ts)
 
@@ -299,19 +312,19 @@ def _margins(loop: DiscreteTF, n_grid: int) -> Margins:
     # an exact phase crossover at Nyquist (real L(-1) < 0, finite)
     den_m1 = np.polyval(loop.den, -1.0)
     if abs(den_m1) > 1e-12 * float(np.sum(np.abs(loop.den))):  # no pole at z = -1
-        v = np.polyval(loop.num, -1.0) / den_m1
-        if v < 0.0:
-            gms.append(-20.0 * math.log10(abs(v)))
+        v_nyq = float(np.polyval(loop.num, -1.0) / den_m1)
+        if v_nyq < 0.0:
+            gms.append(-20.0 * math.log10(abs(v_nyq)))
             wgs.append(0.5 / Ts)
 
     # sensitivity peak
     S = 1.0 / np.abs(1.0 + H)
-    k = int(np.argmax(S))
-    lo, hi = theta[max(k - 1, 0)], theta[min(k + 1, theta.size - 1)]
+    k_pk = int(np.argmax(S))
+    lo, hi = theta[max(k_pk - 1, 0)], theta[min(k_pk + 1, theta.size - 1)]
     t_pk = _golden_max(lambda t: 1.0 / abs(1.0 + Lz(t)), lo, hi)
-    s_pk = max(float(S[k]), 1.0 / abs(1.0 + Lz(t_pk)))
-    if s_pk == float(S[k]):
-        t_pk = theta[k]
+    s_pk = max(float(S[k_pk]), 1.0 / abs(1.0 + Lz(t_pk)))
+    if s_pk == float(S[k_pk]):
+        t_pk = theta[k_pk]
 
     if pms:
         # the smallest margin; crossovers within 1e-6° of it (e.g. the matched deadbeat loop

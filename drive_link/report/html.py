@@ -4,12 +4,24 @@ figures as base64 PNG data URLs, nothing loaded from anywhere."""
 from __future__ import annotations
 
 import html
-from typing import TYPE_CHECKING
+from typing import Any, Protocol
 
-if TYPE_CHECKING:
-    from . import Report
+from ._base import ExperimentResult
 
-__all__ = ["render"]
+__all__ = ["ReportContents", "render"]
+
+
+class ReportContents(Protocol):
+    """What the page shows of a report (:class:`drive_link.report.Report` is one)."""
+
+    @property
+    def drive(self) -> dict[str, Any]: ...
+
+    @property
+    def results(self) -> list[ExperimentResult]: ...
+
+    @property
+    def inconsistencies(self) -> list[dict[str, Any]]: ...
 
 _CSS = """
 body{font-family:sans-serif;max-width:980px;margin:1em auto;color:#222}
@@ -29,7 +41,7 @@ def _fmt(x: float | None) -> str:
     return "—" if x is None else f"{x:.5g}"
 
 
-def render(rep: Report) -> str:
+def render(rep: ReportContents) -> str:
     """The page as a string."""
     e = html.escape
     d = rep.drive

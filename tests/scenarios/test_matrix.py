@@ -23,6 +23,7 @@ from conftest import RunQueueProbe
 
 from drive_link import DriveTimeout, SdoAbort, Trigger, scan, steps
 from drive_link.check import ITEMS
+from drive_link.gains import apply_gains
 from drive_link.trace import TS
 
 from .conditions import Bench, wait_until
@@ -279,12 +280,13 @@ def test_atomic_gain_set_and_read_back(bench):
                 assert exc.code in (0x06090030, 0x06090031), hex(exc.code)
             else:
                 with pytest.raises(SdoAbort) as exc:
-                    d.write("gain_set_apply", 1)
+                    apply_obj = d.table["gain_set_apply"]  # raw: the drive's refusal is tested
+                    d.sdo.download(apply_obj.index, apply_obj.subindex, bytes([1]))
                 assert exc.value.code in (0x06090030, 0x06090031, 0x08000022), hex(exc.value.code)
             assert d.read_gains() == back, f"{_tag(bench)} a refused gain set changed the gains"
         finally:
-            restored = d.apply_gains(L_c=g0.L_c, R_c=g0.R_c)  # re-stages the whole set
-        assert restored.L_c == g0.L_c and restored.R_c == g0.R_c
+            restored = apply_gains(d, {"L_c": g0.L_c, "R_c": g0.R_c}, force=True).gains
+        assert restored["L_c"] == g0.L_c and restored["R_c"] == g0.R_c  # whole set re-staged
 
 
 def test_heartbeat_loss_quick_stop(bench):
