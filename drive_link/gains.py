@@ -14,8 +14,10 @@ else, so both follow one policy:
   margins of a stable current loop — L_c > 1.5 L (deadbeat, predictive), gain margin < 2 dB,
   ‖S‖∞ > 5.
 
-Applying stages the whole set in gain_set (0x20F0) and applies it with gain_set_apply (0x20F1)
-(:meth:`drive_link.Drive.apply_gains`), so the drive changes all values at once or none.
+Applying stages the whole set (current loop, speed loop or both: the ones with a changed value)
+in gain_set (0x20F0) and applies it with gain_set_apply (0x20F1), so the drive changes all
+values at once or none. A caller that holds the present set and the motor (the dashboard) passes
+them and no read precedes the write.
 
 Units: L_c H, R_c Ω, current PI k_p/k_i V/A, T_BT/T_DD/T_SD s, V_G V, speed k_p A/rpm, speed
 k_i 1/sample, speed_current_limit A; motor R Ω, L H, rated_current A, V_dc_nominal V.
@@ -26,7 +28,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 from firmware_protocol.current_stability import (
     CURRENT_KEYS,
@@ -35,10 +37,11 @@ from firmware_protocol.current_stability import (
     check_current_gains,
 )
 from firmware_protocol.entry import LimitError
+from firmware_protocol.entry import f32 as _f32
 from firmware_protocol.stability import A_IDENTIFIED, B_IDENTIFIED, check_ip_speed_gains
 
 from . import design
-from .errors import InvalidValue
+from .errors import DriveError, InvalidValue
 
 if TYPE_CHECKING:
     from .drive import Drive
@@ -138,7 +141,7 @@ class GainsRefused(InvalidValue):
         self.unstable = bool(check.refusals)
 
 
-def _controller(value: Any) -> tuple[int, str]:
+def _controller(value: Any) -> tuple[int, design.ControllerName]:
     """(code, name) of a controller given as 0..2 or "deadbeat"/"pi"/"predictive"."""
     if isinstance(value, str) and not value.strip().lstrip("-").isdigit():
         name = value.strip().lower()
@@ -146,11 +149,12 @@ def _controller(value: Any) -> tuple[int, str]:
             raise InvalidValue(
                 f"type: {value!r} is not a controller ({', '.join(design.CONTROLLERS)} or 0..2)"
             )
-        return design.CONTROLLERS.index(name), name
-    code = int(value)
-    if not 0 <= code < len(design.CONTROLLERS):
-        raise InvalidValue(f"type: {code} is not a controller code (0..2)")
-    return code, design.CONTROLLERS[code]
+        code = design.CONTROLLERS.index(name)
+    else:
+        code = int(value)
+        if not 0 <= code < len(design.CONTROLLERS):
+            raise InvalidValue(f"type: {code} is not a controller code (0..2)")
+    return code, cast("design.ControllerName", design.CONTROLLERS[code])
 
 
 def _normalised(gains: Mapping[str, Any]) -> dict[str, float | int]:
@@ -261,40 +265,98 @@ def read_motor(drive: Drive) -> dict[str, float]:
     return {k: float(drive.read(f"motor.{k}")) for k in MOTOR_KEYS}
 
 
+#: Gains field → the set 0x20F1 applies it with (1 current loop, 2 speed loop); each field is
+#: staged as ``gain_set.<field>`` (0x20F0) and active as :data:`_ACTIVE`'s object.
+_SET_OF: dict[str, int] = {
+    **{k: 1 for k in CURRENT_KEYS},
+    "speed_k_p": 2,
+    "speed_k_i": 2,
+    "speed_current_limit": 2,
+}
+_ACTIVE: dict[str, str] = {
+    **{k: f"current_controller.{k}" for k in CURRENT_KEYS},
+    "speed_k_p": "speed_controller.k_p",
+    "speed_k_i": "speed_controller.k_i",
+    "speed_current_limit": "speed_controller.current_limit",
+}
+
+
+def _check_objects(drive: Drive, merged: Mapping[str, float | int], motor: Mapping[str, float],
+                   fields: list[str]) -> None:
+    """Client-side check, no bus: each staged value in its object's range, and the OD's
+    cross-object rules (:data:`firmware_protocol.constraints.CONSTRAINTS`, e.g. L_c < 2 L)
+    that the staged fields trigger, on the merged set and ``motor`` (a rule with an operand
+    neither holds is left to the drive, which checks the set as a whole when applying)."""
+    from firmware_protocol.constraints import CONSTRAINTS
+
+    for k in fields:
+        drive.info(f"gain_set.{k}").check(merged[k])
+    known: dict[str, float | int] = {_ACTIVE[k]: v for k, v in merged.items() if k in _ACTIVE}
+    known.update({f"motor.{k}": v for k, v in motor.items()})
+    staged = {_ACTIVE[k] for k in fields}
+    for c in CONSTRAINTS:
+        if not any(n in staged for n in c.triggers) or not all(n in known for n in c.names):
+            continue
+        if not c.holds(known):
+            shown = ", ".join(f"{n} = {known[n]:.6g}" for n in c.names)
+            raise InvalidValue(f"refused before sending: {c} does not hold ({shown}): {c.reason}")
+
+
+def _same(held: float | int | None, value: float | int) -> bool:
+    """True if the drive holding ``held`` already holds ``value`` (REAL32: compared as float32)."""
+    if held is None:
+        return False
+    if isinstance(value, float) or isinstance(held, float):
+        return _f32(float(held)) == _f32(float(value))
+    return held == value
+
+
 def apply_gains(
     drive: Drive,
     changes: Mapping[str, Any],
     *,
     force: bool = False,
     speed_model: tuple[float, float] | None = None,
+    previous: Mapping[str, Any] | None = None,
+    motor: Mapping[str, float] | None = None,
 ) -> GainResult:
     """Apply ``changes`` (a subset of :data:`drive_link.GAIN_FIELDS`; ``type`` may be a name)
-    as one set: read the present set and the motor once, check the merged set
-    (:func:`check_gains` on ``speed_model``, default the paper's), stage it in 0x20F0, apply it
-    with 0x20F1 and return the read-back.
+    as one set: check the merged set (:func:`check_gains` on ``speed_model``, default the
+    paper's), stage the set(s) it changes in 0x20F0, apply them with 0x20F1 and read back the
+    values that changed.
+
+    ``previous`` (the full present set) and ``motor`` (:func:`read_motor`'s values) are what
+    the caller already holds; each is read from the drive once when not given. A value equal
+    to the present one is no change; a set none of whose values change is not staged, and with
+    nothing changed nothing is sent. Bus cost: 13 + 4 reads when nothing is given, then the
+    staged set(s) (10 current, 3 speed), one apply and one read per changed number.
+
+    Returns a :class:`GainResult` whose ``gains`` are the set as the drive now holds it (the
+    changed values as read back, float32, the others as they were).
 
     Raises :class:`GainsRefused` (an :class:`InvalidValue`, nothing sent) when the set is
     unstable or the drive's rule refuses it — ``force`` does not change that — or when its
-    margins are poor and ``force`` is False; :class:`InvalidValue` for unknown names or
-    non-numbers; :class:`drive_link.SdoAbort` if the drive still refuses.
+    margins are poor and ``force`` is False; :class:`InvalidValue` for unknown names,
+    non-numbers or a value outside its object's limits (nothing sent);
+    :class:`drive_link.SdoAbort` if the drive still refuses (it then changed nothing);
+    :class:`DriveError` if a value reads back other than applied.
     """
-    from .drive import GAIN_FIELDS
-
-    unknown = [k for k in changes if k not in GAIN_FIELDS]
+    unknown = [k for k in changes if k not in _SET_OF]
     if unknown:
-        raise InvalidValue(f"unknown gain(s) {', '.join(unknown)}; known: {', '.join(GAIN_FIELDS)}")
+        raise InvalidValue(f"unknown gain(s) {', '.join(unknown)}; known: {', '.join(_SET_OF)}")
     if not changes:
         raise InvalidValue("no gain to change")
     wanted = _normalised(changes)
-    previous = drive.read_gains().to_dict()
-    motor = read_motor(drive)
+    before = _normalised(previous) if previous is not None else drive.read_gains().to_dict()
+    held = dict(motor) if motor is not None else read_motor(drive)
+    merged = {**before, **wanted}
     check = check_gains(
-        {**previous, **wanted},
-        motor["R"],
-        motor["L"],
+        merged,
+        held["R"],
+        held["L"],
         speed_model,
-        rated_current=motor["rated_current"],
-        V_dc_nominal=motor["V_dc_nominal"],
+        rated_current=held["rated_current"],
+        V_dc_nominal=held["V_dc_nominal"],
     )
     if check.refusals:
         raise GainsRefused(
@@ -307,5 +369,29 @@ def apply_gains(
             "refused: " + "; ".join(check.warnings) + " (force to apply anyway); nothing applied",
             check,
         )
-    back = drive.apply_gains(**wanted).to_dict()
-    return GainResult(back, previous, check, forced=bool(force and check.warnings))
+    changed = [k for k, v in wanted.items() if not _same(before.get(k), v)]
+    forced = bool(force and check.warnings)
+    if not changed:  # the drive holds this set already
+        return GainResult(dict(merged), dict(before), check, forced=forced)
+    sets = 0
+    for k in changed:
+        sets |= _SET_OF[k]
+    staged = [k for k in _SET_OF if _SET_OF[k] & sets]
+    _check_objects(drive, merged, held, staged)
+    for k in staged:
+        name = f"gain_set.{k}"
+        obj = drive.info(name)
+        drive.sdo.download(obj.index, obj.subindex, obj.encode(merged[k]), name)
+    drive.write("gain_set_apply", sets)
+    after: dict[str, float | int] = dict(merged)
+    for k in staged:
+        if isinstance(merged[k], float):
+            after[k] = _f32(float(merged[k]))  # what a REAL32 holds
+    for k in changed:
+        if isinstance(merged[k], int):
+            continue  # an integer is applied exactly (or the apply was aborted)
+        got = drive.read(_ACTIVE[k])
+        if got != after[k]:
+            raise DriveError(f"gain {k}: drive reads back {got!r} after applying {merged[k]!r}")
+        after[k] = float(got)
+    return GainResult(after, dict(before), check, forced=forced)
