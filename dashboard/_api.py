@@ -308,7 +308,7 @@ def post_store(bench: ControlDep) -> dict[str, Any]:
 
 @router.get("/gains/diff", tags=["gains"], summary="Live vs stored gains")
 def get_gains_diff(bench: BenchDep) -> dict[str, Any]:
-    return jsonable(run(lambda: tuning.stored_diff(bench)))
+    return jsonable(run(lambda: tuning.stored_diff(bench, fresh=True)))
 
 
 # ------------------------------------------------------------------ traces and identification

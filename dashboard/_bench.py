@@ -19,6 +19,7 @@ import numpy as np
 from dashboard._actions import Found, LongAction
 from dashboard._known import STALE_LIMITS_S, DriveWatch, live_ages, state_name
 from dashboard._security import ControlLease
+from dashboard._setpoints import SetpointLink
 from drive_link import jsonable
 from firmware_protocol import emcy_codes
 from firmware_protocol.od import load_od
@@ -70,8 +71,6 @@ def as_dict(obj: Any) -> dict[str, Any]:
         return dataclasses.asdict(obj)
     if isinstance(obj, dict):
         return dict(obj)
-    if hasattr(obj, "_asdict"):
-        return dict(obj._asdict())
     return {k: v for k, v in vars(obj).items() if not k.startswith("_")}
 
 
@@ -133,6 +132,11 @@ class Bench:
         self.current_setpoint = 0.0  # A, last commanded
         self.T_load = 0.0
         self.identified: dict[str, float] | None = None  # {"a","b","Ts"} of the last fit
+        #: the drive's gain set (with motor_R, motor_L, L_c_over_L) and its motor (R, L,
+        #: rated_current, V_dc_nominal) as last read back or applied (:mod:`dashboard._tuning`
+        #: keeps them): previews, diffs and an Apply start from them instead of reading again
+        self.gains: dict[str, Any] | None = None
+        self.motor: dict[str, float] | None = None
         self.captures: dict[int, Capture] = {}
         self._ids = itertools.count(1)
         self._sequence: threading.Thread | None = None
@@ -148,6 +152,7 @@ class Bench:
         #: SDO-only values (mode, parameter store) read in a worker of its own: state()
         #: never waits on an SDO timeout
         self.watch = DriveWatch(drive, busy=lambda: self.action is not None).start()
+        self.setpoints = SetpointLink(drive)  # by RPDO where mapped, else SDO; no reads
 
     # ---------------------------------------------------------------- events
     def emit(self, kind: str, data: dict | None = None) -> None:
@@ -202,7 +207,7 @@ class Bench:
         action = self.action
         # the last heartbeat's state ("OFFLINE" once they stopped); a drive without heartbeats:
         # the worker's answer (drive_link's SDO fallback)
-        nmt = _safe(d.heartbeat._heartbeat_state) if hb_t else self.watch.get("nmt_state")[0]
+        nmt = _safe(lambda: d.heartbeat.state) if hb_t else self.watch.get("nmt_state")[0]
         out: dict[str, Any] = {
             "bus": self.description,
             "node_id": self.node_id,
@@ -278,7 +283,7 @@ class Bench:
         power stage is off for that moment (the motor coasts).
         """
         with self.lock:
-            if _safe(lambda: self.drive.mode) == mode:
+            if self._known_mode() == mode:
                 if setpoint is not None:
                     setpoint()
                 return
@@ -294,10 +299,28 @@ class Bench:
         self.watch.poke()
         self.emit("state")
 
+    def _known_mode(self) -> Any:
+        """The mode as the drive watch last read or the bench set it (read now if unknown or
+        older than its stale limit)."""
+        mode, age = self.watch.get("mode")
+        if mode is None or age is None or age > STALE_LIMITS_S["mode"]:
+            return _safe(lambda: self.drive.mode)
+        return mode
+
+    def _send(self, name: str, value: float | int) -> str:
+        """A setpoint by RPDO or SDO (:class:`dashboard._setpoints.SetpointLink`), from the
+        402 and NMT states as known (no read)."""
+        s = self.state()
+        stale = set(s.get("stale") or ())
+        state = s.get("state") if "statusword" not in stale else None
+        nmt = s.get("nmt_state") if "heartbeat" not in stale else None
+        return self.setpoints.send(name, value, state=state, nmt=nmt)
+
     def set_speed(self, rpm: float) -> None:
-        """Speed setpoint (rpm); switches to speed mode if needed (see :meth:`set_mode`)."""
+        """Speed setpoint (rpm, rounded to an integer: target_velocity); switches to speed mode
+        if needed (see :meth:`set_mode`). No read: the mode as known, the limit as kept."""
         with self.lock:
-            self.set_mode("speed", lambda: self.drive.set_speed(rpm))
+            self.set_mode("speed", lambda: self._send("target_velocity", round(float(rpm))))
             self.speed_setpoint = float(rpm)
             self.last_step_t = time.monotonic()
         self.emit("setpoint", {"rpm": rpm})
@@ -314,7 +337,7 @@ class Bench:
     def set_current(self, amps: float) -> None:
         """Pseudo-current setpoint i_p* (A); switches to current mode if needed."""
         with self.lock:
-            self.set_mode("current", lambda: self.drive.set_current(amps))
+            self.set_mode("current", lambda: self._send("setpoints.i_p_ref", float(amps)))
             self.current_setpoint = float(amps)
             self.last_step_t = time.monotonic()
         self.emit("setpoint", {"i_p_ref": amps})

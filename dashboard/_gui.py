@@ -261,6 +261,10 @@ class BenchGui:
         finally:
             self.bench.lock.release()
 
+    def wake_plots(self) -> None:
+        """Push the live plots now, not at the next tick (a page switched its node)."""
+        self._wake.set()
+
     def panel_list(self) -> list[Panel]:
         with self._panels_lock:
             return list(self.panels.values())
@@ -297,11 +301,9 @@ class BenchGui:
                 with contextlib.suppress(Exception):
                     p.show_captures()
         elif kind == "gains":
-            for p in panels:
+            for p in panels:  # from the applied set: no page reads the drive again
                 with contextlib.suppress(Exception):
-                    p.show_readback(data)
-                    p.gains = data
-                    p._preview()  # the Loop tab's applied (grey) curves follow the drive
+                    p.on_gains(data)  # the Loop tab's applied (grey) curves follow the drive
         elif kind == "setpoint":
             if "rpm" in data:
                 self._wake_target = ("measurements.speed_ref", float(data["rpm"]))
@@ -419,8 +421,7 @@ class BenchGui:
         )
         for p in ready:
             try:
-                p.speed_plot.data = speed
-                p.current_plot.data = current
+                p.plots.show_live(speed, current)
                 p.plot_newest = newest
                 p.pace.sent_update()
             except Exception as exc:  # one broken browser must not stop the others
@@ -544,13 +545,11 @@ class BenchGui:
                 continue  # this page is behind: it gets the newest status once it caught up
             try:
                 p.show_bar(bar)
-                p.show_readout(readout)
+                p.plots.show_readout(readout)
                 p.show_status(status)
-                p.show_legends(*legends)
+                p.plots.show_legends(*legends)
                 p.show_action(s.get("action"), s.get("sequence"))
-                txt = controller_text(ctl, p, gone)
-                if p.controller_md.content != txt:
-                    p.controller_md.content = txt
+                p.show_controller(controller_text(ctl, p.holds_control(), gone))
                 p.pace.sent_update()
             except Exception as exc:
                 log.warning("status for browser #%s failed: %s", p.cid, exc)

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["install_fast_cast"]
+__all__ = ["install_fast_cast", "installed_cast"]
 
 _F16 = npt.NDArray[np.float16]
 _F32 = npt.NDArray[np.float32]
@@ -27,12 +27,22 @@ _F64 = npt.NDArray[np.float64]
 _U8 = npt.NDArray[np.uint8]
 
 
+#: (our cast, viser's original) once installed
+_INSTALLED: tuple[Any, Any] | None = None
+
+
+def installed_cast() -> tuple[Any, Any] | None:
+    """(the fast cast, viser's original method) once :func:`install_fast_cast` ran, else None."""
+    return _INSTALLED
+
+
 def install_fast_cast() -> None:
     """Patch viser's ``_cast_value_recursive`` (once; idempotent)."""
+    global _INSTALLED
     from viser import _assignable_props_api as api
 
     cls = api.AssignablePropsBase
-    if getattr(cls._cast_value_recursive, "_dashboard_fast", False):
+    if _INSTALLED is not None and cls._cast_value_recursive is _INSTALLED[0]:
         return
     original = cls._cast_value_recursive
     colors_to_uint8 = api.colors_to_uint8
@@ -60,6 +70,5 @@ def install_fast_cast() -> None:
             return tuple(cast(self, element_type, item, prop_name) for item in value)
         return value
 
-    cast._dashboard_fast = True  # type: ignore[attr-defined]
-    cast._dashboard_original = original  # type: ignore[attr-defined]  # viser's, for tests
+    _INSTALLED = (cast, original)
     cls._cast_value_recursive = cast  # type: ignore[method-assign]

@@ -6,21 +6,20 @@ Units: whatever the field's :class:`~dashboard._fields.NumberSpec` label states 
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from contextlib import AbstractContextManager
+from typing import Any, Protocol
 
 import numpy as np
 import viser.uplot as uplot
 
 from dashboard._fields import FieldError, NumberSpec, show
 
-if TYPE_CHECKING:
-    from dashboard._gui_panel import Panel
-
 __all__ = [
     "CURRENT_COLORS",
     "PLOT_HEIGHT_PX",
     "SPEED_COLORS",
     "Field",
+    "FieldHost",
     "fmt",
     "live_series",
     "series",
@@ -65,14 +64,23 @@ def live_series(name: str, unit: str, colors: tuple[str, str], x_label: str) -> 
     ]
 
 
+class FieldHost(Protocol):
+    """A field's home: a page's GUI and its echo guard (:class:`dashboard._gui_page.Page`)."""
+
+    gui: Any
+
+    def mute(self) -> AbstractContextManager[None]:
+        """Callbacks fired meanwhile do nothing."""
+
+
 class Field:
     """A typed number: a text input plus a message line under it (hidden while valid)."""
 
-    def __init__(self, panel: Panel, spec: NumberSpec, initial: float, hint: str = "") -> None:
-        self.panel = panel
+    def __init__(self, host: FieldHost, spec: NumberSpec, initial: float, hint: str = "") -> None:
+        self.host = host
         self.spec = spec
-        self.input = panel.gui.add_text(spec.label, show(initial), hint=hint or None)
-        self.error = panel.gui.add_markdown("", visible=False)
+        self.input = host.gui.add_text(spec.label, show(initial), hint=hint or None)
+        self.error = host.gui.add_markdown("", visible=False)
         self.input.on_update(lambda e: self.validate())
 
     def validate(self) -> bool:
@@ -104,6 +112,6 @@ class Field:
 
     def set(self, x: float) -> None:
         """Show ``x`` (a read-back) in the field without firing its callbacks' echo."""
-        with self.panel.mute():
+        with self.host.mute():
             self.input.value = show(x)
         self._show_error("")

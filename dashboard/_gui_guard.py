@@ -45,10 +45,12 @@ __all__ = [
     "install_loop_safe_events",
     "install_send_lock",
     "refuse_share_url",
+    "send_lock_installed",
 ]
 
 #: One lock for every message queued into viser (see module docstring).
 SEND_LOCK = threading.RLock()
+_PATCHED: set[Any] = set()  #: the viser functions replaced here (installed once)
 
 
 class LoopSafeEvent(asyncio.Event):
@@ -75,7 +77,7 @@ def install_loop_safe_events() -> None:
     """Give every viser message buffer created from now on :class:`LoopSafeEvent` s (once)."""
     from viser.infra._async_message_buffer import AsyncMessageBuffer
 
-    if getattr(AsyncMessageBuffer.__init__, "_dashboard_safe", False):
+    if AsyncMessageBuffer.__init__ in _PATCHED:
         return
     original = AsyncMessageBuffer.__init__
 
@@ -84,8 +86,15 @@ def install_loop_safe_events() -> None:
         self.message_event = LoopSafeEvent(self.event_loop)
         self.flush_event = LoopSafeEvent(self.event_loop)
 
-    init_with_safe_events._dashboard_safe = True  # type: ignore[attr-defined]
+    _PATCHED.add(init_with_safe_events)
     AsyncMessageBuffer.__init__ = init_with_safe_events  # type: ignore[method-assign]
+
+
+def send_lock_installed() -> bool:
+    """True once viser's sends go through :data:`SEND_LOCK` (:func:`install_send_lock`)."""
+    from viser.infra import _infra
+
+    return _infra.WebsockMessageHandler.queue_message in _PATCHED
 
 
 def install_send_lock() -> None:
@@ -96,7 +105,7 @@ def install_send_lock() -> None:
     install_loop_safe_events()
 
     cls = _infra.WebsockMessageHandler
-    if getattr(cls.queue_message, "_dashboard_locked", False):
+    if send_lock_installed():
         return
     original = cls.queue_message
 
@@ -104,7 +113,7 @@ def install_send_lock() -> None:
         with SEND_LOCK:
             original(self, message)
 
-    queue_message._dashboard_locked = True  # type: ignore[attr-defined]
+    _PATCHED.add(queue_message)
     cls.queue_message = queue_message  # type: ignore[method-assign]
 
 
@@ -164,7 +173,7 @@ def refuse_share_url(server: Any, notify: Callable[[int], None] | None = None) -
 
     ws = server._websock_server
     for cls in (_messages.ShareUrlRequest, _messages.ShareUrlDisconnect):
-        if cls in ws._incoming_handlers:
+        with contextlib.suppress(AssertionError, KeyError):  # it was not registered
             ws.unregister_handler(cls)
 
     def refused(client_id: int, message: Any) -> None:

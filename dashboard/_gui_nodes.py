@@ -8,9 +8,11 @@ heartbeat or a scan); under it one line per node: its NMT state and who controls
 
 from __future__ import annotations
 
-import contextlib
 import html
+from collections.abc import Callable
 from typing import Any
+
+from dashboard._gui_page import Page
 
 __all__ = ["NodeSelect", "nodes_html"]
 
@@ -32,81 +34,80 @@ def nodes_html(rows: list[dict[str, Any]], shown: int) -> str:
 
 
 class NodeSelect:
-    """Mixin of :class:`dashboard._gui_panel.Panel`: the "Node" dropdown and the node table."""
+    """The "Node" dropdown and the node table of one page; switching the node changes the
+    page's bench, then ``on_switched`` redraws what shows that node."""
 
-    gui: Any
-    bench: Any
-    owner: Any
-    control_md: Any
-    plot_newest: float | None
-    gains: Any
-    _muted: int
-
-    def _build_node_selector(self) -> None:
-        nodes = self.owner.nodes
-        ids = nodes.ids() if nodes is not None else [self.bench.node_id]
-        self.node_dd = self.gui.add_dropdown(
+    def __init__(self, page: Page, on_switched: Callable[[], None]) -> None:
+        self.page = page
+        self.on_switched = on_switched
+        gui = page.gui
+        nodes = page.owner.nodes
+        ids = nodes.ids() if nodes is not None else [page.bench.node_id]
+        self.node_dd = gui.add_dropdown(
             "Node",
             tuple(str(n) for n in ids),
-            initial_value=str(self.bench.node_id),
+            initial_value=str(page.bench.node_id),
             hint="the drive this page shows and controls; each node has its own control",
         )
-        self.nodes_table = self.gui.add_html("")
+        self.nodes_table = gui.add_html("")
         self._nodes_shown = ""
         self.node_dd.on_update(lambda e: self._select_node())
-        self.gui.add_button("Scan the bus", hint="probe every node-ID by SDO (0x1000)").on_click(
+        gui.add_button("Scan the bus", hint="probe every node-ID by SDO (0x1000)").on_click(
             lambda e: self._scan_nodes()
         )
+        self.notices: Any = None  # where its notices go (the control notice, set by the panel)
+
+    def _notice(self, text: str, level: str = "error") -> None:
+        if self.notices is not None:
+            self.page.notice(self.notices, text, level)
 
     def show_nodes(self, rows: list[dict[str, Any]]) -> None:
         """Update the dropdown's options and the node table (sent only when they changed)."""
+        shown = self.page.bench.node_id
         opts = tuple(str(r["node_id"]) for r in rows)
         if opts and opts != tuple(self.node_dd.options):
-            with self.mute():  # type: ignore[attr-defined]
+            with self.page.mute():
                 self.node_dd.options = opts
-                if self.node_dd.value != str(self.bench.node_id):
-                    self.node_dd.value = str(self.bench.node_id)
-        txt = nodes_html(rows, self.bench.node_id)
+                if self.node_dd.value != str(shown):
+                    self.node_dd.value = str(shown)
+        txt = nodes_html(rows, shown)
         if txt != self._nodes_shown:
             self._nodes_shown = txt
             self.nodes_table.content = txt
 
     def _scan_nodes(self) -> None:
-        nodes = self.owner.nodes
+        nodes = self.page.owner.nodes
         if nodes is None:
             return
         try:
             rows = nodes.scan()
         except Exception as exc:
-            self.notice(self.control_md, f"scan failed: {exc}")  # type: ignore[attr-defined]
+            self._notice(f"scan failed: {exc}")
             return
         self.show_nodes(rows)
         found = ", ".join(str(r["node_id"]) for r in rows)
-        self.notice(self.control_md, f"nodes on the bus: {found}", "ok")  # type: ignore[attr-defined]
+        self._notice(f"nodes on the bus: {found}", "ok")
 
     def _select_node(self) -> None:
-        if self._muted:
+        page = self.page
+        if page.muted:
             return
         try:
             node = int(self.node_dd.value)
         except ValueError:
             return
-        if node == self.bench.node_id:
+        if node == page.bench.node_id:
             return
         try:
-            bench = self.owner.bench_for(node)
+            bench = page.owner.bench_for(node)
         except Exception as exc:
-            self.notice(self.control_md, f"node {node}: {exc}")  # type: ignore[attr-defined]
-            with self.mute():  # type: ignore[attr-defined]
-                self.node_dd.value = str(self.bench.node_id)
+            self._notice(f"node {node}: {exc}")
+            with page.mute():
+                self.node_dd.value = str(page.bench.node_id)
             return
-        self.bench = bench
-        self.plot_newest = None  # the plots start again with this node's window
-        self.gains = None
-        with contextlib.suppress(Exception):
-            self.load_gains()  # type: ignore[attr-defined]
-        with contextlib.suppress(Exception):
-            self.show_captures()  # type: ignore[attr-defined]
-        self.notice(self.control_md, f"this page shows node {node}", "ok")  # type: ignore[attr-defined]
-        self.owner._wake.set()
-        self.owner.refresh_status()
+        page.bench = bench
+        page.plot_newest = None  # the plots start again with this node's window
+        self.on_switched()
+        self._notice(f"this page shows node {node}", "ok")
+        page.owner.wake_plots()
+        page.owner.refresh_status()

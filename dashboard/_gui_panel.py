@@ -9,8 +9,14 @@ control that caused them.
 
 Layout: the main area (plots, :mod:`dashboard._gui_tabs.plots`) is a wide panel docked left; the
 control panel (docked right) holds status, control, the drive buttons, progress, then the tabs
-Speed · Current · Tuning · Identify · Captures · Config (one module each in
+Speed · Current · Tuning · Identify · Captures · Config · Bus · Report (one object each, from
 :mod:`dashboard._gui_tabs`).
+
+Who owns what: the :class:`~dashboard._gui_page.Page` (shared by the tabs) owns the browser's
+handle, the node shown, the lease token, the echo guard and the plot area; each tab owns its
+widgets and their state; the panel owns the status block (bar, controller line, progress) and
+composes the rest. Tabs talk to each other only through the callbacks the panel hands them
+(Identify → Tuning's IP design, Config → Tuning's read-back, node switch → Tuning, Captures).
 Units: rpm, A, µH, mΩ, V/A, A/rpm, 1/sample, N·m, s.
 """
 
@@ -18,36 +24,25 @@ from __future__ import annotations
 
 import contextlib
 import html
-import secrets
-import time
-from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import viser
 
-from dashboard._fields import FieldError
+from dashboard._bench import Bench
 from dashboard._gui_field import CURRENT_COLORS, SPEED_COLORS, Field, fmt
 from dashboard._gui_nodes import NodeSelect
 from dashboard._gui_pace import PagePace
+from dashboard._gui_page import Page, PageOwner
 from dashboard._gui_statusbar import BAR_CSS, notices_css
-from dashboard._gui_tabs import (
-    BusTab,
-    CapturesTab,
-    ConfigTab,
-    CurrentTab,
-    IdentifyTab,
-    PlotArea,
-    ReportTab,
-    SpeedTab,
-    TuningTab,
-    parse_sequence,
-)
-from dashboard._gui_tabs.plots import PLOT_AREA_WIDTH_PX, STRIP_PX
-from dashboard._gui_words import gui_text
-from dashboard._security import token_ok
-
-if TYPE_CHECKING:
-    from dashboard._gui import BenchGui
+from dashboard._gui_tabs.bus import BusTab
+from dashboard._gui_tabs.captures import CapturesTab
+from dashboard._gui_tabs.config import ConfigTab
+from dashboard._gui_tabs.current import CurrentTab
+from dashboard._gui_tabs.identify import IdentifyTab
+from dashboard._gui_tabs.plots import PLOT_AREA_WIDTH_PX, STRIP_PX, PlotArea
+from dashboard._gui_tabs.report import ReportTab
+from dashboard._gui_tabs.speed import SpeedTab, parse_sequence
+from dashboard._gui_tabs.tuning import TuningTab
 
 #: requested width of the control panel (px): with the plot area's 1700 px wider than any
 #: screen, so viser scales both to the window keeping only its 120 px canvas strip
@@ -58,111 +53,57 @@ _fmt = fmt  # older name
 __all__ = ["CURRENT_COLORS", "SPEED_COLORS", "Field", "Panel", "parse_sequence"]
 
 
-class Panel(
-    PlotArea,
-    SpeedTab,
-    CurrentTab,
-    TuningTab,
-    IdentifyTab,
-    CapturesTab,
-    ConfigTab,
-    BusTab,
-    ReportTab,
-    NodeSelect,
-):
-    """The GUI of one connected browser."""
+class Panel:
+    """The GUI of one connected browser: the status block, then one object per tab.
 
-    def __init__(self, owner: BenchGui, client: viser.ClientHandle) -> None:
-        self.owner = owner
-        self.bench = owner.bench  # the node this page shows (its node selector changes it)
-        self.config = owner.config
+    ``owner``: the GUI serving it (:class:`~dashboard._gui_page.PageOwner`).
+    """
+
+    def __init__(self, owner: PageOwner, client: viser.ClientHandle) -> None:
+        self.page = Page(owner, client, owner.bench, owner.config)
         self.client = client
         self.cid = client.client_id
-        self.gui = client.gui
-        self.token: str | None = None  # this browser's lease token once it took control
-        self.authenticated = self.config.token is None
-        self._muted = 0
-        self.gains: dict[str, Any] | None = None
+        self.pace = PagePace(client)  # live updates only as fast as this page applies them
         self.last_status = ""
         self.last_bar = ""
-        self.last_legends: tuple[str, str] = ("", "")
-        self.pace = PagePace(client)  # live updates only as fast as this page applies them
-        self.plot_newest: float | None = None  # host time of the newest sample sent here
         self._build()
 
-    # ------------------------------------------------------------------ helpers
-    @contextlib.contextmanager
-    def mute(self):
-        self._muted += 1
-        try:
-            yield
-        finally:
-            self._muted -= 1
+    # ------------------------------------------------------------------ shared state
+    @property
+    def bench(self) -> Bench:
+        """The node this page shows (the page's; its node selector changes it)."""
+        return self.page.bench
 
-    def name(self) -> str:
-        return f"browser #{self.cid}"
+    @property
+    def token(self) -> str | None:
+        """This browser's lease token once it took control."""
+        return self.page.token
 
-    def notice(self, md: Any, text: str, level: str = "error") -> None:
-        """Show ``text`` under the control that caused it (replaces the previous notice)."""
-        icon = {"error": "⚠", "ok": "✓", "info": "ℹ"}.get(level, "")
-        stamp = time.strftime("%H:%M:%S")
-        md.content = f"{icon} {text} · {stamp}" if text else ""
-        md.visible = bool(text)
+    @property
+    def plot_newest(self) -> float | None:
+        """Host time (s) of the newest live sample sent to this page."""
+        return self.page.plot_newest
 
-    def md(self) -> Any:
-        """A hidden notice line (shown by :meth:`notice`) right under the last control."""
-        return self.gui.add_markdown("", visible=False)
+    @plot_newest.setter
+    def plot_newest(self, t: float | None) -> None:
+        self.page.plot_newest = t
 
     def holds_control(self) -> bool:
-        holder = self.bench.lease.holder
-        return holder is not None and self.token is not None and holder.token == self.token
+        return self.page.holds_control()
 
-    def _control(self, md: Any) -> bool:
-        """True if this browser holds control (taking it when nobody does)."""
-        if not self.authenticated:
-            self.notice(md, "enter the access token first (this bench requires one)")
-            return False
-        if self.holds_control():
-            return True
-        holder = self.bench.lease.holder
-        if holder is None:
-            self.token = self.token or secrets.token_urlsafe(16)
-            self.bench.lease.acquire(self.name(), token=self.token)
-            return True
-        self.notice(md, f"{holder.client} controls the bench — press 'Take control' to take over")
-        return False
-
-    def action(
-        self, fn: Callable[[Any], Any], md: Any, *, needs_control: bool = True
-    ) -> Callable[[Any], None]:
-        """Wrap a callback: lease check, typed values parsed first, errors shown in ``md``."""
-
-        def cb(event: Any) -> None:
-            if self._muted:
-                return
-            if needs_control and not self._control(md):
-                return
-            try:
-                done = fn(event)
-            except FieldError as exc:
-                self.notice(md, f"{exc} — nothing sent")
-            except Exception as exc:  # drive_link speaks CLI: say it with the GUI's controls
-                self.notice(md, gui_text(str(exc)) or type(exc).__name__)
-            else:
-                self.notice(md, done if isinstance(done, str) else "", "ok")
-            self.owner.refresh_status()
-
-        return cb
+    def notice(self, md: Any, text: str, level: str = "error") -> None:
+        self.page.notice(md, text, level)
 
     # ------------------------------------------------------------------ layout
     def _build(self) -> None:
-        gui = self.gui
+        page = self.page
+        gui = page.gui
         # sent once: the bar's pinning, badges, page-side stale switch and where notices go
         gui.add_html(BAR_CSS + notices_css(CONTROL_WIDTH_PX, PLOT_AREA_WIDTH_PX, STRIP_PX))
         # the status bar: pinned at the top of the panel (BAR_CSS), however far it scrolls
         with gui.add_folder("State", expand_by_default=True):
             self.bar_html = gui.add_html("<div class='bench-statusbar'>connecting …</div>")
-            self._build_node_selector()
+            self.nodes = NodeSelect(page, on_switched=self._node_switched)
             self.quick_btn = gui.add_button(
                 "Quick stop", color="red", hint="CiA 402 quick stop: the drive brakes and halts"
             )
@@ -170,59 +111,53 @@ class Panel(
             # small and plain: ownership is shown, it does not compete with Quick stop
             self.take_btn = gui.add_button_group("Control", ("Take control",))
         self.control_md = gui.add_markdown("", visible=False)
+        self.nodes.notices = self.control_md
         self.status_html = gui.add_html("connecting …")
-        if self.config.token is not None:
+        if page.config.token is not None:
             self.token_in = gui.add_text(
                 "Access token", "", hint="the bench's --token; needed to change anything"
             )
-            gui.add_button("Sign in").on_click(lambda e: self._sign_in())
+            gui.add_button("Sign in").on_click(lambda e: self.sign_in())
         self.drive_btns = gui.add_button_group("Drive", ("Enable", "Disable", "Fault reset"))
         # a safety control: any connected browser may press it (not only the one in control),
         # and it never waits for a long action (Bench.quick_stop)
         self.quick_btn.on_click(
-            self.action(self._quick_stop, self.control_md, needs_control=False)
+            page.action(self._quick_stop, self.control_md, needs_control=False)
         )
         self.take_btn.on_click(
-            self.action(self._take_control, self.control_md, needs_control=False)
+            page.action(lambda e: page.take_control(), self.control_md, needs_control=False)
         )
-        self.drive_btns.on_click(self.action(self._drive_button, self.control_md))
+        self.drive_btns.on_click(page.action(self._drive_button, self.control_md))
         self.action_html = gui.add_html("")
         self.cancel_btn = gui.add_button("Cancel action", color="red", visible=False)
-        self.cancel_btn.on_click(self.action(self._cancel, self.control_md))
+        self.cancel_btn.on_click(page.action(self._cancel, self.control_md))
         tabs = gui.add_tab_group()
         with tabs.add_tab("Speed"):
-            self._build_speed_tab()
+            self.speed = SpeedTab(page)
         with tabs.add_tab("Current"):
-            self._build_current_tab()
+            self.current = CurrentTab(page)
         with tabs.add_tab("Tuning"):
-            self._build_tuning_tab()
+            self.tuning = TuningTab(page)
         with tabs.add_tab("Identify"):
-            self._build_identify_tab()
+            self.identify = IdentifyTab(page, use_ab=self.tuning.use_ab)
         with tabs.add_tab("Captures"):
-            self._build_captures_tab()
+            self.captures = CapturesTab(page)
         with tabs.add_tab("Config"):
-            self._build_config_tab()
+            self.config_tab = ConfigTab(page, on_loaded=self.tuning.load_gains)
         with tabs.add_tab("Bus"):
-            self._build_bus_tab()
+            self.bus_tab = BusTab(page)
         with tabs.add_tab("Report"):
-            self._build_report_tab()
-        self._build_plot_area()
-        self.show_captures()
+            self.report = ReportTab(page)
+        self.plots: PlotArea = page.build_plots()
+        self.captures.show_captures()
 
     # ------------------------------------------------------------------ control
-    def _sign_in(self) -> None:
-        ok = token_ok(self.config.token, str(self.token_in.value).strip() or None)
-        self.authenticated = ok
-        with self.mute():
+    def sign_in(self) -> None:
+        """Check the token typed in "Access token" (it is not kept on the page)."""
+        ok = self.page.sign_in(str(self.token_in.value))
+        with self.page.mute():
             self.token_in.value = ""
         self.notice(self.control_md, "signed in" if ok else "wrong token", "ok" if ok else "error")
-
-    def _take_control(self, event: Any) -> str:
-        if not self.authenticated:
-            raise PermissionError("enter the access token first (this bench requires one)")
-        self.token = self.token or secrets.token_urlsafe(16)
-        self.bench.lease.acquire(self.name(), take_over=True, token=self.token)
-        return "you control the bench"
 
     def _drive_button(self, event: Any) -> None:
         cmd = {
@@ -239,26 +174,44 @@ class Panel(
     def _cancel(self, event: Any) -> str:
         return "cancelling …" if self.bench.cancel_action() else "no action under way"
 
-    # ------------------------------------------------------------------ live updates
+    def _node_switched(self) -> None:
+        """The page shows another node: its gains and captures."""
+        with contextlib.suppress(Exception):
+            self.tuning.load_gains()
+        with contextlib.suppress(Exception):
+            self.captures.show_captures()
+
+    # ------------------------------------------------------------------ what the GUI pushes
+    def load_gains(self) -> None:
+        """Read the node's gains into the Tuning tab (a new page, a node switch)."""
+        self.tuning.load_gains()
+
+    def show_captures(self) -> None:
+        self.captures.show_captures()
+
+    def on_gains(self, g: dict[str, Any]) -> None:
+        """The node's gains changed (applied from any page); no bus."""
+        self.tuning.on_gains(g)
+
+    def show_nodes(self, rows: list[dict[str, Any]]) -> None:
+        self.nodes.show_nodes(rows)
+
+    def fit_readout(self, rotor_shown: bool) -> None:
+        self.plots.fit_readout(rotor_shown)
+
     def show_status(self, text: str) -> None:
         if text != self.last_status:
             self.last_status = text
             self.status_html.content = text
 
-    def show_readout(self, text: str) -> None:
-        if text != self.readout_html.content:
-            self.readout_html.content = text
+    def show_controller(self, text: str) -> None:
+        if self.controller_md.content != text:
+            self.controller_md.content = text
 
     def show_bar(self, text: str) -> None:
         if text != self.last_bar:
             self.last_bar = text
             self.bar_html.content = text
-
-    def show_legends(self, speed: str, current: str) -> None:
-        if (speed, current) != self.last_legends:
-            self.last_legends = (speed, current)
-            self.speed_legend.content = speed
-            self.current_legend.content = current
 
     def show_action(self, action: dict | None, sequence: dict | None) -> None:
         if action is not None:

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import html
 import time
-from typing import Any
 
 from dashboard._gui_field import fmt as _fmt
 
@@ -132,10 +131,12 @@ def legend(
     return f"<div class='{cls}' style='font-size:0.8em'>{sw} · {fresh}</div>"
 
 
-def controller_text(ctl: dict | None, panel: Any, gone: float | None) -> str:
+def controller_text(ctl: dict | None, yours: bool, gone: float | None) -> str:
+    """Who controls the node (``ctl``: :meth:`Bench.state`'s controller), "(you)" when the page
+    asking holds the lease (``yours``), and the s until a closed page's lease frees (``gone``)."""
     if not ctl:
         return "**In control:** nobody (your first action takes control)"
-    you = " (you)" if panel.holds_control() else ""
+    you = " (you)" if yours else ""
     since = time.strftime("%H:%M:%S", time.localtime(ctl["since"]))
     txt = f"**In control:** {ctl['client']}{you} since {since}"
     if gone is not None:

@@ -97,10 +97,9 @@ class Nodes:
         :meth:`listing`."""
         from drive_link import scan
 
-        conn = self.default.drive._conn
         with self._lock:
             skip = tuple(self._benches)
-        found = scan(bus=conn.bus, timeout=timeout, skip=skip)
+        found = scan(bus=self.default.drive.bus, timeout=timeout, skip=skip)
         now = time.monotonic()
         with self._lock:
             for info in found:
@@ -140,7 +139,7 @@ class Nodes:
         from drive_link import Drive
 
         base = self.default
-        drive = Drive.connect(bus=base.drive._conn.bus, node_id=node, heartbeat_ms=None)
+        drive = Drive.connect(bus=base.drive.bus, node_id=node, heartbeat_ms=None)
         try:
             if drive.nmt_state != "OPERATIONAL":
                 drive.nmt("start")  # TPDOs (live values) flow in OPERATIONAL only

@@ -16,6 +16,7 @@ from dashboard._bench import LIVE_NAMES, Bench, as_dict
 from dashboard._models import TYPE_NAMES
 from drive_link import design
 from drive_link import gains as link_gains
+from drive_link.drive import GAIN_FIELDS
 from firmware_protocol import paper
 
 __all__ = [
@@ -26,6 +27,7 @@ __all__ = [
     "design_ip",
     "diff_markdown",
     "display",
+    "held",
     "motor_RL",
     "preview",
     "preview_markdown",
@@ -41,24 +43,45 @@ A_PAPER, B_PAPER = paper.SPEED_MODEL
 
 
 def motor_RL(bench: Bench) -> tuple[float, float]:
-    """(R Ω, L H) of the motor as the drive holds them (motor.R, motor.L)."""
-    return float(bench.drive.read("motor.R")), float(bench.drive.read("motor.L"))
+    """(R Ω, L H) of the motor as the bench holds them (read once, see :func:`held`)."""
+    _g, motor = held(bench)
+    return motor["R"], motor["L"]
+
+
+def _hold(bench: Bench, gains: dict[str, Any], motor: dict[str, float]) -> dict[str, Any]:
+    """Keep ``gains`` (a full set, drive units) and ``motor`` as the bench's known set; returns
+    the set as the dashboard shows it (type by name, motor R and L, L_c/L)."""
+    g = dict(gains)
+    g["type"] = TYPE_NAMES.get(int(g["type"]), str(g["type"]))
+    g["motor_R"], g["motor_L"] = motor["R"], motor["L"]
+    g["L_c_over_L"] = g["L_c"] / motor["L"]
+    bench.gains, bench.motor = g, dict(motor)
+    # the operand of |i_p*| ≤ current limit, so a current setpoint need not read it
+    bench.setpoints.note("speed_controller.current_limit", float(g["speed_current_limit"]))
+    return dict(g)
 
 
 def read_gains(bench: Bench) -> dict[str, Any]:
-    """The live gains read back from the drive, plus motor R, L and L_c/L."""
+    """The live gains read back from the drive (13 SDO reads), plus the motor (4 reads: R, L
+    and the two values the drive's rule uses); the bench keeps both (:func:`held`)."""
     with bench.lock:
         g = as_dict(bench.drive.read_gains())
-        R, L = motor_RL(bench)
-    g["type"] = TYPE_NAMES.get(int(g["type"]), str(g["type"]))
-    g["motor_R"], g["motor_L"] = R, L
-    g["L_c_over_L"] = g["L_c"] / L
-    return g
+        motor = link_gains.read_motor(bench.drive)
+        return _hold(bench, g, motor)
+
+
+def held(bench: Bench) -> tuple[dict[str, Any], dict[str, float]]:
+    """(gains, motor) as the bench knows them: last read back or applied; read once when the
+    bench knows none. A preview, a diff or an Apply costs no read of what is known."""
+    with bench.lock:
+        if bench.gains is None or bench.motor is None:
+            read_gains(bench)
+        assert bench.gains is not None and bench.motor is not None
+        return dict(bench.gains), dict(bench.motor)
 
 
 def _merged(bench: Bench, changes: dict[str, float | int]) -> dict[str, Any]:
-    g = read_gains(bench)
-    out = dict(g)
+    out, _motor = held(bench)
     for k, v in changes.items():
         out[k] = TYPE_NAMES[int(v)] if k == "type" else v
     return out
@@ -135,17 +158,30 @@ def _ab(bench: Bench) -> tuple[float, float]:
 
 def apply(bench: Bench, changes: dict[str, float | int], *, force: bool = False) -> dict[str, Any]:
     """Apply ``changes`` as one set through :func:`drive_link.gains.apply_gains` (the rule of
-    ``drive-link set-gains``) on the identified speed model; returns the read-back gains.
+    ``drive-link set-gains``) on the identified speed model; returns the applied set (its
+    :class:`~drive_link.gains.GainResult`), which the bench then holds and every page shows.
 
-    An unstable set, or one the drive's rule refuses, is refused always; poor margins
-    (L_c > 1.5 L, GM < 2 dB, ‖S‖∞ > 5) unless ``force`` (GainsRefused, a ValueError → 422,
-    nothing applied).
+    The set and the motor the check starts from are the ones the bench holds (:func:`held`):
+    only what changes is staged. An unstable set, or one the drive's rule refuses, is refused
+    always; poor margins (L_c > 1.5 L, GM < 2 dB, ‖S‖∞ > 5) unless ``force`` (GainsRefused, a
+    ValueError → 422, nothing applied).
     """
     with bench.lock:
-        link_gains.apply_gains(bench.drive, changes, force=force, speed_model=_ab(bench))
-        g = read_gains(bench)
-    bench.emit("gains", g)
-    return g
+        g, motor = held(bench)
+        previous = {k: g[k] for k in GAIN_FIELDS}
+        try:
+            res = link_gains.apply_gains(
+                bench.drive, changes, force=force, speed_model=_ab(bench),
+                previous=previous, motor=motor,
+            )
+        except link_gains.GainsRefused:
+            raise  # nothing sent: what the bench holds is still the drive's
+        except Exception:
+            bench.gains = None  # the drive refused or did not answer: read it next time
+            raise
+        out = _hold(bench, res.gains, motor)
+    bench.emit("gains", out)
+    return out
 
 
 def design_ip(
@@ -163,7 +199,7 @@ _stored: dict[int, dict[str, Any]] = {}
 
 
 def store(bench: Bench) -> dict[str, Any]:
-    """Store the live parameters in the drive (0x1010); remember what was stored."""
+    """Store the live parameters in the drive (0x1010); remember what was stored (read back)."""
     with bench.lock:
         bench.drive.store()
         g = read_gains(bench)
@@ -172,13 +208,14 @@ def store(bench: Bench) -> dict[str, Any]:
     return g
 
 
-def stored_diff(bench: Bench) -> dict[str, Any]:
+def stored_diff(bench: Bench, *, fresh: bool = False) -> dict[str, Any]:
     """Live gains against the last set stored from this bench session.
 
     CANopen offers no read of the non-volatile copy, so "stored" is the read-back taken right
-    after the last successful store from this dashboard (None before any).
+    after the last successful store from this dashboard (None before any); "live" is the set
+    the bench holds (:func:`held`), read from the drive first with ``fresh``.
     """
-    live = read_gains(bench)
+    live = read_gains(bench) if fresh else held(bench)[0]
     st = _stored.get(id(bench))
     if st is None:
         return {"live": live, "stored": None, "stored_at": None, "differs": None}

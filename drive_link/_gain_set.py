@@ -130,45 +130,76 @@ def stage_and_apply(
     drive: GainSetDrive,
     changes: Mapping[str, float | int],
     present: Mapping[str, float | int] | None = None,
+    motor: Mapping[str, float] | None = None,
 ) -> Gains:
-    """Stage the set(s) ``changes`` touches in 0x20F0 (``present``, default read now, with
-    ``changes`` in place), apply them with 0x20F1 and return the read-back.
+    """Stage the set(s) whose values ``changes`` changes in 0x20F0 (the whole set, from
+    ``present`` with ``changes`` in place), apply them with 0x20F1 and return the set as the
+    drive now holds it.
 
-    Checks each value against its staged object's limits and the OD's cross-object rules
+    ``present`` (the full active set) and ``motor`` (motor.R/L/... values by their short names)
+    are what the caller already holds; ``present`` is read from the drive when not given (13
+    uploads), and a rule operand neither holds is read. A value equal to the present one (as
+    float32 for a REAL32) is no change; a set none of whose values change is not staged, and
+    with nothing changed nothing is sent. Then: the staged set(s) (10 current, 3 speed
+    downloads), one apply, one upload per changed REAL32 (an integer is applied exactly or the
+    apply aborts).
+
+    Checks each staged value against its object's limits and the OD's cross-object rules
     (L_c < 2 motor.L) first; no policy beyond the drive's own: call
     :func:`drive_link.gains.apply_gains`, which does. Raises :class:`InvalidValue` for unknown
     names or refused values (nothing sent), :class:`drive_link.SdoAbort` if the drive refuses
-    the set (nothing changed), :class:`DriveError` if the read-back differs.
+    the set (nothing changed), :class:`DriveError` if a read-back differs.
     """
     unknown = [k for k in changes if k not in GAIN_OBJECTS]
     if unknown:
         raise InvalidValue(
             f"unknown gain(s) {', '.join(unknown)}; known: {', '.join(GAIN_FIELDS)}"
         )
-    if not changes:
-        return drive.read_gains()
     table = drive.table
-    for k, v in changes.items():
-        table[GAIN_OBJECTS[k][2]].check(v)
-    # the staged set is checked as the objects it becomes (the drive checks it so at apply)
-    _rules.check_rules(drive.read, {GAIN_OBJECTS[k][1]: v for k, v in changes.items()})
-    sets = 0
-    for k in changes:
-        sets |= GAIN_OBJECTS[k][0]
     with drive.gains_lock:
         base = dict(present) if present is not None else drive.read_gains().to_dict()
         merged = {**base, **changes}
-        for f in GAIN_FIELDS:
-            if GAIN_OBJECTS[f][0] & sets:
-                staged = GAIN_OBJECTS[f][2]
-                obj = table[staged]
-                drive.sdo.download(obj.index, obj.subindex, obj.encode(merged[f]), staged)
+        changed = [k for k, v in changes.items() if not _same(base.get(k), v)]
+        if not changed:  # the drive holds this set already
+            return Gains(**merged)  # type: ignore[arg-type]
+        sets = 0
+        for k in changed:
+            sets |= GAIN_OBJECTS[k][0]
+        staged = [f for f in GAIN_FIELDS if GAIN_OBJECTS[f][0] & sets]
+        for f in staged:
+            table[GAIN_OBJECTS[f][2]].check(merged[f])
+        # the staged set is checked as the objects it becomes (the drive checks it so at apply)
+        known: dict[str, float | int] = {GAIN_OBJECTS[f][1]: v for f, v in merged.items()}
+        known.update({f"motor.{k}": v for k, v in (motor or {}).items()})
+
+        def read(name: str) -> Any:
+            return known[name] if name in known else drive.read(name)
+
+        _rules.check_rules(read, {GAIN_OBJECTS[f][1]: merged[f] for f in staged})
+        for f in staged:
+            name = GAIN_OBJECTS[f][2]
+            obj = table[name]
+            drive.sdo.download(obj.index, obj.subindex, obj.encode(merged[f]), name)
         apply = table[APPLY_NAME]
         drive.sdo.download(apply.index, apply.subindex, apply.encode(sets), APPLY_NAME)
-        back = drive.read_gains()
-    for k, v in changes.items():
-        got = getattr(back, k)
-        want = f32(float(v)) if isinstance(got, float) else int(v)
-        if got != want:
-            raise DriveError(f"gain {k}: drive reads back {got!r} after applying {v!r}")
-    return back
+        after: dict[str, float | int] = dict(merged)
+        for f in staged:
+            if isinstance(merged[f], float):
+                after[f] = f32(float(merged[f]))  # what a REAL32 holds
+        for f in changed:
+            if not isinstance(merged[f], float):
+                continue  # an integer is applied exactly (or the apply was aborted)
+            got = drive.read(GAIN_OBJECTS[f][1])
+            if got != after[f]:
+                raise DriveError(f"gain {f}: drive reads back {got!r} after applying {merged[f]!r}")
+            after[f] = float(got)
+    return Gains(**after)  # type: ignore[arg-type]
+
+
+def _same(held: float | int | None, value: float | int) -> bool:
+    """True if the drive holding ``held`` already holds ``value`` (REAL32: compared as float32)."""
+    if held is None:
+        return False
+    if isinstance(value, float) or isinstance(held, float):
+        return f32(float(held)) == f32(float(value))
+    return held == value

@@ -14,9 +14,12 @@ else, so both follow one policy:
   margins of a stable current loop — L_c > 1.5 L (deadbeat, predictive), gain margin < 2 dB,
   ‖S‖∞ > 5.
 
-Applying stages the whole set in gain_set (0x20F0) and applies it with gain_set_apply (0x20F1)
+Applying stages the whole set (current loop, speed loop or both: the ones with a changed value)
+in gain_set (0x20F0) and applies it with gain_set_apply (0x20F1)
 (:func:`drive_link._gain_set.stage_and_apply`), so the drive changes all values at once or none.
-This is the one public way to change gains: ``Drive.write`` of a gain object comes here too.
+A caller that holds the present set and the motor (the dashboard) passes them and no read
+precedes the write. This is the one public way to change gains: ``Drive.write`` of a gain object
+comes here too.
 
 Units: L_c H, R_c Ω, current PI k_p/k_i V/A, T_BT/T_DD/T_SD s, V_G V, speed k_p A/rpm, speed
 k_i 1/sample, speed_current_limit A; motor R Ω, L H, rated_current A, V_dc_nominal V.
@@ -267,16 +270,29 @@ def apply_gains(
     *,
     force: bool = False,
     speed_model: tuple[float, float] | None = None,
+    previous: Mapping[str, Any] | None = None,
+    motor: Mapping[str, float] | None = None,
 ) -> GainResult:
     """Apply ``changes`` (a subset of :data:`drive_link.GAIN_FIELDS`; ``type`` may be a name)
-    as one set: read the present set and the motor once, check the merged set
-    (:func:`check_gains` on ``speed_model``, default the paper's), stage it in 0x20F0, apply it
-    with 0x20F1 and return the read-back.
+    as one set: check the merged set (:func:`check_gains` on ``speed_model``, default the
+    paper's), stage the set(s) it changes in 0x20F0, apply them with 0x20F1 and read back the
+    values that changed.
+
+    ``previous`` (the full present set) and ``motor`` (:func:`read_motor`'s values) are what
+    the caller already holds; each is read from the drive once when not given. A value equal
+    to the present one is no change; a set none of whose values change is not staged, and with
+    nothing changed nothing is sent. Bus cost: 13 + 4 reads when nothing is given, then the
+    staged set(s) (10 current, 3 speed), one apply and one read per changed REAL32.
+
+    Returns a :class:`GainResult` whose ``gains`` are the set as the drive now holds it (the
+    changed values as read back, float32, the others as they were).
 
     Raises :class:`GainsRefused` (an :class:`InvalidValue`, nothing sent) when the set is
     unstable or the drive's rule refuses it — ``force`` does not change that — or when its
-    margins are poor and ``force`` is False; :class:`InvalidValue` for unknown names or
-    non-numbers; :class:`drive_link.SdoAbort` if the drive still refuses.
+    margins are poor and ``force`` is False; :class:`InvalidValue` for unknown names,
+    non-numbers or a value outside its object's limits (nothing sent);
+    :class:`drive_link.SdoAbort` if the drive still refuses (it then changed nothing);
+    :class:`DriveError` if a value reads back other than applied.
     """
     unknown = [k for k in changes if k not in GAIN_FIELDS]
     if unknown:
@@ -284,15 +300,19 @@ def apply_gains(
     if not changes:
         raise InvalidValue("no gain to change")
     wanted = _normalised(changes)
-    previous = drive.read_gains().to_dict()
-    motor = read_motor(drive)
+    before = (
+        {k: v for k, v in _normalised(previous).items() if k in GAIN_FIELDS}
+        if previous is not None
+        else drive.read_gains().to_dict()
+    )
+    held = dict(motor) if motor is not None else read_motor(drive)
     check = check_gains(
-        {**previous, **wanted},
-        motor["R"],
-        motor["L"],
+        {**before, **wanted},
+        held["R"],
+        held["L"],
         speed_model,
-        rated_current=motor["rated_current"],
-        V_dc_nominal=motor["V_dc_nominal"],
+        rated_current=held["rated_current"],
+        V_dc_nominal=held["V_dc_nominal"],
     )
     if check.refusals:
         raise GainsRefused(
@@ -305,5 +325,5 @@ def apply_gains(
             "refused: " + "; ".join(check.warnings) + " (force to apply anyway); nothing applied",
             check,
         )
-    back = stage_and_apply(drive, wanted).to_dict()
-    return GainResult(back, previous, check, forced=bool(force and check.warnings))
+    back = stage_and_apply(drive, wanted, present=before, motor=held).to_dict()
+    return GainResult(back, before, check, forced=bool(force and check.warnings))

@@ -54,10 +54,10 @@ def test_bus_tab_shows_the_bench_bus_decoded_filtered_and_paused(app_client):
     from dashboard._gui_panel import Panel
 
     gui = app_client.app.state.gui
-    p = Panel(gui, _FakeClient(gui.server.gui, 993))
-    assert p._bus is None  # unchecked: no connection, no cost
+    p = Panel(gui, _FakeClient(gui.server.gui, 993)).bus_tab
+    assert p.table is None  # unchecked: no connection, no cost
     p.bus_on.value = True
-    p._bus_toggle()
+    p.on_toggle()
     try:
         time.sleep(1.6)
         rows = _rows(p.bus_html.content)
@@ -67,20 +67,20 @@ def test_bus_tab_shows_the_bench_bus_decoded_filtered_and_paused(app_client):
         # 1 kHz (the event timer), measured; a drive starved of CPU sends fewer (README)
         assert 300 < float(rows["0x281"][3]) < 1300
         p.bus_ids.value = "0x700-0x77F"
-        p._bus_filter()
+        p.on_filter()
         time.sleep(0.8)
         shown = {int(i, 16) for i in _rows(p.bus_html.content)}
         assert 0x701 in shown and all(0x700 <= i <= 0x77F for i in shown)  # (0x77F: the host)
         p.bus_ids.value = "0xZZ"  # refused in one line; the filter stays
-        p._bus_guard(p._bus_filter)
-        assert "0xZZ" in p.bus_md.content and p._bus[2].keep.ids == set(range(0x700, 0x780))
+        p.on_filter()
+        assert "0xZZ" in p.bus_md.content and p.table.keep.ids == set(range(0x700, 0x780))
         p.bus_pause.value = True
-        p._bus_pause_changed()
+        p.on_pause()
         time.sleep(0.6)
         frozen = p.bus_html.content
         time.sleep(1.0)
         assert p.bus_html.content == frozen and "paused" in frozen
     finally:
         p.bus_on.value = False
-        p._bus_toggle()
-    assert p._bus is None
+        p.on_toggle()
+    assert p.table is None

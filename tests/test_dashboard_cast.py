@@ -12,7 +12,7 @@ import pytest
 import viser._messages as messages
 from viser._assignable_props_api import AssignablePropsBase
 
-from dashboard._gui_cast import install_fast_cast
+from dashboard._gui_cast import install_fast_cast, installed_cast
 
 pytestmark = pytest.mark.unit
 
@@ -41,8 +41,10 @@ def test_fast_cast_equals_visers_cast_on_every_props_hint():
     install_fast_cast()
     install_fast_cast()  # idempotent
     fast = AssignablePropsBase._cast_value_recursive
-    original = fast._dashboard_original
-    assert getattr(fast, "_dashboard_fast", False) and original is not fast
+    installed = installed_cast()
+    assert installed is not None and installed[0] is fast
+    original = installed[1]
+    assert original is not fast
     assert original.__module__ == "viser._assignable_props_api"
     obj = object.__new__(AssignablePropsBase)
 

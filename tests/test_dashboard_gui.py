@@ -78,9 +78,9 @@ def test_share_url_request_is_refused(app_client):
 
 
 def test_viser_sends_go_through_one_lock(app_client):
-    from viser.infra import _infra
+    from dashboard._gui_guard import send_lock_installed
 
-    assert getattr(_infra.WebsockMessageHandler.queue_message, "_dashboard_locked", False)
+    assert send_lock_installed()
     # while the lock is held elsewhere, a send from the plot thread waits (no interleaving)
     gui = app_client.app.state.gui
     before = gui.frames_sent
@@ -106,18 +106,19 @@ def test_with_a_token_the_gui_must_sign_in_before_it_changes_anything(app_client
     cfg.token = "secret-token-1234"  # as with --allow-remote --token
     try:
         p = Panel(gui, _FakeClient(gui.server.gui, 990))
-        assert not p._control(p.control_md)
+        page = p.page
+        assert not page.control(p.control_md)
         assert "access token" in p.control_md.content
         assert bench.lease.holder is None or not p.holds_control()
         p.token_in.value = "wrong-token-0000"
-        p._sign_in()
-        assert not p.authenticated and not p._control(p.control_md)
+        p.sign_in()
+        assert not page.authenticated and not page.control(p.control_md)
         p.token_in.value = "secret-token-1234"
-        p._sign_in()
-        assert p.authenticated and p.token_in.value == ""  # the token is not kept on the page
+        p.sign_in()
+        assert page.authenticated and p.token_in.value == ""  # the token is not kept on the page
         if bench.lease.holder is not None:
-            p._take_control(None)
-        assert p._control(p.control_md) and p.holds_control()
+            page.take_control()
+        assert page.control(p.control_md) and p.holds_control()
     finally:
         cfg.token = None
 
@@ -150,7 +151,8 @@ def test_config_tab_saves_a_dcf_canopen_reads_and_loads_it_back(app_client, tmp_
     drive = app_client.app.state.bench.drive
     client = _DownloadClient(gui.server.gui, 991)
     p = Panel(gui, client)
-    assert p._save_dcf(None).startswith("saved ")
+    tab = p.config_tab
+    assert tab.save_dcf(None).startswith("saved ")
     (name, data), = client.files.items()
     assert name.endswith(".dcf")
     path = tmp_path / name
@@ -167,17 +169,17 @@ def test_config_tab_saves_a_dcf_canopen_reads_and_loads_it_back(app_client, tmp_
         flags=re.IGNORECASE,
     )
     upload = UploadedFile(name, text.encode())
-    p.dcf_dry.value = True
-    msg = p._load_dcf(_event(upload))
+    tab.dcf_dry.value = True
+    msg = tab.load_dcf(_event(upload))
     assert "1 change(s) (dry run, nothing written)" in msg, msg
     assert drive.read("current_controller.R_c") == pytest.approx(R_c)  # nothing written
-    p.dcf_dry.value = False
+    tab.dcf_dry.value = False
     if app_client.app.state.bench.lease.holder is not None:
-        p._take_control(None)
-    msg = p._load_dcf(_event(upload))
+        p.page.take_control()
+    msg = tab.load_dcf(_event(upload))
     assert "1 object(s) written" in msg, msg
     assert drive.read("current_controller.R_c") == pytest.approx(R_c * 2, rel=1e-6)
-    p._load_dcf(_event(UploadedFile(name, data)))  # the saved file puts it back
+    tab.load_dcf(_event(UploadedFile(name, data)))  # the saved file puts it back
     assert drive.read("current_controller.R_c") == pytest.approx(R_c, rel=1e-6)
 
 
@@ -199,11 +201,11 @@ def test_config_tab_records_the_bus_for_other_can_tools(app_client):
 
     gui = app_client.app.state.gui
     client = _DownloadClient(gui.server.gui, 992)
-    p = Panel(gui, client)
-    p.rec_fmt.value = ".asc"
-    assert "recording the bus" in p._record_button(_event("Start recording"))
+    tab = Panel(gui, client).config_tab
+    tab.rec_fmt.value = ".asc"
+    assert "recording the bus" in tab.record_button(_event("Start recording"))
     time.sleep(1.5)
-    msg = p._record_button(_event("Stop and download"))
+    msg = tab.record_button(_event("Stop and download"))
     (name, data), = client.files.items()
     assert name.endswith(".asc") and "downloaded" in msg
     path = Path(tempfile.mkdtemp()) / name

@@ -73,21 +73,22 @@ def test_dcf_dry_run_in_the_gui_names_the_gui_checkbox_and_shows_field_units(ben
 
     with pytest.raises(Exception, match="--force"):
         load(d, io.StringIO(poor), dry_run=True)
-    panel.dcf_dry.value = True
-    panel.dcf_force.value = False
-    cb = panel.action(panel._load_dcf, panel.cfg_md, needs_control=False)
+    tab = panel.config_tab
+    tab.dcf_dry.value = True
+    tab.dcf_force.value = False
+    cb = panel.page.action(tab.load_dcf, tab.cfg_md, needs_control=False)
     cb(_upload(poor))
-    msg = panel.cfg_md.content
+    msg = tab.cfg_md.content
     assert "--force" not in msg and CONFIG_FORCE_LABEL in msg, msg
     # the GUI's own control does what --force does: the dry run passes and lists the diff
-    panel.dcf_force.value = True
+    tab.dcf_force.value = True
     cb(_upload(poor))
-    msg = panel.cfg_md.content
+    msg = tab.cfg_md.content
     want = f"{1.6 * L * 1e6:.6g} µH"
     assert f"current_controller.L_c: {L_c * 1e6:.6g} µH → {want}" in msg, msg
     assert "dry run, nothing written" in msg
     assert float(d.read("current_controller.L_c")) == L_c  # a dry run wrote nothing
-    panel.dcf_force.value = False
+    tab.dcf_force.value = False
 
 
 def test_cli_words_become_gui_words():

@@ -11,10 +11,12 @@ from __future__ import annotations
 import html
 import threading
 import time
+from collections.abc import Callable
 from typing import Any
 
 import can
 
+from dashboard._gui_page import Page
 from dashboard._gui_tabs.config import bus_kwargs
 from drive_link.bus import open_bus
 from drive_link.monitor import BusTable, IdFilter, TableFeed, parse_ids
@@ -45,34 +47,49 @@ def rows_html(rows: list[dict[str, Any]], frames: int, paused: bool) -> str:
 
 
 class BusTab:
-    """Mixin of :class:`dashboard._gui_panel.Panel`: the Bus tab."""
+    """The Bus tab of one page: its own connection to the bench's bus while watched."""
 
-    gui: Any
-    bench: Any
-    config: Any
-
-    def _build_bus_tab(self) -> None:
-        gui = self.gui
+    def __init__(self, page: Page) -> None:
+        self.page = page
+        gui = page.gui
         self.bus_on = gui.add_checkbox("Watch the bus", False, hint="per CAN-ID, with its meaning")
         self.bus_nodes = gui.add_text("Nodes", "", hint="e.g. 1,2 (empty: all)")
         self.bus_ids = gui.add_text("CAN-IDs", "", hint="e.g. 0x181,0x700-0x77F (empty: all)")
         self.bus_pause = gui.add_checkbox("Pause", False, hint="freeze the table")
-        self.bus_md = self.md()
+        self.bus_md = page.md()
         self.bus_html = gui.add_html("")
         self._bus: tuple[Any, Any, BusTable] | None = None  # (bus, notifier, table)
         self._bus_lock = threading.Lock()
-        self.bus_on.on_update(lambda e: self._bus_guard(self._bus_toggle))
-        self.bus_pause.on_update(lambda e: self._bus_guard(self._bus_pause_changed))
-        self.bus_nodes.on_update(lambda e: self._bus_guard(self._bus_filter))
-        self.bus_ids.on_update(lambda e: self._bus_guard(self._bus_filter))
+        self.bus_on.on_update(lambda e: self.on_toggle())
+        self.bus_pause.on_update(lambda e: self.on_pause())
+        self.bus_nodes.on_update(lambda e: self.on_filter())
+        self.bus_ids.on_update(lambda e: self.on_filter())
 
-    def _bus_guard(self, fn: Any) -> None:
+    def on_toggle(self) -> None:
+        """"Watch the bus" changed: open or close this page's connection to the bus."""
+        self._bus_guard(self._bus_toggle)
+
+    def on_filter(self) -> None:
+        """A filter changed: applied, or refused in one line (the old one stays)."""
+        self._bus_guard(self._bus_filter)
+
+    def on_pause(self) -> None:
+        """"Pause" changed: the table freezes (frames are still counted) or goes on."""
+        self._bus_guard(self._bus_pause_changed)
+
+    @property
+    def table(self) -> BusTable | None:
+        """The table of the bus being watched (None while not watching)."""
+        watch = self._bus
+        return watch[2] if watch is not None else None
+
+    def _bus_guard(self, fn: Callable[[], None]) -> None:
         try:
             fn()
         except Exception as exc:
-            self.notice(self.bus_md, str(exc) or type(exc).__name__)  # type: ignore[attr-defined]
+            self.page.notice(self.bus_md, str(exc) or type(exc).__name__)
         else:
-            self.notice(self.bus_md, "")  # type: ignore[attr-defined]
+            self.page.notice(self.bus_md, "")
 
     def _bus_keep(self) -> IdFilter:
         nodes_text = str(self.bus_nodes.value).strip()
@@ -98,7 +115,8 @@ class BusTab:
         with self._bus_lock:
             if self.bus_on.value and self._bus is None:
                 table = BusTable(keep=self._bus_keep())
-                bus = open_bus(**bus_kwargs(self.config, getattr(self.bench, "hub_port", None)))
+                page = self.page
+                bus = open_bus(**bus_kwargs(page.config, getattr(page.bench, "hub_port", None)))
                 notifier = can.Notifier(bus, [TableFeed(table)], timeout=0.1)
                 self._bus = (bus, notifier, table)
                 threading.Thread(target=self._bus_loop, name="bench-bus-tab", daemon=True).start()

@@ -11,62 +11,60 @@ from typing import Any
 from dashboard import _experiments as experiments
 from dashboard._fields import NumberSpec
 from dashboard._gui_field import Field
+from dashboard._gui_page import Page
 from dashboard._models import TraceIn, field_bounds
 
 __all__ = ["CapturesTab"]
 
 
 class CapturesTab:
-    """Mixin of :class:`dashboard._gui_panel.Panel`: the Captures tab."""
+    """The Captures tab of one page: the capture picked, downloads, a 50 kHz trace."""
 
-    gui: Any
-    bench: Any
-    client: Any
-
-    def _build_captures_tab(self) -> None:
-        gui = self.gui
+    def __init__(self, page: Page) -> None:
+        self.page = page
+        gui = page.gui
         self.cap_dd = gui.add_dropdown("Capture", ("none",), initial_value="none")
         self.cap_dd.on_update(lambda e: self._on_capture_pick())
         dl = gui.add_button_group("Download", ("CSV", "PNG"))
         self.cap_md = gui.add_markdown("", visible=False)
-        dl.on_click(self.action(self._download, self.cap_md, needs_control=False))
+        dl.on_click(page.action(self._download, self.cap_md, needs_control=False))
         with gui.add_folder("Trace (i_p at 50 kHz)"):
             self.tr_len = Field(
-                self, NumberSpec("Length (samples)", 2, 8192, integer=True, unit="samples"), 1000
+                page, NumberSpec("Length (samples)", 2, 8192, integer=True, unit="samples"), 1000
             )
             self.tr_div = Field(
-                self, NumberSpec("Divider", *field_bounds(TraceIn, "divider"), integer=True), 1
+                page, NumberSpec("Divider", *field_bounds(TraceIn, "divider"), integer=True), 1
             )
-            gui.add_button("Capture now").on_click(self.action(self._capture_now, self.cap_md))
+            gui.add_button("Capture now").on_click(page.action(self._capture_now, self.cap_md))
 
     def _capture_now(self, event: Any) -> str:
         cfg = TraceIn(
             length=int(self.tr_len.value()), divider=int(self.tr_div.value()), pre_trigger=0
         )
-        cap = experiments.capture(self.bench, cfg)
+        cap = experiments.capture(self.page.bench, cfg)
         return f"capture #{cap.id} recorded (plot: Capture tab)"
 
     def _picked(self) -> Any:
         if self.cap_dd.value == "none":
             return None
-        return self.bench.captures.get(int(self.cap_dd.value.split(" ")[0].lstrip("#")))
+        return self.page.bench.captures.get(int(self.cap_dd.value.split(" ")[0].lstrip("#")))
 
     def _on_capture_pick(self) -> None:
-        if self._muted:
+        if self.page.muted:
             return
         cap = self._picked()
         if cap is not None:
-            self.show_capture_plot(cap)
+            self.page.plots.show_capture_plot(cap)
 
     def show_captures(self) -> None:
         """Offer every capture; select and plot the newest."""
-        caps = list(self.bench.captures.values())
+        caps = list(self.page.bench.captures.values())
         opts = tuple(f"#{c.id} {c.kind}" for c in caps) or ("none",)
         self.cap_dd.options = opts
-        with self.mute():
+        with self.page.mute():
             self.cap_dd.value = opts[-1]
         if caps:
-            self.show_capture_plot(caps[-1])
+            self.page.plots.show_capture_plot(caps[-1])
 
     def _download(self, event: Any) -> None:
         from dashboard._export import capture_csv, capture_png
@@ -76,6 +74,6 @@ class CapturesTab:
             raise ValueError("no capture yet")
         fmt = event.target.value.lower()
         data = capture_csv(cap) if fmt == "csv" else capture_png(cap)
-        self.client.send_file_download(
+        self.page.client.send_file_download(
             f"capture_{cap.id}_{cap.kind}.{fmt}", data, save_immediately=True
         )

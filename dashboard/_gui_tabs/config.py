@@ -10,9 +10,11 @@ import contextlib
 import tempfile
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from dashboard._gui_page import Page
 from dashboard._gui_words import CONFIG_FORCE_LABEL, diff_rows
 from drive_link import config_dcf
 from drive_link.record import record_bus
@@ -38,19 +40,17 @@ def bus_kwargs(config: Any, hub_port: int | None) -> dict[str, Any]:
 
 
 class ConfigTab:
-    """Mixin of :class:`dashboard._gui_panel.Panel`: the Config tab."""
+    """The Config tab of one page: DCF save and load, a bus recording; ``on_loaded`` is called
+    after a DCF file was written to the drive."""
 
-    gui: Any
-    bench: Any
-    config: Any
-    client: Any
-
-    def _build_config_tab(self) -> None:
-        gui = self.gui
+    def __init__(self, page: Page, on_loaded: Callable[[], None]) -> None:
+        self.page = page
+        self.on_loaded = on_loaded
+        gui = page.gui
         gui.add_markdown("**Configuration file (DCF, CiA 306)**")
         save = gui.add_button("Save configuration (.dcf)")
-        self.save_md = self.md()
-        save.on_click(self.action(self._save_dcf, self.save_md, needs_control=False))
+        self.save_md = page.md()
+        save.on_click(page.action(self.save_dcf, self.save_md, needs_control=False))
         self.dcf_dry = gui.add_checkbox(
             "Compare only (dry run)", True, hint="show what the file would change; write nothing"
         )
@@ -62,37 +62,37 @@ class ConfigTab:
         )
         up = gui.add_upload_button("Load configuration (.dcf)", mime_type=".dcf,text/plain")
         self.cfg_md = gui.add_markdown("", visible=False)
-        up.on_upload(self.action(self._load_dcf, self.cfg_md, needs_control=False))
+        up.on_upload(page.action(self.load_dcf, self.cfg_md, needs_control=False))
         gui.add_markdown("**Bus recording**")
         self.rec_fmt = gui.add_dropdown("Format", RECORD_FORMATS, initial_value=".asc")
         self.rec_btns = gui.add_button_group("Recording", ("Start recording", "Stop and download"))
         self.rec_md = gui.add_markdown("", visible=False)
-        self.rec_btns.on_click(self.action(self._record_button, self.rec_md, needs_control=False))
+        self.rec_btns.on_click(page.action(self.record_button, self.rec_md, needs_control=False))
         self._rec: tuple[threading.Thread, threading.Event, Path, dict] | None = None
 
-    def _save_dcf(self, event: Any) -> str:
+    def save_dcf(self, event: Any) -> str:
         with tempfile.TemporaryDirectory() as d:
-            path = Path(d) / f"drive_node{self.bench.node_id}.dcf"
-            with self.bench.lock:
-                res = config_dcf.save(self.bench.drive, path, bitrate=self.config.bitrate)
+            path = Path(d) / f"drive_node{self.page.bench.node_id}.dcf"
+            with self.page.bench.lock:
+                res = config_dcf.save(self.page.bench.drive, path, bitrate=self.page.config.bitrate)
             data = path.read_bytes()
         stamp = time.strftime("%Y%m%d_%H%M%S")
-        self.client.send_file_download(
+        self.page.client.send_file_download(
             f"drive_node{res['node_id']}_{stamp}.dcf", data, save_immediately=True
         )
         return f"saved {res['objects']} objects of node {res['node_id']}"
 
-    def _load_dcf(self, event: Any) -> str | None:
+    def load_dcf(self, event: Any) -> str | None:
         f = event.target.value
         dry = bool(self.dcf_dry.value)
         force = bool(self.dcf_force.value)
-        if not dry and not self._control(self.cfg_md):
+        if not dry and not self.page.control(self.cfg_md):
             return None
         with tempfile.TemporaryDirectory() as d:
             path = Path(d) / Path(f.name).name
             path.write_bytes(f.content)
-            with self.bench.lock:
-                res = config_dcf.load(self.bench.drive, path, dry_run=dry, force=force)
+            with self.page.bench.lock:
+                res = config_dcf.load(self.page.bench.drive, path, dry_run=dry, force=force)
         changes = res.get("changes") or []
         rows = diff_rows(changes)
         if dry:
@@ -100,11 +100,12 @@ class ConfigTab:
         else:
             n = res.get("written") or 0
             head = f"{f.name}: {n if isinstance(n, int) else len(n)} object(s) written"
+            self.page.bench.setpoints.forget()  # limits and RPDO layouts may have changed
             with contextlib.suppress(Exception):
-                self.load_gains()
+                self.on_loaded()
         return f"{head}{': ' + rows if rows else ''}"
 
-    def _record_button(self, event: Any) -> str | None:
+    def record_button(self, event: Any) -> str | None:
         if event.target.value == "Start recording":
             if self._rec is not None and self._rec[0].is_alive():
                 raise ValueError("already recording: stop it first")
@@ -112,7 +113,7 @@ class ConfigTab:
             path = d / f"bus_{time.strftime('%Y%m%d_%H%M%S')}{self.rec_fmt.value}"
             stop = threading.Event()
             out: dict[str, Any] = {}
-            kw = bus_kwargs(self.config, getattr(self.bench, "hub_port", None))
+            kw = bus_kwargs(self.page.config, getattr(self.page.bench, "hub_port", None))
 
             def run() -> None:
                 try:
@@ -133,7 +134,7 @@ class ConfigTab:
         if "error" in out:
             raise RuntimeError(f"recording failed: {out['error']}")
         stats = out.get("stats")
-        self.client.send_file_download(path.name, path.read_bytes(), save_immediately=True)
+        self.page.client.send_file_download(path.name, path.read_bytes(), save_immediately=True)
         frames = stats.frames if stats is not None else "?"
         secs = f"{stats.seconds:.1f}" if stats is not None else "?"
         with contextlib.suppress(OSError):

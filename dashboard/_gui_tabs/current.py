@@ -13,52 +13,51 @@ import numpy as np
 from dashboard import _experiments as experiments
 from dashboard._fields import NumberSpec
 from dashboard._gui_field import Field, fmt
+from dashboard._gui_page import Page
 from dashboard._models import CurrentIn, CurrentStepIn, field_bounds
 
 __all__ = ["CurrentTab"]
 
 
 class CurrentTab:
-    """Mixin of :class:`dashboard._gui_panel.Panel`: the Current tab."""
+    """The Current tab of one page: i_p* and the current step test."""
 
-    gui: Any
-    bench: Any
-
-    def _build_current_tab(self) -> None:
-        gui = self.gui
+    def __init__(self, page: Page) -> None:
+        self.page = page
+        gui = page.gui
         self.i_in = Field(
-            self, NumberSpec("i_p* (A)", *field_bounds(CurrentIn, "i_p_ref"), unit="A"), 0.0
+            page, NumberSpec("i_p* (A)", *field_bounds(CurrentIn, "i_p_ref"), unit="A"), 0.0
         )
         btn = gui.add_button("Set current")
-        self.current_md = self.md()
-        btn.on_click(self.action(self._set_current, self.current_md))
+        self.current_md = page.md()
+        btn.on_click(page.action(self._set_current, self.current_md))
         with gui.add_folder("Current step test (Fig. 13)"):
             self.step_from = Field(
-                self, NumberSpec("From (A)", *field_bounds(CurrentStepIn, "from_A"), unit="A"), 15.0
+                page, NumberSpec("From (A)", *field_bounds(CurrentStepIn, "from_A"), unit="A"), 15.0
             )
             self.step_to = Field(
-                self, NumberSpec("To (A)", *field_bounds(CurrentStepIn, "to_A"), unit="A"), 20.0
+                page, NumberSpec("To (A)", *field_bounds(CurrentStepIn, "to_A"), unit="A"), 20.0
             )
             self.avg_n = Field(
-                self,
+                page,
                 NumberSpec(
                     "Moving average (samples)", 1, 1000, integer=True, unit="samples"
                 ),
                 1,
             )
             run = gui.add_button("Run current step")
-            self.step_md = self.md()
-            run.on_click(self.action(self._current_step, self.step_md))
+            self.step_md = page.md()
+            run.on_click(page.action(self._current_step, self.step_md))
 
     def _set_current(self, event: Any) -> None:
-        self.bench.set_current(self.i_in.value())
+        self.page.bench.set_current(self.i_in.value())
 
     def _current_step(self, event: Any) -> str:
         body = CurrentStepIn(
             from_A=self.step_from.value(), to_A=self.step_to.value(), duration_ms=2.0
         )
         avg = int(self.avg_n.value())
-        res = experiments.current_step(self.bench, body, average_samples=avg)
+        res = experiments.current_step(self.page.bench, body, average_samples=avg)
         m = res["metrics"]
         return (
             f"**{res['controller']}**: rise {fmt(m.get('rise_time_s', np.nan) * 1e6, '.0f')} µs · "

@@ -116,13 +116,13 @@ def _capture_series(styles: list[SignalStyle], x_label: str) -> tuple[Any, ...]:
 
 
 class PlotArea:
-    """Mixin of :class:`dashboard._gui_panel.Panel`: builds and fills the main plot area."""
+    """The main plot area of one browser's page (docked left) and the readout strip; owns its
+    plots and what they last showed."""
 
-    gui: Any
-    config: Any
-
-    def _build_plot_area(self) -> None:
-        gui = self.gui
+    def __init__(self, gui: Any, live_window_s: float) -> None:
+        self.gui = gui
+        self.live_window_s = live_window_s
+        self.last_legends: tuple[str, str] = ("", "")
         self.plot_panel = gui.add_panel()
         with self.plot_panel.add_tab("Live"):
             gui.add_html(LEGEND_CSS)
@@ -149,8 +149,25 @@ class PlotArea:
         """The readout over the top of a shown 3D rotor, or the whole strip without one."""
         self.readout_panel.set_height(READOUT_HEIGHT_PX if rotor_shown else READOUT_FULL_PX)
 
+    def show_readout(self, text: str) -> None:
+        """The live readout (sent only when it changed)."""
+        if text != self.readout_html.content:
+            self.readout_html.content = text
+
+    def show_legends(self, speed: str, current: str) -> None:
+        """The live plots' legend lines (sent only when they changed)."""
+        if (speed, current) != self.last_legends:
+            self.last_legends = (speed, current)
+            self.speed_legend.content = speed
+            self.current_legend.content = current
+
+    def show_live(self, speed: tuple[Any, ...], current: tuple[Any, ...]) -> None:
+        """The live window: (t, reference, measurement, envelope) of each plot."""
+        self.speed_plot.data = speed
+        self.current_plot.data = current
+
     def _live_plot(self, name: str, unit: str, colors: tuple[str, str]) -> Any:
-        window = self.config.live_window_s
+        window = self.live_window_s
         x0 = np.linspace(-window, 0.0, 2)
         zero = np.zeros(2)
         return self.gui.add_uplot(

@@ -12,6 +12,8 @@ import json
 import weakref
 from typing import Any
 
+from dashboard._gui_page import Page
+
 __all__ = ["REPORT_IDS", "ReportTab"]
 
 REPORT_DEADLINE_S = 600.0  #: the whole report gives up (and puts the drive back) after this, s
@@ -33,14 +35,11 @@ _LAST: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  #: bench → its
 
 
 class ReportTab:
-    """Mixin of :class:`dashboard._gui_panel.Panel`: the Report tab."""
+    """The Report tab of one page (the last report is kept per bench)."""
 
-    gui: Any
-    bench: Any
-    client: Any
-
-    def _build_report_tab(self) -> None:
-        gui = self.gui
+    def __init__(self, page: Page) -> None:
+        self.page = page
+        gui = page.gui
         gui.add_markdown(
             "The paper's experiments on this drive, each with its verdict (pass when the "
             "measurement agrees with the paper's equations within the tolerance). Each one says "
@@ -55,8 +54,8 @@ class ReportTab:
         self.rep_dl = gui.add_button_group("Download report", ("HTML", "JSON"))
         self.rep_md = gui.add_markdown("", visible=False)
         self.rep_result = gui.add_markdown("")
-        self.rep_run.on_click(self.action(self._run_report, self.rep_md))
-        self.rep_dl.on_click(self.action(self._download_report, self.rep_md, needs_control=False))
+        self.rep_run.on_click(page.action(self._run_report, self.rep_md))
+        self.rep_dl.on_click(page.action(self._download_report, self.rep_md, needs_control=False))
 
     def _run_report(self, event: Any) -> str:
         from drive_link.report import run_report
@@ -66,10 +65,10 @@ class ReportTab:
         if not only:
             raise ValueError("tick at least one experiment")
         said: list[str] = []
-        with self.bench.long_action("report", REPORT_DEADLINE_S) as act:
+        with self.page.bench.long_action("report", REPORT_DEADLINE_S) as act:
             hooks = Hooks(progress=act.progress, sleep=act.sleep, say=said.append)
-            rep = run_report(self.bench.drive, only, hooks)
-        _LAST[self.bench] = rep
+            rep = run_report(self.page.bench.drive, only, hooks)
+        _LAST[self.page.bench] = rep
         rows = ["| experiment | verdict | s |", "|---|---|---|"]
         rows += [f"| {r.id} | **{r.verdict}** | {r.seconds:.1f} |" for r in rep.results]
         self.rep_result.content = "\n".join(rows)
@@ -80,7 +79,7 @@ class ReportTab:
     def _download_report(self, event: Any) -> None:
         from drive_link.report.html import render
 
-        rep = _LAST.get(self.bench)
+        rep = _LAST.get(self.page.bench)
         if rep is None:
             raise ValueError("run the report first")
         if event.target.value == "HTML":
@@ -89,4 +88,4 @@ class ReportTab:
         else:
             data = json.dumps(rep.as_dict(), indent=1, allow_nan=False).encode("utf-8")
             name = "report.json"
-        self.client.send_file_download(name, data, save_immediately=True)
+        self.page.client.send_file_download(name, data, save_immediately=True)

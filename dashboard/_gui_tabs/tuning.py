@@ -14,6 +14,7 @@ from typing import Any
 from dashboard import _tuning as tuning
 from dashboard._fields import FieldError, NumberSpec
 from dashboard._gui_field import Field
+from dashboard._gui_page import Page
 from dashboard._models import CONTROLLER_TYPES, GainsIn, field_bounds
 from firmware_protocol import paper
 
@@ -21,14 +22,11 @@ __all__ = ["TuningTab"]
 
 
 class TuningTab:
-    """Mixin of :class:`dashboard._gui_panel.Panel`: the Tuning tab."""
+    """The Tuning tab of one page: the typed gain set, its preview, Apply, Read back, Store."""
 
-    gui: Any
-    bench: Any
-    gains: dict[str, Any] | None
-
-    def _build_tuning_tab(self) -> None:
-        gui = self.gui
+    def __init__(self, page: Page) -> None:
+        self.page = page
+        gui = page.gui
         # preview, Apply and its notice first: visible without scrolling
         self.preview_md = gui.add_markdown("")
         self.force_in = gui.add_checkbox(
@@ -39,46 +37,46 @@ class TuningTab:
         )
         self.gain_btns = gui.add_button_group("Gains", ("Apply gains", "Read back", "Store"))
         self.tuning_md = gui.add_markdown("", visible=False)
-        self.gain_btns.on_click(self.action(self._gain_button, self.tuning_md, needs_control=False))
+        self.gain_btns.on_click(page.action(self._gain_button, self.tuning_md, needs_control=False))
         self.readback_md = gui.add_markdown("")
         self.type_in = gui.add_dropdown(
             "Current controller", tuple(CONTROLLER_TYPES), initial_value="deadbeat"
         )
         self.Lc_uH = Field(
-            self, NumberSpec("L_c (µH)", *field_bounds(GainsIn, "L_c", 1e6), unit="µH"), 14.8
+            page, NumberSpec("L_c (µH)", *field_bounds(GainsIn, "L_c", 1e6), unit="µH"), 14.8
         )
-        self.Lc_ratio = Field(self, NumberSpec("L_c / L", 0.0, 3.0, lo_open=True), 1.0)
+        self.Lc_ratio = Field(page, NumberSpec("L_c / L", 0.0, 3.0, lo_open=True), 1.0)
         self.Rc_mOhm = Field(
-            self, NumberSpec("R_c (mΩ)", *field_bounds(GainsIn, "R_c", 1e3), unit="mΩ"), 6.2
+            page, NumberSpec("R_c (mΩ)", *field_bounds(GainsIn, "R_c", 1e3), unit="mΩ"), 6.2
         )
         self.kp_i = Field(
-            self, NumberSpec("PI k_p (V/A)", *field_bounds(GainsIn, "k_p"), unit="V/A"), 0.4647
+            page, NumberSpec("PI k_p (V/A)", *field_bounds(GainsIn, "k_p"), unit="V/A"), 0.4647
         )
         self.ki_i = Field(
-            self, NumberSpec("PI k_i (V/A)", *field_bounds(GainsIn, "k_i"), unit="V/A"), 0.0492
+            page, NumberSpec("PI k_i (V/A)", *field_bounds(GainsIn, "k_i"), unit="V/A"), 0.0492
         )
         self.kp_w = Field(
-            self,
+            page,
             NumberSpec(
                 "IP k_p (A/rpm)", *field_bounds(GainsIn, "speed_k_p"), unit="A/rpm"
             ),
             0.2113,
         )
         self.ki_w = Field(
-            self,
+            page,
             NumberSpec(
                 "IP k_i (1/sample)", *field_bounds(GainsIn, "speed_k_i"), unit="1/sample"
             ),
             2.9994e-5,
         )
         with gui.add_folder("IP design from ξ, ω_n (eqs. 28–31)", expand_by_default=False):
-            self.xi_in = Field(self, NumberSpec("ξ", 0.0, 10.0, lo_open=True), 1.0)
+            self.xi_in = Field(page, NumberSpec("ξ", 0.0, 10.0, lo_open=True), 1.0)
             self.wn_in = Field(
-                self, NumberSpec("ω_n (rad/s)", 0.0, 1000.0, lo_open=True, unit="rad/s"), 2.3
+                page, NumberSpec("ω_n (rad/s)", 0.0, 1000.0, lo_open=True, unit="rad/s"), 2.3
             )
-            self.a_in = Field(self, NumberSpec("a", 0.0, 1.0, lo_open=True), paper.A_IDENTIFIED)
+            self.a_in = Field(page, NumberSpec("a", 0.0, 1.0, lo_open=True), paper.A_IDENTIFIED)
             self.b_in = Field(
-                self,
+                page,
                 NumberSpec(
                     "b (rpm/A per sample)", 0.0, 1.0, lo_open=True, unit="rpm/A/sample"
                 ),
@@ -86,38 +84,43 @@ class TuningTab:
             )
             self.design_md = gui.add_markdown("", visible=False)
             gui.add_button("Compute IP gains").on_click(
-                self.action(self._design_ip, self.design_md, needs_control=False)
+                self.page.action(self._design_ip, self.design_md, needs_control=False)
             )
         self.diff_md = gui.add_markdown("")
         for f in (self.Rc_mOhm, self.kp_i, self.ki_i, self.kp_w, self.ki_w):
-            f.input.on_update(lambda e: self._preview())
-        self.type_in.on_update(lambda e: self._preview())
+            f.input.on_update(lambda e: self.preview())
+        self.type_in.on_update(lambda e: self.preview())
         self.Lc_uH.input.on_update(lambda e: self._on_Lc_uH())
         self.Lc_ratio.input.on_update(lambda e: self._on_Lc_ratio())
+
+    @property
+    def gains(self) -> dict[str, Any] | None:
+        """The drive's applied set as this page's node holds it (:func:`dashboard._tuning.held`)."""
+        return self.page.bench.gains
 
     def motor_L(self) -> float:
         return float(self.gains.get("motor_L", paper.L_TABLE2)) if self.gains else paper.L_TABLE2
 
     def speed_model(self) -> tuple[float, float]:
         """(a, b) of G(z) = b/(z − a): the identified model, else the paper's."""
-        ident = self.bench.identified
+        ident = self.page.bench.identified
         if ident:
             return float(ident["a"]), float(ident["b"])
         return tuning.A_PAPER, tuning.B_PAPER
 
     def _on_Lc_uH(self) -> None:
-        if self._muted or not self.Lc_uH.validate():
+        if self.page.muted or not self.Lc_uH.validate():
             return
-        with self.mute():
+        with self.page.mute():
             self.Lc_ratio.set(round(self.Lc_uH.value() * 1e-6 / self.motor_L(), 6))
-        self._preview()
+        self.preview()
 
     def _on_Lc_ratio(self) -> None:
-        if self._muted or not self.Lc_ratio.validate():
+        if self.page.muted or not self.Lc_ratio.validate():
             return
-        with self.mute():
+        with self.page.mute():
             self.Lc_uH.set(round(self.Lc_ratio.value() * self.motor_L() * 1e6, 6))
-        self._preview()
+        self.preview()
 
     def changes(self) -> dict[str, float | int]:
         """This browser's gain set in drive units; FieldError (shown at the fields) if any typed
@@ -149,12 +152,13 @@ class TuningTab:
             return None
         return {**self.gains, **changes, "type": self.type_in.value}
 
-    def _preview(self) -> None:
-        if self._muted:
+    def preview(self) -> None:
+        """The typed set's verdict and Loop plots, from what this page holds (no bus)."""
+        if self.page.muted:
             return
         try:
             changes = self.changes()
-            p = tuning.preview(self.bench, changes)
+            p = tuning.preview(self.page.bench, changes)
         except FieldError:
             self.preview_md.content = "**Preview:** fix the marked fields"
             return
@@ -168,9 +172,10 @@ class TuningTab:
         """Redraw the Loop tab: the typed set (``changes``) against the applied one."""
         a, b = self.speed_model()
         typed = self.typed_set(changes) if changes is not None else self.gains
-        self.show_loop(typed, self.gains, a, b)
+        plots = self.page.plots
+        plots.show_loop(typed, self.gains, a, b)
         name = typed["type"] if typed else "–"
-        self.loop_md.content = (
+        plots.loop_md.content = (
             f"Typed set ({name}, not yet applied) in colour, the drive's applied set in grey · "
             f"speed model a = {a:.7f}, b = {b:.4g} rpm/(A·sample) · drag to zoom, "
             "double-click to zoom out"
@@ -179,35 +184,48 @@ class TuningTab:
     def _gain_button(self, event: Any) -> str | None:
         which = event.target.value
         if which == "Read back":
-            self.load_gains()
+            self.load_gains(tuning.read_gains(self.page.bench))
             return "fields show the drive's read-back"
-        if not self._control(self.tuning_md):
+        if not self.page.control(self.tuning_md):
             return None
         if which == "Store":
-            tuning.store(self.bench)
+            tuning.store(self.page.bench)
             self.show_diff()
             return "stored in the drive"
-        changes = self.changes()  # FieldError → shown, nothing sent
-        tuning.apply(self.bench, changes, force=bool(self.force_in.value))
-        with self.mute():
+        return self.apply()
+
+    def apply(self) -> str:
+        """"Apply gains": this page's typed set, as one set (:func:`dashboard._tuning.apply`);
+        the fields then show the set the drive holds (its GainResult: nothing is read again).
+        FieldError (nothing sent) if a typed value is invalid."""
+        changes = self.changes()
+        applied = tuning.apply(self.page.bench, changes, force=bool(self.force_in.value))
+        with self.page.mute():
             self.force_in.value = False  # an override is for one apply only
-        self.load_gains()
+        self.load_gains(applied)
         return "applied; the fields show the drive's read-back"
+
+    def use_ab(self, a: float, b: float) -> str:
+        """Design the IP gains on the speed model ``a``, ``b`` (an identification's result)."""
+        self.a_in.set(a)
+        self.b_in.set(b)
+        return self._design_ip(None)
 
     def _design_ip(self, event: Any) -> str:
         d = tuning.design_ip(
-            self.bench, self.xi_in.value(), self.wn_in.value(), self.a_in.value(), self.b_in.value()
+            self.page.bench, self.xi_in.value(), self.wn_in.value(), self.a_in.value(),
+            self.b_in.value(),
         )
         self.kp_w.set(float(d["speed_k_p"]))
         self.ki_w.set(float(d["speed_k_i"]))
-        self._preview()
+        self.preview()
         return "IP gains computed (not applied yet)"
 
     def load_gains(self, g: dict[str, Any] | None = None) -> None:
-        """Put the drive's read-back gains into this browser's fields."""
-        g = g or tuning.read_gains(self.bench)
-        self.gains = g
-        with self.mute():
+        """Put the drive's gains (``g``: as applied or read back; None: read them now) into
+        this browser's fields."""
+        g = g or tuning.read_gains(self.page.bench)
+        with self.page.mute():
             self.type_in.value = g["type"]
         self.Lc_uH.set(round(g["L_c"] * 1e6, 6))
         self.Lc_ratio.set(round(g["L_c"] / g["motor_L"], 6))
@@ -217,14 +235,20 @@ class TuningTab:
         self.kp_w.set(g["speed_k_p"])
         self.ki_w.set(g["speed_k_i"])
         self.show_readback(g)
-        self._preview()
+        self.preview()
         self.show_diff()
+
+    def on_gains(self, g: dict[str, Any]) -> None:
+        """The node's gains changed (applied from any page): show them, redraw the preview
+        against them (the Loop tab's grey curves follow the drive); no bus."""
+        self.show_readback(g)
+        self.preview()
 
     def show_readback(self, g: dict[str, Any]) -> None:
         self.readback_md.content = tuning.readback_markdown(g)
 
     def show_diff(self) -> None:
         try:
-            self.diff_md.content = tuning.diff_markdown(tuning.stored_diff(self.bench))
+            self.diff_md.content = tuning.diff_markdown(tuning.stored_diff(self.page.bench))
         except Exception as exc:
             self.diff_md.content = f"stored values: {exc}"
