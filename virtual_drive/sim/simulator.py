@@ -61,12 +61,6 @@ _MODES = {"off": 0, "current": 1, "speed": 2}
 _MODELS = {"pwm": 0, "averaged": 1}
 
 
-def _trip_text(reason: int) -> str:
-    """Text of the C loop's trip reason number (``OD_TRIP_*``), ``"?"`` if unknown."""
-    trip = emcy_codes.TRIP_REASONS.get(reason)
-    return trip.text if trip is not None else "?"
-
-
 @dataclass(frozen=True)
 class Fault:
     """A drive trip: EMCY ``code`` (0x2310, 0x3210, 0x3220), ``reason``, sim time ``t`` (s)."""
@@ -560,9 +554,10 @@ class Simulator:
             loop = self._loop
             if loop.fault_code == 0:
                 return None
+            trip = emcy_codes.TRIP_REASONS.get(int(loop.fault_reason))  # OD_TRIP_*
             return Fault(
                 code=int(loop.fault_code),
-                reason=_trip_text(int(loop.fault_reason)),
+                reason=trip.text if trip is not None else "?",
                 t=float(loop.fault_time),
             )
 
