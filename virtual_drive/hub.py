@@ -184,7 +184,8 @@ class Hub:
         """The TCP port the hub listens on (valid after :meth:`start`)."""
         if self._listener is None:
             raise RuntimeError("hub not started")
-        return self._listener.getsockname()[1]
+        port: int = self._listener.getsockname()[1]
+        return port
 
     @property
     def host(self) -> str:
@@ -338,7 +339,8 @@ class Hub:
         now = time.monotonic()
         deadline = self._next_deadline(now)
         timeout = None if deadline is None else max(0.0, deadline - now)
-        poll = self._poll
+        poll, listener, wake_r = self._poll, self._listener, self._wake_r
+        assert poll is not None and listener is not None and wake_r is not None  # (start())
         for c in self._by_fd.values():  # level-triggered interest: read unless its queue is
             events = _EPOLLIN if len(c.queue) < self.max_pending_per_client else 0  # full,
             if c.outbuf and c.ready_at <= now:  # write while output waits for room
@@ -357,11 +359,11 @@ class Hub:
         for fd, events in ready:
             client = self._by_fd.get(fd)
             if client is None:
-                if fd == self._listener.fileno():
-                    self._accept(now)
-                elif fd == self._wake_r.fileno():
+                if fd == listener.fileno():
+                    self._accept(listener, poll, now)
+                elif fd == wake_r.fileno():
                     try:
-                        self._wake_r.recv(4096)
+                        wake_r.recv(4096)
                     except OSError:
                         pass
                 continue
@@ -401,10 +403,10 @@ class Hub:
                 deadline = c.ready_at
         return deadline
 
-    def _accept(self, now: float) -> None:
+    def _accept(self, listener: socket.socket, poll: select.epoll, now: float) -> None:
         while True:
             try:
-                sock, peer = self._listener.accept()
+                sock, peer = listener.accept()
             except (BlockingIOError, InterruptedError):
                 return
             except OSError:
@@ -414,7 +416,7 @@ class Hub:
             client = Client(sock, peer)
             self._clients[sock] = client
             self._by_fd[client.fd] = client
-            self._poll.register(client.fd, _EPOLLIN)
+            poll.register(client.fd, _EPOLLIN)
             client.events = _EPOLLIN
             self._n_clients_total += 1
             client.outbuf += b"< hi >"
@@ -441,7 +443,7 @@ class Hub:
         if client.state == RAW:  # it speaks after its handshake: it has read its < ok >,
             client.ready_at = 0.0  # so the hold ends (an answer to its first request waits not)
         if client.state == RAW and not client.splitter.pending_bytes:
-            bus, backdate = client.bus, self.max_backdate_s
+            bus, backdate = client.on_bus(), self.max_backdate_s
             while chunk:  # the common case: only well-formed sends (or sendats)
                 frames, used = scan_sends(chunk)
                 if frames:
@@ -471,12 +473,12 @@ class Hub:
     def _handle(self, client: Client, words: list[str], now: float) -> None:
         cmd = words[0]
         if client.state == RAW and cmd == "send":
-            client.bus.enqueue(client, [parse_send_fields(words)], now)
+            client.on_bus().enqueue(client, [parse_send_fields(words)], now)
         elif client.state == RAW and cmd == "sendrtr":
-            client.bus.enqueue(client, [parse_sendrtr_fields(words)], now)  # (id, DLC, ext)
+            client.on_bus().enqueue(client, [parse_sendrtr_fields(words)], now)  # (id, DLC, ext)
         elif client.state == RAW and cmd == "sendat":
             timed = [parse_sendat_fields(words)]
-            client.bus.enqueue_timed(client, timed, now, self.max_backdate_s)
+            client.on_bus().enqueue_timed(client, timed, now, self.max_backdate_s)
         elif cmd == "echo":
             client.outbuf += b"< echo >"
         elif cmd == "features":
@@ -506,7 +508,7 @@ class Hub:
             self._flush(client, now)
             client.state = RAW
             client.ready_at = now + (0.0 if client.parses_elements else self.handshake_hold_s)
-            client.bus.join(client)
+            client.on_bus().join(client)
         elif cmd == "rawmode":
             client.outbuf += b"< ok >"
         else:

@@ -16,6 +16,8 @@ from __future__ import annotations
 import socket
 from bisect import bisect_right
 from collections import deque
+from collections.abc import Sequence
+from typing import TypeAlias
 
 from firmware_protocol.can_bits import arbitration_key, frame_bits_fast
 from virtual_drive.hub_faults import FaultInjection
@@ -29,10 +31,18 @@ __all__ = [
     "WAIT_OPEN",
     "Bus",
     "Client",
+    "Delivery",
     "HubCounters",
+    "QueuedFrame",
     "idle_gap",
     "spacing_floor",
 ]
+
+#: a frame waiting for the bus: (arrival, arbitration key, sequence, CAN-ID, data (bytes, or the
+#: DLC of a remote frame), is_extended, bits on the bus, stated time); times monotonic s
+QueuedFrame: TypeAlias = tuple[float, int, int, int, "bytes | int", bool, int, float]
+#: a frame that completed on the bus: (due, sender, CAN-ID, data or DLC, is_extended)
+Delivery: TypeAlias = "tuple[float, Client, int, bytes | int, bool]"
 
 #: session states of a client: waiting for ``< open BUS >``, for ``< rawmode >``, in rawmode,
 #: closed
@@ -70,13 +80,20 @@ class Client:
         self.ready_at = 0.0  # monotonic time before which frames are held back (see Hub)
         self.parses_elements = False  # asked < features >: takes frames glued to < ok >
         #: (arrival, key, seq, id, data, ext, bits, stated time) waiting for the bus
-        self.queue: deque = deque()
+        self.queue: deque[QueuedFrame] = deque()
         self.bus: Bus | None = None
         self.bus_end = 0.0  # monotonic time its last frame left the bus
         self.errors = 0
         #: CAN-ID -> (stated time, end on the bus, stated gap to the one before or None) of
         #: this client's last frame with that ID: see :func:`spacing_floor`
         self.spacing: dict[int, tuple[float, float, float | None]] = {}
+
+    def on_bus(self) -> Bus:
+        """Its bus (set at ``< open BUS >``, so always there in rawmode)."""
+        bus = self.bus
+        if bus is None:
+            raise RuntimeError(f"client {self.peer} has not opened a bus")
+        return bus
 
 
 class HubCounters:
@@ -121,7 +138,7 @@ def idle_gap(bus: Bus, t: float, duration: float) -> tuple[int, float] | None:
     return None
 
 
-def spacing_floor(client: Client, head: tuple, bitrate: float) -> float:
+def spacing_floor(client: Client, head: QueuedFrame, bitrate: float) -> float:
     """Earliest start (monotonic s) of ``client``'s queue head that keeps it as far after its
     last frame with the same CAN-ID, end to end on the bus, as the smaller of the two last
     stated gaps (its own and the previous one): a sender's spacing (a TPDO's inhibit time)
@@ -183,7 +200,7 @@ class Bus:
         self.receivers: list[Client] = []  # clients in rawmode
         self.senders: list[Client] = []  # clients with frames waiting for the bus
         self.free_at = 0.0  # monotonic time the bus becomes idle
-        self.deliveries: deque = deque()  # (due, sender, frame), due non-decreasing
+        self.deliveries: deque[Delivery] = deque()  # due non-decreasing
         self.last_due = 0.0
         #: the bus's recent occupancy: frame i was on it from busy_start[i] to busy_end[i]
         #: (monotonic s, sorted, never overlapping; the last max_backdate_s are kept), so a
@@ -215,8 +232,14 @@ class Bus:
 
     # ---------------------------------------------------------------- frames in
 
-    def enqueue(self, client: Client, frames: list[tuple[int, bytes, bool]], now: float) -> None:
-        """Queue ``frames`` (id, data, is_extended) of ``client`` for the bus, arrived ``now``."""
+    def enqueue(
+        self,
+        client: Client,
+        frames: list[tuple[int, bytes, bool]] | list[tuple[int, int, bool]],
+        now: float,
+    ) -> None:
+        """Queue ``frames`` (id, data or a remote frame's DLC, is_extended) of ``client`` for the
+        bus, arrived ``now``."""
         self._queue(client, [(now, can_id, data, ext) for can_id, data, ext in frames])
 
     def enqueue_timed(
@@ -252,7 +275,12 @@ class Bus:
             timed.append((arrival, can_id, data, ext, stated))
         self._queue(client, timed)
 
-    def _queue(self, client: Client, frames: list[tuple]) -> None:
+    def _queue(
+        self,
+        client: Client,
+        frames: Sequence[tuple[float, int, bytes | int, bool]]
+        | Sequence[tuple[float, int, bytes | int, bool, float]],
+    ) -> None:
         """Append ``(arrival, id, data, is_extended[, stated])`` to ``client``'s queue."""
         queue = client.queue
         if not queue:
@@ -260,7 +288,10 @@ class Bus:
         seq = self._seq
         for arrival, can_id, data, ext, *stated in frames:
             seq += 1
-            rtr = data.__class__ is int  # a remote frame: data is its DLC
+            if isinstance(data, int):  # a remote frame: data is its DLC
+                rtr, payload = True, b""
+            else:
+                rtr, payload = False, data
             queue.append(
                 (
                     arrival,
@@ -271,7 +302,7 @@ class Bus:
                     can_id,
                     data,
                     ext,
-                    frame_bits_fast(can_id, b"" if rtr else data, ext),
+                    frame_bits_fast(can_id, payload, ext),
                     # the time its sender stated (a sendat moved up to the backdate limit
                     # keeps it: its spacing to the next one is the sender's)
                     stated[0] if stated else arrival,
@@ -330,13 +361,15 @@ class Bus:
                 start = max(self.free_at, min(c.queue[0][0] for c in senders))
                 if start > now:
                     break
-                winner = None
+                chosen: Client | None = None
                 best = None
                 for c in senders:
                     arrival, key, seq = c.queue[0][:3]
                     if arrival <= start and (best is None or (key, seq) < best):
                         best = (key, seq)
-                        winner = c
+                        chosen = c
+                assert chosen is not None  # start is the earliest arrival: someone is there
+                winner = chosen
             head = winner.queue[0]
             floor = spacing_floor(winner, head, bitrate)
             if start < floor - 1e-9:  # its spacing is not over: compete again from then
@@ -378,7 +411,7 @@ class Bus:
         receivers = self.receivers
         while deliveries and deliveries[0][0] <= now:
             due, sender, can_id, data, ext = deliveries.popleft()
-            if data.__class__ is int:  # a remote frame (its DLC)
+            if isinstance(data, int):  # a remote frame (its DLC)
                 line = rtr_line(can_id, data, ext, due + wall_offset)
             else:
                 line = frame_line(can_id, data, ext, due + wall_offset)

@@ -61,12 +61,6 @@ _MODES = {"off": 0, "current": 1, "speed": 2}
 _MODELS = {"pwm": 0, "averaged": 1}
 
 
-def _trip_text(reason: int) -> str:
-    """Text of the C loop's trip reason number (``OD_TRIP_*``), ``"?"`` if unknown."""
-    trip = emcy_codes.TRIP_REASONS.get(reason)
-    return trip.text if trip is not None else "?"
-
-
 @dataclass(frozen=True)
 class Fault:
     """A drive trip: EMCY ``code`` (0x2310, 0x3210, 0x3220), ``reason``, sim time ``t`` (s)."""
@@ -413,6 +407,8 @@ class Simulator:
             return {}
         with self._lock:
             loop = self._loop
+            data: np.ndarray | None = None
+            t: np.ndarray | None = None
             if record:
                 data = np.empty((len(SIGNALS), n), dtype=np.float32)
                 t = np.empty(n, dtype=np.float64)
@@ -421,10 +417,9 @@ class Simulator:
                     ptrs[j] = ffi.cast("float *", data[j].ctypes.data)
                 t_ptr = ffi.cast("double *", t.ctypes.data)
             else:
-                data = t = None
                 ptrs = ffi.NULL
                 t_ptr = ffi.NULL
-            os_buf = None
+            os_buf: np.ndarray | None = None
             if os_n:
                 os_buf = np.zeros((n * os_n + 1, 5), dtype=np.float64)
                 loop.os_n = os_n
@@ -437,6 +432,7 @@ class Simulator:
                 while done < n:
                     m = min(chunk, n - done)
                     if record:
+                        assert data is not None and t is not None
                         for j in range(len(SIGNALS)):
                             ptrs[j] = ffi.cast("float *", data[j, done:].ctypes.data)
                         t_ptr = ffi.cast("double *", t[done:].ctypes.data)
@@ -451,9 +447,10 @@ class Simulator:
             self._refresh_last()
             if not record:
                 return {}
+            assert data is not None and t is not None
             out = {name: data[j] for j, name in enumerate(SIGNALS)}
             out["t"] = t
-            if os_n:
+            if os_buf is not None:
                 osr = os_buf[:os_len]
                 for j, key in enumerate(("os_t", "os_i_a", "os_i_b", "os_i_c", "os_i_p")):
                     out[key] = osr[:, j].copy()
@@ -515,7 +512,8 @@ class Simulator:
         with self._lock:
             lib.loop_run_points(self._loop, n_samples, buf, m + 1, self._points_buf)
             self._last = None
-            return self._points_rows[: m + 1].tolist()
+            rows: list[list[float]] = self._points_rows[: m + 1].tolist()
+            return rows
 
     def run_record(self, n_samples: int, out: dict[str, np.ndarray], start: int = 0) -> None:
         """Run ``n_samples`` samples recording only the signals named in ``out`` (SIGNALS
@@ -556,9 +554,10 @@ class Simulator:
             loop = self._loop
             if loop.fault_code == 0:
                 return None
+            trip = emcy_codes.TRIP_REASONS.get(int(loop.fault_reason))  # OD_TRIP_*
             return Fault(
                 code=int(loop.fault_code),
-                reason=_trip_text(int(loop.fault_reason)),
+                reason=trip.text if trip is not None else "?",
                 t=float(loop.fault_time),
             )
 
