@@ -14,10 +14,11 @@ slcan's frame lines (``t1238AABB...\\r``) read the same in both directions, so p
 slcan client on each end of the line is a complete link; the commands the host's client sends
 (``O``, ``C``) are ignored by the one inside, as the inside's ``O`` is by the host's.
 
-The kernel's own slcan line discipline (slcan.ko on ttyS1, routed to vcan0 by can-gw) was
-tried first and does not work on UML's serial line: slcan stops its queue after each frame and
-waits for the tty's write wake-up, which UML's line driver gives only after a write that did
-not complete at once, so one frame reached the host and no more.
+The kernel's own slcan line discipline (slcan.ko attached to ttyS1 by ``TIOCSETD``, routed to
+vcan0 by can-gw configured over netlink) was tried first: in 3 s one of UML's frames reached the
+host and none of the host's reached vcan0. Not pursued; a likely cause is that slcan stops its
+queue after each frame until the tty's write wake-up, which UML's line driver gives only after
+a write that did not complete at once.
 
 Steps: start the relay, the recorder and the drives,
 set the drives' TPDO event timers to the lane's (``BENCH_TPDO_EVENT_TIMERS_MS``: UML moves about
