@@ -129,7 +129,7 @@ def cmd_lss(args: argparse.Namespace) -> int:
 
 #: A fast scan that failed while an unconfigured drive still answers is repeated this many
 #: times, each with twice the LSS timeout of the one before.
-SCAN_RETRIES = 3
+SCAN_RETRIES = 4
 #: Wait for an answer to "identify non-configured remote slave" after a scan found nobody, s:
 #: one frame, so a generous wait costs one second at the end of a run, not one per bit.
 IDENTIFY_TIMEOUT = 1.0

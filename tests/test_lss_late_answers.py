@@ -6,7 +6,7 @@ exit 0 while a drive is left without a node-ID: it asks "identify non-configured
 
 Bench: the loopback hub with a delivery delay of 15 ms per frame (each request and each answer:
 a round trip of 30 ms and more), one ``virtual-drive run --unconfigured 1``, ``--lss-timeout
-0.02``. Truth: canopen's own SDO client reads the identity serial number (0x1018:4) at the new
+0.025``. Truth: canopen's own SDO client reads the identity serial number (0x1018:4) at the new
 node-ID; before this fix the command printed "no unconfigured drive answered" and exited 0.
 """
 
@@ -44,7 +44,7 @@ def test_lss_with_answers_later_than_the_timeout_still_configures_the_drive():
         out = io.StringIO()
         with contextlib.redirect_stdout(out):
             rc = cli.main(["lss", "--host", "127.0.0.1", "--port", str(hub.port),
-                           "--first-id", "12", "--lss-timeout", "0.02", "--json"])  # fmt: skip
+                           "--first-id", "12", "--lss-timeout", "0.025", "--json"])  # fmt: skip
         assert rc == 0
         done = json.loads(out.getvalue())
         assert [(d["node_id"], d["serial"]) for d in done] == [(12, SERIAL)], done
