@@ -15,10 +15,11 @@ slcan client on each end of the line is a complete link; the commands the host's
 (``O``, ``C``) are ignored by the one inside, as the inside's ``O`` is by the host's.
 
 The kernel's own slcan line discipline (slcan.ko attached to ttyS1 by ``TIOCSETD``, routed to
-vcan0 by can-gw configured over netlink) was tried first: in 3 s one of UML's frames reached the
-host and none of the host's reached vcan0. Not pursued; a likely cause is that slcan stops its
-queue after each frame until the tty's write wake-up, which UML's line driver gives only after
-a write that did not complete at once.
+vcan0 by can-gw configured over netlink) was tried first: the host's frames arrive on its
+netdev, but it sends one frame to the host per frame the host sends (16 of 32 in 8 s with the
+host sending every 0.5 s, then ENOBUFS): slcan stops its queue after each frame until the tty's
+write wake-up, and UML's serial line gives that only from its interrupt (input or a write that
+did not complete at once), never after a write that completed.
 
 Steps: start the relay, the recorder and the drives,
 set the drives' TPDO event timers to the lane's (``BENCH_TPDO_EVENT_TIMERS_MS``: UML moves about
