@@ -19,6 +19,7 @@ from typing import Any
 __all__ = ["cmd_lss", "register_lss"]
 
 _LSS_RX = 0x7E4  # slave → master
+_LSS_TX = 0x7E5  # master → slave
 
 
 def register_lss(sub: argparse._SubParsersAction, bus: argparse.ArgumentParser) -> None:
@@ -69,7 +70,7 @@ def cmd_lss(args: argparse.Namespace) -> int:
         time.sleep(0.05)
         nid = args.first_id
         while len(done) < args.max:
-            found, address = lss.fast_scan()
+            found, address = _fast_scan(lss, args.lss_timeout)
             if not found:
                 break
             while nid in used:
@@ -124,6 +125,61 @@ def cmd_lss(args: argparse.Namespace) -> int:
 
     _emit(args, done, text)
     return 0
+
+
+#: A fast scan that failed while an unconfigured drive still answers is repeated this many
+#: times, each with twice the LSS timeout of the one before.
+SCAN_RETRIES = 4
+#: Wait for an answer to "identify non-configured remote slave" after a scan found nobody, s:
+#: one frame, so a generous wait costs one second at the end of a run, not one per bit.
+IDENTIFY_TIMEOUT = 1.0
+
+
+def _fast_scan(lss: Any, timeout: float) -> tuple[bool, list[int] | None]:
+    """canopen's fast scan with ``lss.RESPONSE_TIMEOUT`` (at least ``timeout``); when it finds
+    nobody but an unconfigured drive answers "identify non-configured remote slave" (CiA 305,
+    0x4C → 0x50), an answer came later than the LSS timeout at some bit (a busy host, a slow
+    adapter): scanned again with twice the timeout, up to :data:`SCAN_RETRIES` times, then an
+    error. The timeout that worked stays set for the configure services that follow. canopen's
+    ``fast_scan`` returns the same ``(False, None)`` for "nobody there" and for a scan that
+    lost its slave half-way, so without this check ``lss`` reported success with drives left
+    unconfigured."""
+    from .errors import DriveError
+
+    wait = max(timeout, lss.RESPONSE_TIMEOUT)
+    for _attempt in range(SCAN_RETRIES + 1):
+        lss.RESPONSE_TIMEOUT = wait
+        found, address = lss.fast_scan()
+        if found:
+            return found, address
+        if not _unconfigured_answers(lss.network, max(IDENTIFY_TIMEOUT, wait)):
+            return False, None
+        time.sleep(wait)  # late answers of the failed scan: past
+        lss.send_switch_state_global(lss.WAITING_STATE)  # a slave left half-way: back in
+        wait = min(2 * wait, 10.0)
+    raise DriveError(
+        f"LSS: an unconfigured drive answers, but {SCAN_RETRIES + 1} fast scans "
+        f"(LSS timeout {timeout:g} s up to {lss.RESPONSE_TIMEOUT:g} s) did not find its "
+        "address: answers later than the timeout (raise --lss-timeout)"
+    )
+
+
+def _unconfigured_answers(net: Any, timeout: float) -> bool:
+    """Send "identify non-configured remote slave" (0x4C) and wait up to ``timeout`` s for an
+    answer 0x50 (canopen's ``send_identify_non_configured_remote_slave`` does not wait: 0x4C
+    is not in its list of services with an answer)."""
+    seen = threading.Event()
+
+    def on_answer(can_id: int, data: bytearray, ts: float) -> None:
+        if data and data[0] == 0x50:
+            seen.set()
+
+    net.subscribe(_LSS_RX, on_answer)
+    try:
+        net.send_message(_LSS_TX, bytes([0x4C, 0, 0, 0, 0, 0, 0, 0]))
+        return seen.wait(timeout)
+    finally:
+        net.unsubscribe(_LSS_RX, on_answer)
 
 
 def _await_boot(net: Any, nid: int, switch: Any, timeout: float = 2.0) -> bool:

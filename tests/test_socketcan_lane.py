@@ -2,7 +2,9 @@
 SocketCAN inside it, tests/uml/vcan_checks.py (the README's vcan0/can0 commands as written, NMT,
 CiA 402, error frames, a full transmit queue), tests/uml/vcan_checks_cia301.py (issue 29 on vcan0:
 supervision in a held quick stop, SDO protocol bytes, RTR, a dead drive) and the whole scenario
-suite of tests/scenarios with BENCH_CONDITION=vcan0 (the matrix's SocketCAN row).
+suite of tests/scenarios with BENCH_CONDITION=vcan0 (the matrix's SocketCAN row). Beside it,
+with its own UML, the dashboard's two-drive session on vcan0 in a real browser reaches vcan0
+through a UML serial line (tests/test_socketcan_dashboard.py; the same SOCKETCAN_LANE switch).
 
 UML spends about 38 µs per system call: a drive-link call takes 5-15 s there, the lane several
 minutes. It therefore runs in the background while the rest of the suite runs (tests/uml/lane.py,

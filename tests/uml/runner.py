@@ -146,10 +146,14 @@ def run_in_uml(
     cwd: str | Path = ROOT,
     env: Mapping[str, str] | None = None,
     watch_pid: int | None = None,
+    extra_args: Sequence[str] = (),
+    pass_fds: Sequence[int] = (),
 ) -> UmlResult:
     """Boot UML, run ``argv`` (in ``cwd``, with ``env`` added to a small clean environment),
     power off; at most ``timeout`` s of wall time (then UML is killed). With ``watch_pid``, UML
     is also killed as soon as that process is gone (the test run that wanted the result).
+    ``extra_args`` go on UML's command line (e.g. ``ssl1=fd:5``: a serial line on a host file
+    descriptor, which ``pass_fds`` hands to UML; tests/uml/slcan_bridge.py).
 
     The kernel: ``SOCKETCAN_LANE_KERNEL`` (see the module docstring). With ``auto``, a system
     kernel that does not boot (PID 1 never ran) is followed by Debian sid's."""
@@ -162,7 +166,7 @@ def run_in_uml(
         k = kernels.sid_kernel() if which == "sid" else kernels.system_kernel()
     except kernels.KernelError as exc:
         return UmlResult(None, "", str(exc), "", "", time.monotonic() - t0)
-    res = _boot(k, argv, timeout, Path(cwd), env or {}, watch_pid)
+    res = _boot(k, argv, timeout, Path(cwd), env or {}, watch_pid, extra_args, pass_fds)
     if res.booted or which != "auto":
         res.seconds = time.monotonic() - t0
         return res
@@ -174,7 +178,7 @@ def run_in_uml(
         res.seconds = time.monotonic() - t0
         return res
     left = timeout - (time.monotonic() - t0)
-    res = _boot(sid, argv, left, Path(cwd), env or {}, watch_pid)
+    res = _boot(sid, argv, left, Path(cwd), env or {}, watch_pid, extra_args, pass_fds)
     res.kernel = f"{sid.label}; the system's {first}"
     if not res.booted:
         res.problem = f"no User-Mode Linux boots here: {first}; {res.problem}"
@@ -189,6 +193,8 @@ def _boot(
     cwd: Path,
     env: Mapping[str, str],
     watch_pid: int | None,
+    extra_args: Sequence[str] = (),
+    pass_fds: Sequence[int] = (),
 ) -> UmlResult:
     """One boot of kernel ``k`` (a :class:`kernels.Kernel`) running ``argv``."""
     t0 = time.monotonic()
@@ -215,6 +221,7 @@ def _boot(
             "con0=fd:0,fd:1",
             f"UML_JOB={job}",
             f"UML_MODULES={k.modules}",
+            *extra_args,
         ]
         if any(" " in a for a in cmd):
             problem = f"a path on UML's command line has a space: {' '.join(cmd)}"
@@ -228,6 +235,7 @@ def _boot(
                     stdout=console,
                     stderr=subprocess.STDOUT,
                     start_new_session=True,  # UML's host processes share this group
+                    pass_fds=tuple(pass_fds),
                     # UML keeps its run directory in $HOME/.uml and its RAM file in $TMPDIR
                     env={"PATH": os.environ.get("PATH", "/bin"), "HOME": tmp, "TMPDIR": tmp},
                 )
