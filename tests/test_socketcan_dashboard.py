@@ -4,10 +4,11 @@
 vcan0 exists only inside User-Mode Linux, and nothing may listen on a network port for it (UML's
 ``port:`` channels bind every interface). The route is CAN itself over a serial line, as a
 serial-line CAN adapter (slcan) connects a PC to a bus: the test makes a pty pair; UML gets one
-end as its serial line 1 (``ssl1=fd:N``); inside, the kernel's slcan driver turns ttyS1 into
-the CAN netdev slcan0 and the kernel's CAN gateway routes slcan0 ⇄ vcan0, where
-``virtual-drive run --interface socketcan --channel vcan0 --nodes 1,2`` serves the drives
-(tests/uml/slcan_bridge.py). On the host, ``drive-dashboard --interface slcan --channel
+end as its serial line 1 (``ssl1=fd:N``); inside, tests/uml/slcan_bridge.py relays ttyS1
+(python-can's ``slcan`` interface) ⇄ vcan0 (``socketcan``) with ``can.RedirectReader`` both
+ways, and ``virtual-drive run --interface socketcan --channel vcan0 --nodes 1,2`` serves the
+drives on vcan0. (The kernel's slcan line discipline routed by can-gw was tried first: UML's
+serial line passed only one frame back per frame sent, then ENOBUFS; see the README.) On the host, ``drive-dashboard --interface slcan --channel
 /dev/pts/N`` (python-can's slcan interface, pyserial) opens the other end, and headless
 Chromium (/usr/bin/chromium) drives the page: pick node 2, take control, Enable, "+ step".
 
