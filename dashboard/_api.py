@@ -170,7 +170,7 @@ def delete_control(
     bench: BenchDep, x_control_token: Annotated[str | None, Header()] = None
 ) -> ControlOut:
     run(lambda: bench.lease.release(x_control_token))
-    return ControlOut(client=None, since=None)
+    return ControlOut(client=None)
 
 
 @router.post(

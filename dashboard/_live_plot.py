@@ -55,7 +55,6 @@ def decimate(
             rows[pad] = -np.inf
             keep.append(starts + rows.argmax(axis=1))
         else:
-            assert seg is not None  # set above when the buckets are not padded into rows
             keep.append(starts + _argext(finite, starts, seg, np.minimum))
             keep.append(starts + _argext(finite, starts, seg, np.maximum))
     mask = np.zeros(n, dtype=bool)  # sorted and unique, without np.unique's sort

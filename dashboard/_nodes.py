@@ -73,9 +73,7 @@ class Nodes:
         for node in self.ids():
             heard = self._heard.get(node)
             age = now - heard[1] if heard else None
-            nmt = None
-            if heard is not None and age is not None:
-                nmt = "OFFLINE" if age > OFFLINE_AFTER_S else heard[0]
+            nmt = None if heard is None else ("OFFLINE" if age > OFFLINE_AFTER_S else heard[0])
             row: dict[str, Any] = {
                 "node_id": node,
                 "nmt_state": nmt,

@@ -123,7 +123,6 @@ def run_dashboard(args: Sequence[str], timeout: float = 60.0) -> Iterator[Dashbo
     cmd = [sys.executable, "-m", "dashboard.cli", *args, "--port", str(api_port)]
     cmd += ["--gui-port", "0"]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
-    assert proc.stdout is not None  # stdout=PIPE
     try:
         line = ""
         deadline = time.monotonic() + timeout
