@@ -146,7 +146,8 @@ class Bench:
         self.busy: str | None = None  # a long operation under way (capture, identify ...)
         from dashboard._models import TraceIn
 
-        self.trace_config = TraceIn()  # default for POST /api/trace/capture without a body
+        #: default for POST /api/trace/capture without a body
+        self.trace_config = TraceIn.model_validate({})
         self.sequence_progress: dict[str, Any] | None = None
         self.action: LongAction | None = None  # the long action under way (progress, cancel)
         #: SDO-only values (mode, parameter store) read in a worker of its own: state()
@@ -195,7 +196,7 @@ class Bench:
             limits["statusword"] = limits["mode"]
         mode, ages["mode"] = self.watch.get("mode")
         store, ages["store_status"] = self.watch.get("store_status")
-        stale = [k for k, lim in limits.items() if ages.get(k) is None or ages[k] > lim]
+        stale = [k for k, lim in limits.items() if (age := ages.get(k)) is None or age > lim]
         health = dict.fromkeys(STATUS_FIELDS)
         health.update(_safe(lambda: dict(d.bus_health()), {}) or {})
         sup = _safe(lambda: dict(d.supervisor.status()), {}) or {}
@@ -275,7 +276,7 @@ class Bench:
             self.watch.poke()
             self.emit("state")
 
-    def set_mode(self, mode: str, setpoint: Callable[[], None] | None = None) -> None:
+    def set_mode(self, mode: str, setpoint: Callable[[], object] | None = None) -> None:
         """Switch to "speed" or "current" mode.
 
         The drive refuses a mode change while OPERATION ENABLED (SDO abort 0x08000022), so the
@@ -357,8 +358,9 @@ class Bench:
         """Run a long action under the bench lock with a deadline (s), progress and a cancel;
         on any failure (cancel and timeout included) put the drive back as found, then
         re-raise with what was restored. Refused (RuntimeError) while another runs."""
-        if self.action is not None or self.busy:
-            raise RuntimeError(f"busy: {self.busy or self.action.what} under way")
+        running = self.action
+        if running is not None or self.busy:
+            raise RuntimeError(f"busy: {self.busy or (running.what if running else '')} under way")
         act = LongAction(what, time.monotonic() + deadline_s)
         with self.lock, self._stop_watch():
             if self.action is not None:
@@ -366,6 +368,7 @@ class Bench:
             found = self._found()
             act.found = found
             self.action, self.busy = act, what
+            self.watch.forget("mode")  # the action switches modes as it needs: read it after
             self.emit("busy", {"what": what})
             try:
                 yield act
@@ -386,6 +389,7 @@ class Bench:
                 raise
             finally:
                 self.action, self.busy = None, None
+                self.watch.forget("mode")  # read again: the drive_link steps switch it unnoted
                 self.emit("busy", {"what": None})
 
     def _stop_watch(self) -> contextlib.AbstractContextManager:
@@ -425,8 +429,10 @@ class Bench:
                 attempt("power stage off", lambda: d.disable())
             attempt("i_p*", lambda: d.set_current(found.current_A))
             self.current_setpoint = found.current_A
-            if found.mode in ("speed", "current") and _safe(lambda: d.mode) != found.mode:
-                attempt("mode", lambda: self.set_mode(found.mode))
+            mode = found.mode
+            if mode in ("speed", "current") and _safe(lambda: d.mode) != mode:
+                self.watch.forget("mode")  # the drive's, just read, is not the one known
+                attempt("mode", lambda: self.set_mode(str(mode)))
             attempt("speed setpoint", lambda: d.set_speed(found.speed_rpm))
             self.speed_setpoint = found.speed_rpm
             if not found.enabled and _safe(lambda: d.state) == "OPERATION ENABLED":

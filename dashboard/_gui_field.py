@@ -58,7 +58,7 @@ def live_series(name: str, unit: str, colors: tuple[str, str], x_label: str) -> 
         uplot.Series(label=x_label),
         uplot.Series(
             label=f"{name}* ({unit})", stroke=colors[1], width=REFERENCE_WIDTH_PX,
-            dash=list(REFERENCE_DASH),
+            dash=REFERENCE_DASH,
         ),
         uplot.Series(label=f"{name} ({unit})", stroke=colors[0], width=MEASURED_WIDTH_PX),
     ]

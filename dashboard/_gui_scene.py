@@ -342,7 +342,7 @@ class RotorScene:
         if live is not None and "measurements.speed" in live:
             t = np.asarray(live["t"], dtype=np.float64)
             speed = np.asarray(live["measurements.speed"], dtype=np.float64)
-        if t is None or not len(t):
+        if t is None or speed is None or not len(t):
             if math.isfinite(speed_rpm):
                 self.angle = (self.angle + speed_rpm / 60.0 * 2 * math.pi * (now - self._mono)) % (
                     2 * math.pi

@@ -93,6 +93,12 @@ class DriveWatch:
         with self._lock:
             self._values[name] = (value, time.monotonic())
 
+    def forget(self, name: str) -> None:
+        """Drop a value that may no longer hold (e.g. the mode while a long action changes
+        it): :meth:`get` says (None, None) until it is read or noted again."""
+        with self._lock:
+            self._values.pop(name, None)
+
     def poke(self) -> None:
         """Poll now (after a command changed the drive), not at the next period."""
         self._poke.set()

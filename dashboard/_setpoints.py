@@ -1,9 +1,10 @@
 """Setpoints to the drive without reading anything first: by RPDO where the drive maps them,
 by SDO otherwise.
 
-The drive's RPDO layouts (0x1400+k cob_id, 0x1600+k mapping; the EDS maps RPDO1 = controlword +
-target_velocity, RPDO2 = setpoints.i_p_ref) are read once per drive, on the first setpoint, and
-kept. A setpoint then goes:
+The drive's RPDO layouts (0x1400+k cob_id and transmission type, 0x1600+k mapping; the EDS maps
+RPDO1 = controlword + target_velocity, RPDO2 = setpoints.i_p_ref, both event-driven) are read
+once per drive, on the first setpoint (9 reads with the EDS defaults), and kept. A setpoint
+then goes:
 
 - by RPDO when an enabled RPDO maps the object, every other object it maps has a known value
   (the controlword is known only in OPERATION ENABLED: 0x000F, "enable operation", which keeps
@@ -75,7 +76,8 @@ class SetpointLink:
         return value
 
     def layouts(self) -> list[RpdoLayout]:
-        """The drive's enabled RPDOs (read once: cob_id, count and entries of each)."""
+        """The drive's enabled, event-driven RPDOs (read once: cob_id, transmission type, count
+    and entries of each)."""
         with self._lock:
             if self._layouts is not None:
                 return self._layouts
@@ -89,6 +91,8 @@ class SetpointLink:
             cob = int(self.drive.read(f"rpdo{k}_communication.cob_id"))
             if cob & 0x8000_0000:
                 continue  # disabled
+            if int(self.drive.read(f"rpdo{k}_communication.transmission_type")) < 0xFE:
+                continue  # synchronous: it would apply only at a SYNC the host may never send
             n = int(self.drive.read(f"rpdo{k}_mapping.number_of_mapped_objects"))
             objects = []
             for i in range(1, n + 1):

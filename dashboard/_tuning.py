@@ -17,6 +17,7 @@ from dashboard._models import TYPE_NAMES
 from drive_link import design
 from drive_link import gains as link_gains
 from drive_link.drive import GAIN_FIELDS
+from drive_link.errors import InvalidValue
 from firmware_protocol import paper
 
 __all__ = [
@@ -174,8 +175,8 @@ def apply(bench: Bench, changes: dict[str, float | int], *, force: bool = False)
                 bench.drive, changes, force=force, speed_model=_ab(bench),
                 previous=previous, motor=motor,
             )
-        except link_gains.GainsRefused:
-            raise  # nothing sent: what the bench holds is still the drive's
+        except InvalidValue:
+            raise  # refused before sending: what the bench holds is still the drive's
         except Exception:
             bench.gains = None  # the drive refused or did not answer: read it next time
             raise

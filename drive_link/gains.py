@@ -1,4 +1,5 @@
-"""One path for a gain change: read once, check, stage, apply, read back.
+"""One path for a gain change: read once (what the caller does not hold), check, stage, apply,
+read back.
 
 ``drive-link set-gains`` and the dashboard (REST and GUI) call :func:`apply_gains` and nothing
 else, so both follow one policy:

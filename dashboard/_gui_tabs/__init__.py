@@ -6,4 +6,7 @@ panel (:mod:`dashboard._gui_panel`) composes them. Nothing is imported here, so 
 tab module does not import the others.
 """
 
-__all__: list[str] = []
+#: the tab modules (``from dashboard._gui_tabs import *`` imports them)
+__all__ = [
+    "bus", "captures", "config", "current", "identify", "plots", "report", "speed", "tuning",
+]

@@ -38,8 +38,9 @@ class CapturesTab:
             gui.add_button("Capture now").on_click(page.action(self._capture_now, self.cap_md))
 
     def _capture_now(self, event: Any) -> str:
-        cfg = TraceIn(
-            length=int(self.tr_len.value()), divider=int(self.tr_div.value()), pre_trigger=0
+        cfg = TraceIn.model_validate(
+            {"length": int(self.tr_len.value()), "divider": int(self.tr_div.value()),
+             "pre_trigger": 0}
         )
         cap = experiments.capture(self.page.bench, cfg)
         return f"capture #{cap.id} recorded (plot: Capture tab)"

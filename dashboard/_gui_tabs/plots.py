@@ -15,7 +15,7 @@ magnitude dB; phase degrees; z-plane dimensionless.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 import viser.uplot as uplot
@@ -80,7 +80,8 @@ def capture_view(
 def _styled(s: SignalStyle) -> Any:
     """A uPlot series of a styled signal, on the scale of its unit."""
     return uplot.Series(
-        label=s.label, stroke=s.color, width=s.width, dash=list(s.dash) or None,
+        label=s.label, stroke=s.color, width=s.width,
+        dash=cast(Any, list(s.dash) or None),  # None: solid (uPlot takes null; viser's type not)
         scale=axis_key(s.unit),
     )
 
@@ -238,7 +239,10 @@ class PlotArea:
         self.bode_mag = bode("|L| (dB)", "Open loops: magnitude")
         self.bode_phase = bode("∠L (°)", "Open loops: phase")
         z0 = loop_view.z_plane_data(np.zeros(0), np.zeros(0), np.zeros(0))
-        dot = {"show": True, "size": 9, "width": 2}
+
+        def dot(fill: str) -> uplot.Series_Points:
+            return uplot.Series_Points(show=True, size=9, width=2, fill=fill)
+
         self.z_plane = gui.add_uplot(
             z0,
             (
@@ -246,11 +250,11 @@ class PlotArea:
                 uplot.Series(label="|z| = 1", stroke="#7f8c8d", width=1),
                 uplot.Series(label="", stroke="#7f8c8d", width=1),
                 uplot.Series(label="current poles, typed", stroke=TYPED, width=0,
-                             points={**dot, "fill": TYPED}),
+                             points=dot(TYPED)),
                 uplot.Series(label="current poles, applied", stroke=APPLIED, width=0,
-                             points={**dot, "fill": "#ffffff"}),
+                             points=dot("#ffffff")),
                 uplot.Series(label="speed poles, typed", stroke=SPEED_TYPED, width=0,
-                             points={**dot, "fill": SPEED_TYPED}),
+                             points=dot(SPEED_TYPED)),
             ),
             scales={
                 "x": uplot.Scale(time=False, range=(-1.3, 1.3)),
