@@ -2,7 +2,7 @@
 the two background loops that keep every panel live.
 
 Layout: the plots are the main area, a wide per-browser panel docked left (tabs Live ·
-Capture · Loop, :mod:`dashboard._gui_tabs.plots`); the control panel is docked right (status,
+Capture · Loop, :mod:`dashboard._gui_plots`); the control panel is docked right (status,
 who controls, Take control, Drive buttons, progress/cancel of a long action, then tabs Speed ·
 Current · Tuning · Identify · Captures · Config, one module each in
 :mod:`dashboard._gui_tabs`); the 3D rotor (:mod:`dashboard._gui_scene`, off with ``--no-3d``)

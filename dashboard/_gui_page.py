@@ -20,7 +20,7 @@ from typing import Any, Protocol
 
 from dashboard._bench import Bench
 from dashboard._fields import FieldError
-from dashboard._gui_tabs.plots import PlotArea
+from dashboard._gui_plots import PlotArea
 from dashboard._gui_words import gui_text
 from dashboard._security import token_ok
 from dashboard.config import BenchConfig

@@ -7,7 +7,7 @@ browser holds the control lease). Typed numbers are text fields parsed strictly
 sent. After Apply or Read back the fields show the drive's read-back. Notices appear under the
 control that caused them.
 
-Layout: the main area (plots, :mod:`dashboard._gui_tabs.plots`) is a wide panel docked left; the
+Layout: the main area (plots, :mod:`dashboard._gui_plots`) is a wide panel docked left; the
 control panel (docked right) holds status, control, the drive buttons, progress, then the tabs
 Speed · Current · Tuning · Identify · Captures · Config · Bus · Report (one object each, from
 :mod:`dashboard._gui_tabs`).
@@ -33,13 +33,13 @@ from dashboard._gui_field import CURRENT_COLORS, SPEED_COLORS, Field, fmt
 from dashboard._gui_nodes import NodeSelect
 from dashboard._gui_pace import PagePace
 from dashboard._gui_page import Page, PageOwner
+from dashboard._gui_plots import PLOT_AREA_WIDTH_PX, STRIP_PX, PlotArea
 from dashboard._gui_statusbar import BAR_CSS, notices_css
 from dashboard._gui_tabs.bus import BusTab
 from dashboard._gui_tabs.captures import CapturesTab
 from dashboard._gui_tabs.config import ConfigTab
 from dashboard._gui_tabs.current import CurrentTab
 from dashboard._gui_tabs.identify import IdentifyTab
-from dashboard._gui_tabs.plots import PLOT_AREA_WIDTH_PX, STRIP_PX, PlotArea
 from dashboard._gui_tabs.report import ReportTab
 from dashboard._gui_tabs.speed import SpeedTab, parse_sequence
 from dashboard._gui_tabs.tuning import TuningTab

@@ -15,7 +15,7 @@ import pytest
 
 from dashboard._bench import Capture
 from dashboard._export import capture_figure, capture_png
-from dashboard._gui_tabs.plots import _capture_series, capture_view, unit_axes
+from dashboard._gui_plots import _capture_series, capture_view, unit_axes
 
 pytestmark = pytest.mark.unit
 

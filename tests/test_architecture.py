@@ -1,0 +1,93 @@
+"""The house as docs/architecture.md draws it (issue 25).
+
+- import-linter (its own import graph, built by grimp; the contracts in ``[tool.importlinter]``
+  of pyproject.toml) keeps the layering (dashboard over drive_link and virtual_drive, both over
+  firmware_protocol; drive_link never imports virtual_drive) and finds no import circle between
+  the modules of any package at any depth, imports made only for the type checker included
+  (``lint-imports`` on the command line runs the same contracts).
+- No module reaches into another object's private fields (``obj._x`` where ``obj`` is not
+  ``self``/``cls`` or an imported module), read from the source with :mod:`ast`.
+- No hand-written module is longer than 600 lines (the generated C header aside).
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+pytestmark = [pytest.mark.unit, pytest.mark.timeout(300)]
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGES = ("firmware_protocol", "virtual_drive", "drive_link", "dashboard")
+GENERATED = {"firmware_protocol/bldc_drive_od.h"}
+MAX_LINES = 600
+
+
+def _sources(*suffixes: str) -> list[Path]:
+    return [
+        p
+        for pkg in PACKAGES
+        for p in sorted((ROOT / pkg).rglob("*"))
+        if p.suffix in suffixes and "static" not in p.parts
+        and str(p.relative_to(ROOT)) not in GENERATED
+    ]
+
+
+def test_import_contracts_hold(capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch):
+    from importlinter.cli import lint_imports
+
+    monkeypatch.chdir(ROOT)  # the contracts are read from ./pyproject.toml
+    status = lint_imports(no_cache=True)
+    out = capsys.readouterr().out
+    assert status == 0, out[out.find("Contracts"):]
+    assert "0 broken" in out, out
+
+
+def _reaches(path: Path) -> list[str]:
+    tree = ast.parse(path.read_text(), str(path))
+    modules: set[str] = {"self", "cls"}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            modules |= {a.asname or a.name.split(".")[0] for a in node.names}
+        elif isinstance(node, ast.ImportFrom):
+            modules |= {a.asname or a.name for a in node.names}
+    out = []
+    for node in ast.walk(tree):
+        if (
+            isinstance(node, ast.Attribute)
+            and node.attr.startswith("_")
+            and not node.attr.startswith("__")
+            and not (isinstance(node.value, ast.Name) and node.value.id in modules)
+        ):
+            out.append(f"{path.relative_to(ROOT)}:{node.lineno}: {ast.unparse(node)}")
+    return out
+
+
+def test_no_module_reaches_into_another_objects_private_fields():
+    found = [r for p in _sources(".py") for r in _reaches(p)]
+    assert not found, f"{len(found)} private-field reaches:\n" + "\n".join(found)
+
+
+def test_no_hand_written_module_over_600_lines():
+    long = {
+        str(p.relative_to(ROOT)): n
+        for p in _sources(".py", ".c", ".h")
+        if (n := len(p.read_text().splitlines())) > MAX_LINES
+    }
+    assert not long, long
+
+
+def test_the_reach_finder_sees_a_reach(tmp_path: Path):
+    """The finder is not blind: ``d._param`` and ``self.drive._ramp`` are reaches; ``self._x``,
+    ``cls._y`` and a module's ``os._exit`` are not."""
+    probe = ROOT / "drive_link" / "_probe_for_test.py"
+    src = "import os\n\nclass A:\n    def f(self, d):\n        self._x = d._param\n" \
+          "        cls_ = type(self)\n        os._exit\n        return self.drive._ramp\n"
+    probe.write_text(src)
+    try:
+        found = _reaches(probe)
+    finally:
+        probe.unlink()
+    assert [f.split(": ", 1)[1] for f in found] == ["d._param", "self.drive._ramp"], found
