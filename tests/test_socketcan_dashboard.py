@@ -8,9 +8,10 @@ end as its serial line 1 (``ssl1=fd:N``); inside, tests/uml/slcan_bridge.py rela
 (python-can's ``slcan`` interface) ⇄ vcan0 (``socketcan``) with ``can.RedirectReader`` both
 ways, and ``virtual-drive run --interface socketcan --channel vcan0 --nodes 1,2`` serves the
 drives on vcan0. (The kernel's slcan line discipline routed by can-gw was tried first: UML's
-serial line passed only one frame back per frame sent, then ENOBUFS; see the README.) On the host, ``drive-dashboard --interface slcan --channel
-/dev/pts/N`` (python-can's slcan interface, pyserial) opens the other end, and headless
-Chromium (/usr/bin/chromium) drives the page: pick node 2, take control, Enable, "+ step".
+serial line passed only one frame back per frame sent, then ENOBUFS; see the README.)
+On the host, ``drive-dashboard --interface slcan --channel /dev/pts/N`` (python-can's slcan
+interface, pyserial) opens the other end, and headless Chromium (/usr/bin/chromium) drives
+the page: pick node 2, take control, Enable, "+ step".
 
 Truth: every frame on vcan0, written inside UML by a raw python-can socket of its own to a
 candump log, decoded with the TPDO1 mapping and COB-ID that canopen reads from the EDS
