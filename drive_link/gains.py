@@ -29,6 +29,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from firmware_protocol import load_od
 from firmware_protocol.current_stability import (
     CURRENT_KEYS,
     MOTOR_KEYS,
@@ -61,10 +62,14 @@ GAIN_MARGIN_MIN_DB = 2.0
 SENSITIVITY_PEAK_MAX = 5.0
 """Largest current-loop sensitivity peak ‖S‖∞ applied without ``force``."""
 
-#: Motor values used when a caller gives none (the EDS defaults, Table 2).
-_MOTOR_DEFAULTS = {"rated_current": 100.0, "V_dc_nominal": 48.0}
-#: Current-set entries a caller may leave out of an offline check (the drive's defaults).
-_CURRENT_DEFAULTS = {"T_BT": 0.0, "T_DD": 0.0, "T_SD": 0.0, "V_G": 0.0, "emf_feedforward": 0}
+_EDS_DEFAULTS = load_od().defaults()
+#: Motor values used when a caller gives none: the EDS defaults (Table 2), read from the EDS.
+_MOTOR_DEFAULTS = {k: float(_EDS_DEFAULTS[f"motor.{k}"]) for k in ("rated_current", "V_dc_nominal")}
+#: Current-set entries a caller may leave out of an offline check: the drive's (EDS) defaults.
+_CURRENT_DEFAULTS = {
+    k: _EDS_DEFAULTS[f"current_controller.{k}"]
+    for k in ("T_BT", "T_DD", "T_SD", "V_G", "emf_feedforward")
+}
 
 
 @dataclass(frozen=True)
