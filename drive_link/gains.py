@@ -206,8 +206,8 @@ def check_gains(
     fig: dict[str, Any] = {"controller": controller, "L_c/L": L_c / L, "speed_model": [a, b]}
 
     # current loop: closed-loop poles (design), then the drive's own rule
-    loop = design.current_loop_tf(
-        controller, R=R, L=L, L_c=L_c, R_c=R_c, k_p=float(g["k_p"]), k_i=float(g["k_i"])
+    loop = design.loop_tf(
+        design.CurrentLoopPars(controller, R, L, L_c, R_c, float(g["k_p"]), float(g["k_i"]))
     )
     closed = design.feedback(loop)
     stable = design.is_stable(closed)
@@ -244,7 +244,7 @@ def check_gains(
     # speed loop: IP on the speed model (eq. 27), the drive's IP rule, the cascade rule
     if "speed_k_p" in g and "speed_k_i" in g:
         kp, ki = float(g["speed_k_p"]), float(g["speed_k_i"])
-        sp_closed = design.ip_closed_loop(a, b, kp, ki)
+        sp_closed = design.speed_closed_loop(design.SpeedLoopPars(a, b, kp, ki))
         sp_stable = design.is_stable(sp_closed)
         fig["speed_loop_stable"] = bool(sp_stable)
         fig["speed_max_pole_radius"] = float(max(abs(sp_closed.poles())))

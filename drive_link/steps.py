@@ -271,18 +271,9 @@ def _current_result(
     e_L = float(np.mean(tr.signals["measurements.e_L"][: max(k0, 1)]))
     controller = design.controller_name(g.type) if g.type in CONTROLLER_NAMES else "deadbeat"
     n_after = len(tr.t) - k0
-    pred = design.predicted_step(
-        controller,
-        n_samples=n_after * divider,
-        i_start=i_from,
-        i_final=i_to,
-        R=R,
-        L=L,
-        L_c=g.L_c,
-        R_c=g.R_c,
-        k_p=g.k_p,
-        k_i=g.k_i,
-        e_L=e_L,
+    loop_pars = design.CurrentLoopPars(controller, R, L, g.L_c, g.R_c, g.k_p, g.k_i)
+    pred = design.predict_step(
+        loop_pars, n_samples=n_after * divider, i_start=i_from, i_final=i_to, e_L=e_L
     )
     y_pred = pred.i_p[::divider][:n_after]
     avg = metrics.moving_average(i_p, average_samples)
