@@ -244,8 +244,9 @@ def current_step_predictive(ctx: Context) -> ExperimentResult:
         _write_off(d, {"sim_inverter.T_BT": SIM_T_BT, "sim_inverter.V_G": SIM_V_G})
         try:
             for j, (tag, comp) in enumerate((("without", False), ("with", True))):
-                g = dict(type=2, emf_feedforward=1, L_c=L, T_BT=SIM_T_BT if comp else 0.0,
-                         V_G=SIM_V_G if comp else 0.0, T_DD=0.0, T_SD=0.0)
+                g: dict[str, Any] = dict(type=2, emf_feedforward=1, L_c=L,
+                                         T_BT=SIM_T_BT if comp else 0.0,
+                                         V_G=SIM_V_G if comp else 0.0, T_DD=0.0, T_SD=0.0)
                 with _with_gains(ctx, **g):
                     res = _step(ctx, i0, i1, j / 2, (j + 1) / 2)
                 pred = design.predicted_step(
