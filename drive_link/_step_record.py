@@ -15,6 +15,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from firmware_protocol.enums import ModeOfOperation
+
 from . import metrics
 from .errors import DriveTimeout, InvalidValue, StateError
 from .restore import Snapshot, leave_as_found, switch_mode
@@ -119,7 +121,7 @@ class StepResult:
         return tr.to_png(path, title=title, overlay=over)
 
 
-def ensure_mode(drive: Drive, mode: str, brake: bool = False) -> None:
+def ensure_mode(drive: Drive, mode: str | ModeOfOperation, brake: bool = False) -> None:
     """Select ``mode``; an enabled drive is switched coasting, not braking
     (:func:`drive_link.restore.switch_mode`), and enabled again."""
     switch_mode(drive, mode, brake=brake)
