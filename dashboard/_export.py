@@ -3,13 +3,13 @@ one axis per unit, measurements on top, as in the GUI)."""
 
 from __future__ import annotations
 
-import io
 from typing import Any
 
 import numpy as np
 
 from dashboard._bench import Capture
 from dashboard._plot_style import capture_styles
+from drive_link.writers import csv_text, png_bytes
 
 __all__ = ["capture_csv", "capture_figure", "capture_png"]
 
@@ -18,18 +18,14 @@ def capture_csv(cap: Capture) -> bytes:
     """CSV of a capture: one header row of column names ("t" in s first), then one row per
     sample. The capture's metadata is in ``GET /api/trace/{id}`` (not in the CSV)."""
     names = list(cap.columns)
-    data = np.column_stack([np.asarray(cap.columns[n], dtype=np.float64) for n in names])
-    buf = io.StringIO()
-    np.savetxt(buf, data, delimiter=",", header=",".join(names), comments="", fmt="%.9g")
-    return buf.getvalue().encode()
+    cols = [np.asarray(cap.columns[n], dtype=np.float64) for n in names]
+    return csv_text(names, cols, lineterminator="\n").encode()
 
 
 def capture_png(cap: Capture, *, width_in: float = 9.0, height_in: float = 4.5) -> bytes:
     """A PNG of :func:`capture_figure`."""
     fig = capture_figure(cap, width_in=width_in, height_in=height_in)
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png")
-    return buf.getvalue()
+    return png_bytes(fig, tight=False)
 
 
 def capture_figure(cap: Capture, *, width_in: float = 9.0, height_in: float = 4.5) -> Any:

@@ -21,7 +21,7 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable
-from typing import Any
+from typing import Any, cast
 
 import can
 import canopen
@@ -110,7 +110,7 @@ def _frame_bits(msg: can.Message | tuple[int, bytes, bool]) -> int:
     """Bits ``msg`` occupied on the wire (exact stuffing; :mod:`firmware_protocol.can_bits`).
     A CAN FD frame counts its classical-frame length (47/67 + 8·n, no stuffing). ``msg`` may
     also be a data frame as (CAN-ID, data, is_extended) (:meth:`BusMonitor.on_frame`)."""
-    if type(msg) is tuple:
+    if isinstance(msg, tuple):
         can_id, data, ext = msg
         if len(data) > 8:
             return (67 if ext else 47) + 8 * len(data)
@@ -259,7 +259,10 @@ class Connection:
         self.monitor = BusMonitor()
         self.health = BusHealth(bus)
         self.network = PacedNetwork(bus)
-        self.network.listeners = [dispatcher(self.network, self.monitor, self.health)]
+        # one plain callback (python-can's Notifier calls any callable) for canopen's listener
+        self.network.listeners = cast(
+            "list[Any]", [dispatcher(self.network, self.monitor, self.health)]
+        )
         if owns_bus and hasattr(bus, "rx_direct"):  # the hub client: data frames without
             bus.rx_direct = direct_dispatcher(self.network, self.monitor)  # a Message each
         self.network.NOTIFIER_CYCLE = 0.1
@@ -295,10 +298,11 @@ def acquire(
             conn = Connection(bus, owns_bus=True, bitrate=bitrate)
             _registry[id(bus)] = conn
         else:
-            conn = _registry.get(id(bus))
-            if conn is None or conn.bus is not bus:
-                conn = Connection(bus, owns_bus=False, bitrate=bitrate)
-                _registry[id(bus)] = conn
+            known = _registry.get(id(bus))
+            if known is None or known.bus is not bus:
+                known = Connection(bus, owns_bus=False, bitrate=bitrate)
+                _registry[id(bus)] = known
+            conn = known
         conn.refs += 1
         if conn.bitrate is None:
             conn.bitrate = bitrate or _guess_bitrate(bus)

@@ -123,7 +123,10 @@ def read_tpdo_configs(node: canopen.RemoteNode, table: ObjectTable) -> list[Tpdo
     objects on the bus thread, up to 1 kHz per TPDO; :class:`LiveStreams` decodes into numpy).
     """
     out = []
-    for number, pdo_map in sorted(node.tpdo.map.items()):
+    maps = node.tpdo.map
+    if maps is None:  # canopen makes the maps with the TPDO object: never None for a node
+        raise TypeError("the node has no TPDO maps")
+    for number, pdo_map in sorted(maps.items()):
         mapped: list[tuple[int, int, int]] = []
         add_variable = pdo_map.add_variable
 

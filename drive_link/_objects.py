@@ -180,7 +180,7 @@ class ObjectInfo:
     def encode(self, value: float | int | str | bytes) -> bytes:
         """Bytes on the wire for ``value`` (checked first; canopen's ``encode_raw``)."""
         v = self.check(value)
-        if not self.fmt and not isinstance(v, str):
+        if not self.fmt and isinstance(v, bytes | bytearray):
             return bytes(v)
         return bytes(self.var.encode_raw(v))
 
@@ -189,13 +189,32 @@ class ObjectInfo:
         ``decode_raw`` after fitting the length: an expedited upload may carry fewer bytes
         than the type (sign-extended here) or the 4 bytes of an unspecified size)."""
         if not self.fmt:
-            return self.var.decode_raw(bytes(data))
+            return _plain(self.var.decode_raw(bytes(data)))
         size = struct.calcsize(self.fmt)
         data = bytes(data[:size])
         if len(data) < size:
             negative = bool(data) and self.data_type in _SIGNED_TYPES and data[-1] & 0x80
             data += (b"\xff" if negative else b"\x00") * (size - len(data))
-        return self.var.decode_raw(data)
+        return _plain(self.var.decode_raw(data))
+
+
+def _plain(value: float | int | str | bytes | bytearray) -> float | int | str | bytes:
+    """canopen's decoded value with a bytearray (DOMAIN) as bytes."""
+    return bytes(value) if isinstance(value, bytearray) else value
+
+
+def _variable(od: canopen.ObjectDictionary, e: Entry) -> ODVariable:
+    """canopen's variable of entry ``e`` (the object itself or its sub-index)."""
+    obj = od[e.index]
+    if e.object_name == e.name:
+        var = obj
+    elif isinstance(obj, ODVariable):
+        raise TypeError(f"{e.name}: 0x{e.index:04X} has no sub-indices")
+    else:
+        var = obj[e.subindex]
+    if not isinstance(var, ODVariable):
+        raise TypeError(f"{e.name}: 0x{e.index:04X}:{e.subindex:02X} is no variable")
+    return var
 
 
 class ObjectTable:
@@ -212,10 +231,7 @@ class ObjectTable:
         """Table of every entry of :func:`firmware_protocol.load_od` (the shipped EDS)."""
         view = load_od(node_id=node_id)
         od = view.canopen_od()
-        objects = [
-            ObjectInfo(e, od[e.index] if e.object_name == e.name else od[e.index][e.subindex])
-            for e in view.entries
-        ]
+        objects = [ObjectInfo(e, _variable(od, e)) for e in view.entries]
         return cls(objects, od)
 
     def __contains__(self, name: object) -> bool:

@@ -507,16 +507,12 @@ def _judge(
 
 
 def _write_csv(path: Path, cols: dict[str, np.ndarray], units: dict[str, str]) -> Path:
-    import csv
+    from .writers import column_header, write_csv
 
     names = list(cols)
-    with open(path, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow([f"{n} [{units.get(n, 's' if n == 't' else '')}]".replace(" []", "")
-                    for n in names])
-        for row in zip(*(cols[n] for n in names), strict=True):
-            w.writerow([f"{v:.9g}" for v in row])
-    return path
+    header = [column_header(n, units.get(n, "s" if n == "t" else ""), keep_empty=False)
+              for n in names]  # fmt: skip
+    return write_csv(path, header, [cols[n] for n in names])
 
 
 def cmd_replay(args: argparse.Namespace) -> int:

@@ -134,7 +134,7 @@ class ChannelClient(SdoClient):
             return
         super().on_response(can_id, data, timestamp)
 
-    def abort(self, abort_code: int = 0x08000000) -> None:
-        if abort_code == 0x05040000:  # SDO protocol timed out: see the class doc
+    def abort(self, abort_code: int = cs.ABORT_GENERAL_ERROR) -> None:
+        if abort_code == cs.ABORT_TIMED_OUT:  # SDO protocol timed out: see the class doc
             return
         super().abort(abort_code)

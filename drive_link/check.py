@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from firmware_protocol import abort_codes, emcy_codes
+from firmware_protocol.entry import f32 as _f32  # the one float32 rounding
 from firmware_protocol.enums import StoreStatus
 from firmware_protocol.index_ranges import COMMUNICATION, SIMULATION
 
@@ -110,10 +111,6 @@ def _raw_write(drive: Drive, name: str, value: float | int) -> None:
     """Write bypassing the client-side limit check (the drive must refuse by itself)."""
     obj = drive.table[name]
     drive.sdo.download(obj.index, obj.subindex, struct.pack(obj.fmt, value), name)
-
-
-def _f32(x: float) -> float:
-    return struct.unpack("<f", struct.pack("<f", x))[0]
 
 
 #: Simulated time of a virtual drive (s); firmware on a DSP runs in real time and has none.

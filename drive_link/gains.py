@@ -33,6 +33,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from firmware_protocol import load_od
 from firmware_protocol.current_stability import (
     CURRENT_KEYS,
     MOTOR_KEYS,
@@ -65,10 +66,14 @@ GAIN_MARGIN_MIN_DB = 2.0
 SENSITIVITY_PEAK_MAX = 5.0
 """Largest current-loop sensitivity peak ‖S‖∞ applied without ``force``."""
 
-#: Motor values used when a caller gives none (the EDS defaults, Table 2).
-_MOTOR_DEFAULTS = {"rated_current": 100.0, "V_dc_nominal": 48.0}
-#: Current-set entries a caller may leave out of an offline check (the drive's defaults).
-_CURRENT_DEFAULTS = {"T_BT": 0.0, "T_DD": 0.0, "T_SD": 0.0, "V_G": 0.0, "emf_feedforward": 0}
+_EDS_DEFAULTS = load_od().defaults()
+#: Motor values used when a caller gives none: the EDS defaults (Table 2), read from the EDS.
+_MOTOR_DEFAULTS = {k: float(_EDS_DEFAULTS[f"motor.{k}"]) for k in ("rated_current", "V_dc_nominal")}
+#: Current-set entries a caller may leave out of an offline check: the drive's (EDS) defaults.
+_CURRENT_DEFAULTS = {
+    k: _EDS_DEFAULTS[f"current_controller.{k}"]
+    for k in ("T_BT", "T_DD", "T_SD", "V_G", "emf_feedforward")
+}
 
 
 @dataclass(frozen=True)
@@ -205,8 +210,8 @@ def check_gains(
     fig: dict[str, Any] = {"controller": controller, "L_c/L": L_c / L, "speed_model": [a, b]}
 
     # current loop: closed-loop poles (design), then the drive's own rule
-    loop = design.current_loop_tf(
-        controller, R=R, L=L, L_c=L_c, R_c=R_c, k_p=float(g["k_p"]), k_i=float(g["k_i"])
+    loop = design.loop_tf(
+        design.CurrentLoopPars(controller, R, L, L_c, R_c, float(g["k_p"]), float(g["k_i"]))
     )
     closed = design.feedback(loop)
     stable = design.is_stable(closed)
@@ -243,7 +248,7 @@ def check_gains(
     # speed loop: IP on the speed model (eq. 27), the drive's IP rule, the cascade rule
     if "speed_k_p" in g and "speed_k_i" in g:
         kp, ki = float(g["speed_k_p"]), float(g["speed_k_i"])
-        sp_closed = design.ip_closed_loop(a, b, kp, ki)
+        sp_closed = design.speed_closed_loop(design.SpeedLoopPars(a, b, kp, ki))
         sp_stable = design.is_stable(sp_closed)
         fig["speed_loop_stable"] = bool(sp_stable)
         fig["speed_max_pole_radius"] = float(max(abs(sp_closed.poles())))

@@ -36,6 +36,9 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+from firmware_protocol.enums import ModeOfOperation
+
+from . import cia402
 from .cia402 import (
     FAULT,
     FAULT_REACTION_ACTIVE,
@@ -116,13 +119,16 @@ def quick_stopped(drive: Drive, snap: Snapshot, state: str) -> bool:
     return state == QUICK_STOP_ACTIVE
 
 
-def switch_mode(drive: Drive, mode: str, *, brake: bool = False, timeout: float = 3.0) -> None:
-    """Select ``mode``; an enabled drive is disabled for the switch and enabled again.
+def switch_mode(
+    drive: Drive, mode: str | ModeOfOperation, *, brake: bool = False, timeout: float = 3.0
+) -> None:
+    """Select ``mode`` ("speed", "current", "torque" or a :class:`ModeOfOperation`); an enabled
+    drive is disabled for the switch and enabled again.
 
     The power stage goes off coasting (0x605C set to 0 for that transition and put back), not
     on the drive's slow-down ramp, which brakes at the current limit (-100 A) to standstill;
     ``brake=True`` keeps the drive's own option code."""
-    if drive.mode == mode:
+    if drive.mode == cia402.mode_name(cia402.mode_value(mode)):
         return
     if drive.state != OPERATION_ENABLED:
         drive.set_mode(mode, timeout=max(0.5, timeout / 3))

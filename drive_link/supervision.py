@@ -31,18 +31,24 @@ from __future__ import annotations
 
 import contextlib
 import datetime as _dt
-import struct
 import threading
 import time
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass, field
 from typing import Any
 
 import canopen
 
 from firmware_protocol import load_od
-from firmware_protocol.index_ranges import COMMUNICATION, RPDO_COMM, RPDO_MAP, TPDO_COMM, TPDO_MAP
 
+from ._rearm_writes import (
+    ABORT_CONNECTION_OPTION,
+    NOT_JOURNALLED,
+    RearmReport,
+    journalled,
+    pdo_group,
+    write_entry,
+    write_pdo_group,
+)
 from ._sdo import SdoChannel
 from .errors import DriveError, StateError
 
@@ -63,21 +69,6 @@ __all__ = [
     "write_pdo_group",
 ]
 
-#: Communication objects never replayed: error history, store/restore commands, read-only
-#: identity and error objects.
-NOT_JOURNALLED = frozenset(
-    {0x1002}  # manufacturer status register (CiA 301; not in this drive's OD)
-    | {
-        load_od().entry(n).index
-        for n in (
-            "error_register",
-            "pre_defined_error_field.number_of_errors",
-            "store_parameters.save_all",
-            "restore_default_parameters.restore_all",
-        )
-    }
-)
-ABORT_CONNECTION_OPTION = load_od().entry("abort_connection_option_code").index
 CONSUMER_HEARTBEAT = load_od().entry("consumer_heartbeat_time.consumer_1").index
 PRODUCER_HEARTBEAT = load_od().entry("producer_heartbeat_time").index
 #: First replayed, in this order: the reaction, then the watch itself, then the drive's heartbeat.
@@ -101,49 +92,8 @@ class SupervisionError(StateError):
     """The drive restarted and the session's supervision could not be re-applied."""
 
 
-def journalled(index: int) -> bool:
-    """True if a write to ``index`` is part of the session's supervision/communication setup."""
-    return (index in COMMUNICATION and index not in NOT_JOURNALLED) or (
-        index == ABORT_CONNECTION_OPTION
-    )
-
-
 def _now_iso() -> str:
     return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="milliseconds")
-
-
-def _pdo_group(index: int) -> tuple[str, int] | None:
-    """("rpdo"|"tpdo", k) for the communication/mapping parameter objects of PDO k (0-based)."""
-    for base_comm, base_map, kind in ((RPDO_COMM, RPDO_MAP, "rpdo"), (TPDO_COMM, TPDO_MAP, "tpdo")):
-        if base_comm <= index < base_comm + 0x200:
-            return kind, index - base_comm
-        if base_map <= index < base_map + 0x200:
-            return kind, index - base_map
-    return None
-
-
-@dataclass
-class RearmReport:
-    """What one re-arm did: ``reason``, ``written`` / ``failed`` ("0xIIII:SS" → detail),
-    ``at`` (ISO time, UTC), ``seconds`` taken, ``reboot`` (True when the drive had lost the
-    session's settings)."""
-
-    reason: str
-    reboot: bool = False
-    written: list[str] = field(default_factory=list)
-    failed: dict[str, str] = field(default_factory=dict)
-    at: str | None = None
-    seconds: float = 0.0
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "reason": self.reason,
-            "reboot": self.reboot,
-            "written": list(self.written),
-            "failed": dict(self.failed),
-            "at": self.at,
-            "seconds": self.seconds,
-        }
 
 
 class SupervisedSdoChannel(SdoChannel):
@@ -510,10 +460,10 @@ class Supervisor:
         journal = self.journal
         try:
             first = [k for p in SUPERVISION_FIRST for k in journal if k[0] == p]
-            plain = [k for k in journal if k not in first and _pdo_group(k[0]) is None]
+            plain = [k for k in journal if k not in first and pdo_group(k[0]) is None]
             groups: dict[tuple[str, int], list[tuple[int, int]]] = {}
             for k in journal:
-                g = _pdo_group(k[0])
+                g = pdo_group(k[0])
                 if g is not None:
                     groups.setdefault(g, []).append(k)
             stale_first = [k for k in first if self._differs(sdo, k, journal[k])]
@@ -579,7 +529,7 @@ class Supervisor:
 
     @staticmethod
     def _write(sdo: SdoChannel, key: tuple[int, int], data: bytes, report: RearmReport) -> None:
-        _write(sdo, key, data, report)
+        write_entry(sdo, key, data, report)
 
     # ------------------------------------------------------------------ summary
     def status(self) -> dict[str, Any]:
@@ -591,51 +541,3 @@ class Supervisor:
                 "supervision_ready": self._ready and self._error is None,
                 "supervision_error": self._error,
             }
-
-
-def _write(sdo: SdoChannel, key: tuple[int, int], data: bytes, report: RearmReport) -> None:
-    where = f"0x{key[0]:04X}:{key[1]:02X}"
-    try:
-        SdoChannel.download(sdo, key[0], key[1], data)
-        report.written.append(where)
-    except DriveError as exc:
-        report.failed[where] = str(exc)
-
-
-def pdo_group(index: int) -> tuple[str, int] | None:
-    """("rpdo"|"tpdo", k) if ``index`` is a PDO communication or mapping object, else None."""
-    return _pdo_group(index)
-
-
-def write_pdo_group(
-    sdo: SdoChannel,
-    group: tuple[str, int],
-    keys: list[tuple[int, int]],
-    values: dict[tuple[int, int], bytes],
-    report: RearmReport,
-) -> None:
-    """Give PDO ``group`` the ``values`` of ``keys`` by the CiA 301 §7.2.2 procedure:
-    invalidate the PDO, clear its mapping, write the entries, the count, the other
-    communication parameters and finally the COB-ID (unsupervised transfers)."""
-    kind, k = group
-    comm = (RPDO_COMM if kind == "rpdo" else TPDO_COMM) + k
-    mapping = (RPDO_MAP if kind == "rpdo" else TPDO_MAP) + k
-    cob_key = (comm, 1)
-    try:
-        cob = values.get(cob_key) or SdoChannel.upload(sdo, comm, 1)[:4]
-    except DriveError as exc:
-        report.failed[f"0x{comm:04X}:01"] = str(exc)
-        return
-    cob_value = struct.unpack("<I", cob.ljust(4, b"\0"))[0]
-    _write(sdo, cob_key, struct.pack("<I", cob_value | 0x80000000), report)
-    map_keys = [kk for kk in keys if kk[0] == mapping and kk[1] != 0]
-    if map_keys or (mapping, 0) in values:
-        _write(sdo, (mapping, 0), b"\x00", report)
-        for kk in sorted(map_keys):
-            _write(sdo, kk, values[kk], report)
-        if (mapping, 0) in values:
-            _write(sdo, (mapping, 0), values[(mapping, 0)], report)
-    for kk in keys:
-        if kk[0] == comm and kk[1] != 1:
-            _write(sdo, kk, values[kk], report)
-    _write(sdo, cob_key, struct.pack("<I", cob_value), report)

@@ -7,7 +7,6 @@ units, and the trigger position.
 
 from __future__ import annotations
 
-import csv
 import threading
 import time
 from collections.abc import Callable
@@ -23,6 +22,7 @@ from firmware_protocol.enums import TraceState, TraceTriggerEdge, TraceTriggerMo
 from ._objects import ObjectTable
 from ._sdo import SdoChannel
 from .errors import DriveTimeout, InvalidValue, SdoAbort, StateError
+from .writers import header_with_units, write_csv, write_png
 
 __all__ = [
     "STATES",
@@ -107,15 +107,9 @@ class Trace:
 
     def to_csv(self, path: str | Path) -> Path:
         """Write ``t`` and every signal as CSV with a unit row in the header names."""
-        path = Path(path)
         names = list(self.signals)
-        with path.open("w", newline="") as fh:
-            w = csv.writer(fh)
-            w.writerow(["t [s]"] + [f"{n} [{self.units.get(n, '')}]" for n in names])
-            cols = [self.t] + [self.signals[n] for n in names]
-            for row in zip(*cols, strict=True):
-                w.writerow([f"{x:.9g}" for x in row])
-        return path
+        header = ["t [s]", *header_with_units(names, self.units)]
+        return write_csv(path, header, [self.t, *(self.signals[n] for n in names)])
 
     def to_png(
         self, path: str | Path, title: str = "", overlay: dict[str, np.ndarray] | None = None
@@ -129,7 +123,6 @@ class Trace:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        path = Path(path)
         by_unit: dict[str, list[str]] = {}
         for n in self.signals:
             by_unit.setdefault(self.units.get(n, ""), []).append(n)
@@ -156,10 +149,7 @@ class Trace:
         axes[-1].set_xlabel("t [ms] (0 = trigger)")
         if title:
             axes[0].set_title(title)
-        fig.tight_layout()
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
-        return path
+        return write_png(path, fig, dpi=110)
 
 
 def od_reference(index: int, subindex: int, bits: int = 32) -> int:

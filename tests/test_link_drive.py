@@ -28,6 +28,7 @@ from drive_link import (
     scan,
 )
 from drive_link.gains import apply_gains
+from drive_link.restore import switch_mode
 from drive_link.trace import Trigger
 
 pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
@@ -107,6 +108,10 @@ def test_cia402_enable_disable_quick_stop(drive):
     assert drive.read("modes_of_operation_display") == -1 and drive.mode == "current"
     drive.set_mode(ModeOfOperation.PROFILE_VELOCITY)
     assert drive.read("modes_of_operation_display") == 3 and drive.mode == "speed"
+    switch_mode(drive, ModeOfOperation.PSEUDO_CURRENT)  # the mode-switching helpers too
+    assert drive.read("modes_of_operation_display") == -1
+    switch_mode(drive, "speed")
+    assert drive.mode == "speed"
 
 
 def test_fault_emcy_history_and_reset(drive):

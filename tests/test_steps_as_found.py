@@ -90,12 +90,12 @@ def test_mode_switch_coasts_instead_of_braking_at_the_current_limit(hub):
     current limit to standstill before SWITCHED ON is reached."""
     from drive_link import Drive
     from drive_link.restore import leave_as_found
-    from drive_link.steps import _ensure_mode
+    from drive_link.steps import ensure_mode
 
     before = at_1000rpm(hub)
     with Drive.connect(node_id=1, host="127.0.0.1", port=hub.port) as d:
         with leave_as_found(d):
-            _ensure_mode(d, "current")
+            ensure_mode(d, "current")
             w = float(d.read("measurements.speed"))
             assert d.mode == "current" and d.state == "OPERATION ENABLED"
         assert w > 300, w

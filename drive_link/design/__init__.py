@@ -2,6 +2,10 @@
 
 The facade: the names a user needs (``__all__``). The rooms behind it, one job each:
 
+* :mod:`.pars` — :class:`CurrentLoopPars` (controller, R, L, L_c, R_c, k_p, k_i, fs) and
+  :class:`SpeedLoopPars` (a, b, k_p, k_i, fs): one loop as one object, taken by
+  :func:`loop_tf`, :func:`controller_tf`, :func:`predict_step`, :func:`speed_closed_loop` and
+  :func:`speed_open_loop`; the keyword functions below build them;
 * :mod:`.lti` — :class:`DiscreteTF`, feedback, stability tests (roots, Jury), margins;
 * :mod:`.current_loop` — plant (eqs. 4–9), deadbeat (15), PI (22), predictive (23), the open
   loop ``C(z) P(z)``, the mismatched deadbeat loop (16), PI gains for a crossover and margin;
@@ -58,12 +62,15 @@ from ._common import (
 )
 from .current_loop import (
     closed_loop_mismatch,
+    controller_tf,
     current_loop_tf,
+    loop_tf,
     phi_gamma,
     pi_current_gains,
     plant_tf,
 )
 from .lti import DiscreteTF, Margins, feedback, is_stable, jury_stable, margins
+from .pars import CurrentLoopPars, SpeedLoopPars
 from .report import analyse_current_loop
 from .response import (
     LoopResponse,
@@ -78,9 +85,11 @@ from .speed_loop import (
     ip_design,
     ip_gains,
     predicted_speed_step,
+    speed_closed_loop,
     speed_loop_tf,
+    speed_open_loop,
 )
-from .step import PredictedStep, eq25_compensation, predicted_step
+from .step import PredictedStep, eq25_compensation, predict_step, predicted_step
 
 __all__ = [
     "CONTROLLERS",
@@ -90,15 +99,18 @@ __all__ = [
     "PI_KP_PAPER",
     "R_TABLE2",
     "ControllerName",
+    "CurrentLoopPars",
     "DiscreteTF",
     "IPDesign",
     "LoopResponse",
     "Margins",
     "PredictedSpeedStep",
     "PredictedStep",
+    "SpeedLoopPars",
     "analyse_current_loop",
     "closed_loop_mismatch",
     "controller_name",
+    "controller_tf",
     "current_loop_response",
     "current_loop_tf",
     "eq25_compensation",
@@ -108,13 +120,17 @@ __all__ = [
     "ip_gains",
     "is_stable",
     "jury_stable",
+    "loop_tf",
     "margins",
     "margins_summary",
     "phi_gamma",
     "pi_current_gains",
     "plant_tf",
+    "predict_step",
     "predicted_speed_step",
     "predicted_step",
+    "speed_closed_loop",
     "speed_loop_response",
     "speed_loop_tf",
+    "speed_open_loop",
 ]

@@ -25,14 +25,17 @@ from ._common import (
     _positive,
 )
 from .lti import DiscreteTF
+from .pars import CurrentLoopPars
 
 __all__ = [
     "DeadbeatCoefficients",
     "closed_loop_mismatch",
+    "controller_tf",
     "current_controller_tf",
     "current_loop_tf",
     "deadbeat_coefficients",
     "disturbance_tf",
+    "loop_tf",
     "phi_gamma",
     "pi_current_gains",
     "pi_tf",
@@ -129,13 +132,25 @@ def current_controller_tf(
     fs: float = FS_DEFAULT,
 ) -> DiscreteTF:
     """The current controller ``C(z)`` [V/A] named ``controller`` (eq. 15, 22 or 23)."""
-    if controller == "deadbeat":
-        return deadbeat_coefficients(L_c, R_c, fs).tf
-    if controller == "pi":
-        return pi_tf(k_p, k_i, fs)
-    if controller == "predictive":
-        return predictive_tf(L_c, fs)
-    raise ValueError(f"controller must be one of {', '.join(CONTROLLERS)} (got {controller!r})")
+    return controller_tf(CurrentLoopPars(controller, L_c=L_c, R_c=R_c, k_p=k_p, k_i=k_i, fs=fs))
+
+
+def controller_tf(p: CurrentLoopPars) -> DiscreteTF:
+    """The current controller ``C(z)`` [V/A] of loop ``p`` (eq. 15, 22 or 23)."""
+    if p.controller == "deadbeat":
+        return deadbeat_coefficients(p.L_c_used, p.R_c_used, p.fs).tf
+    if p.controller == "pi":
+        return pi_tf(p.k_p, p.k_i, p.fs)
+    if p.controller == "predictive":
+        return predictive_tf(p.L_c_used, p.fs)
+    raise ValueError(
+        f"controller must be one of {', '.join(CONTROLLERS)} (got {p.controller!r})"
+    )
+
+
+def loop_tf(p: CurrentLoopPars) -> DiscreteTF:
+    """Open loop ``C(z) P(z)`` (dimensionless) of current loop ``p``."""
+    return controller_tf(p) * plant_tf(p.R, p.L, p.fs)
 
 
 def current_loop_tf(
@@ -149,16 +164,9 @@ def current_loop_tf(
     k_i: float = PI_KI_PAPER,
     fs: float = FS_DEFAULT,
 ) -> DiscreteTF:
-    """Open loop ``C(z) P(z)`` (dimensionless) of the current loop; L_c, R_c default to L, R."""
-    C = current_controller_tf(
-        controller,
-        L_c=L if L_c is None else L_c,
-        R_c=R if R_c is None else R_c,
-        k_p=k_p,
-        k_i=k_i,
-        fs=fs,
-    )
-    return C * plant_tf(R, L, fs)
+    """Open loop ``C(z) P(z)`` (dimensionless) of the current loop; L_c, R_c default to L, R
+    (:func:`loop_tf` of a :class:`~drive_link.design.CurrentLoopPars`)."""
+    return loop_tf(CurrentLoopPars(controller, R, L, L_c, R_c, k_p, k_i, fs))
 
 
 def closed_loop_mismatch(

@@ -11,10 +11,11 @@ import numpy as np
 from drive_link import metrics as _metrics
 
 from ._common import FS_DEFAULT, L_TABLE2, PI_KI_PAPER, PI_KP_PAPER, R_TABLE2, ControllerName
-from .current_loop import current_loop_tf, phi_gamma
+from .current_loop import loop_tf, phi_gamma
 from .lti import feedback, is_stable, jury_stable, margins
+from .pars import CurrentLoopPars
 from .response import margins_summary
-from .step import predicted_step
+from .step import predict_step
 
 __all__ = ["analyse_current_loop"]
 
@@ -48,19 +49,9 @@ def analyse_current_loop(
     settling_time_s, steady_state_error_A, steady_state_error_pct, step_samples, step_from_A,
     step_to_A (step figures None unless asymptotically stable).
     """
-    L_c = L if L_c is None else L_c
-    R_c = R if R_c is None else R_c
-    # plant, controller parameters and sampling rate shared by the loop and its step predictions
-    setup: dict[str, Any] = {
-        "R": R,
-        "L": L,
-        "L_c": L_c,
-        "R_c": R_c,
-        "k_p": k_p,
-        "k_i": k_i,
-        "fs": fs,
-    }
-    loop = current_loop_tf(controller, **setup)
+    p = CurrentLoopPars(controller, R, L, L_c, R_c, k_p, k_i, fs).resolved()
+    L_c, R_c = p.L_c_used, p.R_c_used
+    loop = loop_tf(p)
     cl = feedback(loop)
     poles = cl.poles()
     stable = is_stable(cl)
@@ -102,12 +93,8 @@ def analyse_current_loop(
         if n_samples is None:  # long enough for the slowest pole to decay to 1e-4
             n_samples = 50 if r_max < 1e-3 else math.ceil(math.log(1e-4) / math.log(r_max))
             n_samples = min(max(n_samples, 50), 200_000)
-        r = predicted_step(
-            controller, n_samples=n_samples, i_start=i_start, i_final=i_final, **setup
-        )
-        y0 = predicted_step(
-            controller, n_samples=1, i_start=i_start, i_final=i_start, **setup
-        ).i_p_final
+        r = predict_step(p, n_samples=n_samples, i_start=i_start, i_final=i_final)
+        y0 = predict_step(p, n_samples=1, i_start=i_start, i_final=i_start).i_p_final
         sm = _metrics.step_metrics(r.t, r.i_p, reference=i_final, y_initial=y0, y_final=r.i_p_final)
         step = {
             "overshoot_pct": sm.overshoot_pct,

@@ -23,9 +23,10 @@ from ._common import (
     ControllerName,
     _positive,
 )
-from .current_loop import current_loop_tf
+from .current_loop import loop_tf
 from .lti import DiscreteTF, Margins, feedback, is_stable, margins
-from .speed_loop import ip_closed_loop, speed_loop_tf
+from .pars import CurrentLoopPars, SpeedLoopPars
+from .speed_loop import speed_closed_loop, speed_open_loop
 
 __all__ = ["LoopResponse", "current_loop_response", "margins_summary", "speed_loop_response"]
 
@@ -144,7 +145,8 @@ def current_loop_response(
     R, R_c [Ω], L, L_c [H] (L_c, R_c default to L, R), k_p, k_i [V/A] (PI), fs [Hz]; the grid
     has ``n_points`` frequencies. ValueError for bad input.
     """
-    loop = current_loop_tf(controller, R=R, L=L, L_c=L_c, R_c=R_c, k_p=k_p, k_i=k_i, fs=fs)
+    p = CurrentLoopPars(controller, R, L, L_c, R_c, k_p, k_i, fs)
+    loop = loop_tf(p)
     return _response(loop, feedback(loop), _positive("fs", fs), n_points)
 
 
@@ -163,5 +165,5 @@ def speed_loop_response(
 
     a (per loop sample), b [rpm/A per sample], k_p [A/rpm], k_i [1/sample], fs [Hz].
     """
-    loop = speed_loop_tf(a, b, k_p, k_i, fs)
-    return _response(loop, ip_closed_loop(a, b, k_p, k_i, fs), _positive("fs", fs), n_points)
+    p = SpeedLoopPars(a, b, k_p, k_i, fs)
+    return _response(speed_open_loop(p), speed_closed_loop(p), _positive("fs", fs), n_points)

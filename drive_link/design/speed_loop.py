@@ -14,6 +14,7 @@ import numpy as np
 
 from ._common import FS_DEFAULT, _as_f32, _finite, _positive
 from .lti import DiscreteTF, is_stable
+from .pars import SpeedLoopPars
 
 __all__ = [
     "IPDesign",
@@ -24,7 +25,9 @@ __all__ = [
     "ip_min_xi_omega_n",
     "ip_requested_poles",
     "predicted_speed_step",
+    "speed_closed_loop",
     "speed_loop_tf",
+    "speed_open_loop",
 ]
 
 
@@ -183,9 +186,17 @@ def ip_design(
 def ip_closed_loop(
     a: float, b: float, k_p: float, k_i: float, fs: float = FS_DEFAULT
 ) -> DiscreteTF:
-    """Speed closed loop ``w / w*`` of the IP controller on ``b/(z - a)``, eq. (27)."""
-    kb = k_p * b
-    return DiscreteTF([kb * k_i, 0.0], [1.0, kb * k_i + kb - 1.0 - a, a - kb], 1.0 / fs)
+    """Speed closed loop ``w / w*`` of the IP controller on ``b/(z - a)``, eq. (27)
+    (:func:`speed_closed_loop` of a :class:`~drive_link.design.SpeedLoopPars`)."""
+    return speed_closed_loop(SpeedLoopPars(a, b, k_p, k_i, fs))
+
+
+def speed_closed_loop(p: SpeedLoopPars) -> DiscreteTF:
+    """Speed closed loop ``w / w*`` of IP loop ``p``, eq. (27)."""
+    kb = p.k_p * p.b
+    return DiscreteTF(
+        [kb * p.k_i, 0.0], [1.0, kb * p.k_i + kb - 1.0 - p.a, p.a - kb], 1.0 / p.fs
+    )
 
 
 @dataclass(frozen=True)
@@ -255,6 +266,12 @@ def speed_loop_tf(
 
     a (per loop sample), b [rpm/A per sample], k_p [A/rpm], k_i [1/sample], fs [Hz].
     """
+    return speed_open_loop(SpeedLoopPars(a, b, k_p, k_i, fs))
+
+
+def speed_open_loop(p: SpeedLoopPars) -> DiscreteTF:
+    """Open loop of IP speed loop ``p`` broken at the plant input (:func:`speed_loop_tf`)."""
+    a, b, k_p, k_i, fs = p.a, p.b, p.k_p, p.k_i, p.fs
     for name, v in (("a", a), ("b", b), ("k_p", k_p), ("k_i", k_i)):
         _finite(name, v)
     fs = _positive("fs", fs)

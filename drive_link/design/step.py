@@ -25,8 +25,9 @@ from ._common import (
     _positive,
 )
 from .current_loop import phi_gamma
+from .pars import CurrentLoopPars
 
-__all__ = ["PredictedStep", "eq25_compensation", "predicted_step"]
+__all__ = ["PredictedStep", "eq25_compensation", "predict_step", "predicted_step"]
 
 
 def _controller_parts(
@@ -154,6 +155,34 @@ def predicted_step(
     Returns:
         :class:`PredictedStep` (float64 arrays of length n_samples).
     """
+    return predict_step(
+        CurrentLoopPars(controller, R, L, L_c, R_c, k_p, k_i, fs),
+        n_samples=n_samples,
+        i_start=i_start,
+        i_final=i_final,
+        e_L=e_L,
+        feedforward=feedforward,
+        v_loss=v_loss,
+        v_comp=v_comp,
+        e_L_final=e_L_final,
+    )
+
+
+def predict_step(
+    p: CurrentLoopPars,
+    *,
+    n_samples: int = 100,
+    i_start: float = 15.0,
+    i_final: float = 20.0,
+    e_L: float = 0.0,
+    feedforward: bool = False,
+    v_loss: float = 0.0,
+    v_comp: float = 0.0,
+    e_L_final: float | None = None,
+) -> PredictedStep:
+    """:func:`predicted_step` of current loop ``p`` (the other arguments as there)."""
+    controller, R, L, fs = p.controller, p.R, p.L, p.fs
+    k_p, k_i = p.k_p, p.k_i
     n = int(n_samples)
     if n < 1:
         raise ValueError(f"n_samples must be >= 1 (got {n_samples!r})")
@@ -163,8 +192,7 @@ def predicted_step(
     _finite("v_comp", v_comp)
     if v_comp != 0.0 and controller != "predictive":
         raise ValueError("v_comp (eq. 25) applies to the predictive controller only")
-    L_c = L if L_c is None else L_c
-    R_c = R if R_c is None else R_c
+    L_c, R_c = p.L_c_used, p.R_c_used
     Phi, Gamma = phi_gamma(R, L, fs)
     ff = bool(feedforward)
     den, n_eps, n_e, n_c = _controller_parts(controller, L_c, R_c, k_p, k_i, fs, ff)

@@ -9,7 +9,6 @@ judged metrics pass. Units: A, V, rpm, s, Ω, H, % as each metric states.
 from __future__ import annotations
 
 import base64
-import io
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -166,13 +165,9 @@ def settling_samples(y: np.ndarray, y_from: float, y_to: float, band: float = 0.
 
 def figure_png(fig: Any) -> str:
     """A matplotlib figure as base64 PNG (closed afterwards)."""
-    import matplotlib.pyplot as plt
+    from ..writers import png_bytes
 
-    buf = io.BytesIO()
-    fig.tight_layout()
-    fig.savefig(buf, format="png", dpi=90)
-    plt.close(fig)
-    return base64.b64encode(buf.getvalue()).decode("ascii")
+    return base64.b64encode(png_bytes(fig, dpi=90)).decode("ascii")
 
 
 def new_figure(rows: int = 1, height: float = 3.2) -> tuple[Any, Any]:

@@ -53,9 +53,9 @@ def pwm_ripple(ctx: Context) -> ExperimentResult:
     L = float(d.read("motor.L"))
     h = ctx.step_hooks(0.0, 1.0)
     with leave_as_found(d):
-        steps._ensure_mode(d, "speed")
+        steps.ensure_mode(d, "speed")
         d.set_speed(W_RIPPLE)
-        steps._require_enabled(d, True)
+        steps.require_enabled(d, True)
         steps.wait_settled(d, "speed", W_RIPPLE, 5.0, steps.Settle(0.3, 15.0), h, "rpm")
         tr = steps.record(d, ["i_p", *RIPPLE_SIGNALS, "m", "V_dc", "speed"],
                           length=N_SAMPLES, hooks=h)

@@ -156,9 +156,9 @@ def load_step(ctx: Context) -> ExperimentResult:
     h = ctx.step_hooks(0.0, 1.0)
     with leave_as_found(d, settings=("sim_load.T_load",)):
         T0 = float(d.read("sim_load.T_load"))
-        steps._ensure_mode(d, "speed")
+        steps.ensure_mode(d, "speed")
         d.set_speed(W_START)
-        steps._require_enabled(d, True)
+        steps.require_enabled(d, True)
         steps.wait_settled(d, "speed", W_START, 2.0, steps.Settle(0.3, 15.0), h, "rpm")
         trig = Trigger("signal", source="measurements.speed", level=W_START - 1.5, edge="falling")
         tr = steps.record(d, ["speed", "i_p", "i_a"], divider=divider, length=length,
