@@ -20,7 +20,7 @@ from canopen.sdo import SdoAbortedError
 
 from drive_link import Drive, cli
 from drive_link.check import run_checks
-from drive_link.check_conformance import CONFORMANCE_ITEMS, EDS_PATH
+from drive_link.check.conformance import CONFORMANCE_ITEMS, EDS_PATH
 from firmware_protocol import load_od
 
 pytestmark = pytest.mark.timeout(180)

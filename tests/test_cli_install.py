@@ -64,7 +64,7 @@ def test_help_has_no_markup_and_every_option_says_what_it_is():
     sub = next(a for a in ap._actions if a.dest == "cmd")
     missing = []
     for name, p in sub.choices.items():
-        if name in ("design", "identify"):  # drive_link._cli_design's offline commands
+        if name in ("design", "identify"):  # drive_link.cli.design's offline commands
             continue
         for a in p._actions:
             if a.option_strings and a.dest != "help" and not a.help:

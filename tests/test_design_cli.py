@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from drive_link._cli_design import run_cli
+from drive_link.cli.design import run_cli
 
 #: the console script of this interpreter's environment (pytest does not put the venv's bin on
 #: PATH: it sits next to sys.executable)

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from drive_link import design
-from drive_link._cli_design import run_cli
+from drive_link.cli.design import run_cli
 from drive_link.design import speed_loop
 
 pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]

@@ -11,7 +11,7 @@ import json
 import numpy as np
 import pytest
 
-from drive_link._cli_design import run_cli
+from drive_link.cli.design import run_cli
 from drive_link.identify import fit_first_order
 
 sim_mod = pytest.importorskip("virtual_drive.sim")

@@ -18,7 +18,7 @@ import time
 import pytest
 
 from drive_link import cli
-from drive_link._shell import Shell
+from drive_link.cli.shell import Shell
 from drive_link.drive import Drive
 
 pytestmark = pytest.mark.timeout(200)

@@ -23,9 +23,9 @@ from typing import TextIO
 
 import numpy as np
 
-from ._live import LiveStreams
-from .drive import Drive
-from .errors import InvalidValue
+from .._live import LiveStreams
+from ..drive import Drive
+from ..errors import InvalidValue
 
 __all__ = [
     "KEYS",
@@ -261,7 +261,7 @@ def run_curses(
 def drive_state(drive: Drive) -> str:
     """NMT state and the 402 state from the statusword in the TPDOs (no SDO round trip, so a
     silent drive cannot stall the view)."""
-    from .cia402 import state_from_statusword
+    from ..cia402 import state_from_statusword
 
     sw = drive.live.latest().get("statusword", float("nan"))
     state = state_from_statusword(int(sw)) if math.isfinite(sw) else "402 state ?"

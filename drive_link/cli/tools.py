@@ -1,9 +1,8 @@
 """The tool sub-commands of ``drive-link``: ``shell``, ``live --plot``, ``record``, ``replay``.
 
-:func:`register_tools` adds them to :func:`drive_link.cli.build_parser`'s sub-parsers (one hook
-call there), so the tools live in their own modules (:mod:`drive_link._shell`,
-:mod:`drive_link._live_plot`, :mod:`drive_link.record`, :mod:`drive_link._replay`) and the
-one-shot CLI stays one module. Each module is imported only when its command runs.
+:func:`add_parsers` adds them to :func:`drive_link.cli.main.build_parser`'s sub-parsers; the
+tools live in their own modules (:mod:`.shell`, :mod:`.live_plot`, :mod:`.record`,
+:mod:`.replay`), each imported only when its command runs.
 """
 
 from __future__ import annotations
@@ -11,16 +10,19 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-__all__ = ["bus_settings", "register_tools"]
+from ..cli_connect import bus_settings_from_args
+from ._common import quantity
+
+__all__ = ["add_parsers", "bus_settings"]
 
 
 def _lazy(module: str, fn: str) -> Any:
-    """A handler that imports ``drive_link.<module>`` on first call and runs its ``fn``."""
+    """A handler that imports ``drive_link.cli.<module>`` on first call and runs its ``fn``."""
 
     def run(*a: Any) -> int:
         import importlib
 
-        return getattr(importlib.import_module(f"drive_link.{module}"), fn)(*a)
+        return getattr(importlib.import_module(f"drive_link.cli.{module}"), fn)(*a)
 
     run.__name__ = fn
     return run
@@ -29,26 +31,16 @@ def _lazy(module: str, fn: str) -> Any:
 def bus_settings(args: argparse.Namespace) -> dict[str, Any]:
     """:meth:`Drive.connect` / :func:`drive_link.bus.open_bus` keywords from a command line's
     bus options (:func:`drive_link.cli_connect.bus_settings_from_args` where it exists)."""
-    from . import cli_connect
-
-    shared = getattr(cli_connect, "bus_settings_from_args", None)
-    if shared is not None:
-        return dict(shared(args))
-    return {k: getattr(args, k, None) for k in ("interface", "channel", "bitrate", "host", "port")}
+    return dict(bus_settings_from_args(args))
 
 
 def _unit(unit: str, integer: bool = False) -> Any:
     """argparse ``type=`` taking a value with a unit (``2min``, ``500ms``, ``20Hz``) through
-    cli's units parser where it exists, else a plain number in ``unit``."""
-    from . import cli
-
-    q = getattr(cli, "quantity", None)
-    if q is not None:
-        return q(unit, integer=integer)
-    return int if integer else float
+    the CLI's units parser."""
+    return quantity(unit, integer=integer)
 
 
-def register_tools(sub: argparse._SubParsersAction, bus: argparse.ArgumentParser) -> None:
+def add_parsers(sub: argparse._SubParsersAction, bus: argparse.ArgumentParser) -> None:
     """Add ``shell``, ``record``, ``replay`` to ``sub`` and ``--plot`` to its ``live`` command.
 
     ``bus``: the parent parser carrying the bus options (--interface … --json). Handlers follow
@@ -64,7 +56,7 @@ def register_tools(sub: argparse._SubParsersAction, bus: argparse.ArgumentParser
 
     p = add(
         "shell",
-        _lazy("_shell", "cmd_shell"),
+        _lazy("shell", "cmd_shell"),
         "interactive session on one connection: the drive-link commands without the prefix, "
         "history and TAB completion of commands and object names; 'help', 'exit' or Ctrl-D",
         needs_drive=False,  # connects itself, with the session's heartbeat supervision
@@ -100,7 +92,7 @@ def register_tools(sub: argparse._SubParsersAction, bus: argparse.ArgumentParser
 
     p = add(
         "replay",
-        _lazy("_replay", "cmd_replay"),
+        _lazy("replay", "cmd_replay"),
         "decode a bus recording offline (any python-can log format): TPDO signals as in "
         "'live' (summary, --csv, --plot), SDO block uploads, trace uploads reassembled",
         needs_drive=False,
@@ -155,7 +147,7 @@ def _add_live_plot(p: argparse.ArgumentParser) -> None:
 
     def run(args: argparse.Namespace, d: Any) -> int:
         if args.plot:
-            return _lazy("_live_plot", "cmd_live_plot")(args, d)
+            return _lazy("live_plot", "cmd_live_plot")(args, d)
         return summary(args, d)
 
     p.set_defaults(func=run)

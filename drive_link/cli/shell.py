@@ -24,10 +24,13 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import TextIO
 
-from . import cli
-from ._cli_tools import bus_settings
-from .drive import Drive
-from .errors import DriveError, InvalidValue, SdoAbort
+from ..drive import Drive
+from ..errors import DriveError, InvalidValue, SdoAbort
+from . import _common
+from ._common import _ABORT_STATE, EXIT_CODES, EXIT_UNSAFE, Refused, _merge_bus, _state_hint
+from .experiments import apply_step_defaults
+from .main import build_parser
+from .tools import bus_settings
 
 __all__ = ["HISTORY_FILE", "Shell", "cmd_shell"]
 
@@ -54,7 +57,7 @@ class _ParseExitError(Exception):
 
 
 def _defaults() -> dict[str, object]:
-    return {f[0].lstrip("-").replace("-", "_"): d for f, _kw, d in cli._bus_options()}
+    return {f[0].lstrip("-").replace("-", "_"): d for f, _kw, d in _common._bus_options()}
 
 
 class Shell:
@@ -67,7 +70,7 @@ class Shell:
     def __init__(self, drive: Drive, args: argparse.Namespace):
         self.drive = drive
         self.args = args
-        self.parser = cli.build_parser()
+        self.parser = build_parser()
         self.sub = next(
             a for a in self.parser._actions if isinstance(a, argparse._SubParsersAction)
         )
@@ -108,7 +111,7 @@ class Shell:
             args = self.parser.parse_args(argv)
         except SystemExit as exc:
             raise _ParseExitError(int(exc.code or 0)) from None
-        cli._merge_bus(args)
+        _merge_bus(args)
         defaults = _defaults()
         for k, default in defaults.items():
             mine = getattr(self.args, k, default)
@@ -122,9 +125,7 @@ class Shell:
                 setattr(args, k, mine)
             elif given == default:
                 setattr(args, k, mine)
-        apply = getattr(cli, "_apply_step_defaults", None)
-        if apply is not None:
-            apply(args)
+        apply_step_defaults(args)
         return args
 
     def run_line(self, line: str) -> int | None:
@@ -156,12 +157,12 @@ class Shell:
             close = [c for c in self.commands if c.startswith(cmd[:3])]
             hint = f" (did you mean {', '.join(close[:4])}?)" if close else " (try: help)"
             return self._fail(None, f"error: unknown command {cmd!r}{hint}", 2)
-        json_before = getattr(cli, "_JSON_ERRORS", False)
-        cli._JSON_ERRORS = json_before or "--json" in argv  # argparse errors as JSON too
+        json_before = _common._JSON_ERRORS
+        _common._JSON_ERRORS = json_before or "--json" in argv  # argparse errors as JSON too
         try:
             return self._run_args(argv)
         finally:
-            cli._JSON_ERRORS = json_before
+            _common._JSON_ERRORS = json_before
 
     def _run_args(self, argv: list[str]) -> int:
         """Parse and run one command on the shell's Drive; errors as cli.main reports them."""
@@ -174,15 +175,13 @@ class Shell:
                 rc = args.func(args)
         except _ParseExitError as exc:
             rc = exc.code
-        except cli.Refused as exc:
-            rc = self._fail(args, str(exc), cli.EXIT_UNSAFE)
+        except Refused as exc:
+            rc = self._fail(args, str(exc), EXIT_UNSAFE)
         except DriveError as exc:
             msg = f"error: {exc}"
-            hint = getattr(cli, "_state_hint", None)
-            state_code = getattr(cli, "_ABORT_STATE", None)
-            if hint and isinstance(exc, SdoAbort) and exc.code == state_code:
-                msg += f": {hint(exc)}"
-            code = next((c for cls, c in cli.EXIT_CODES if isinstance(exc, cls)), 1)
+            if isinstance(exc, SdoAbort) and exc.code == _ABORT_STATE:
+                msg += f": {_state_hint(exc)}"
+            code = next((c for cls, c in EXIT_CODES if isinstance(exc, cls)), 1)
             rc = self._fail(args, msg, code)
         except KeyboardInterrupt:
             rc = self._fail(args, "interrupted", 130)
@@ -198,7 +197,7 @@ class Shell:
         """One failure as cli.main reports it: ``drive-link: MESSAGE`` on stderr, or with
         --json ``{"error": …, "exit_code": …}`` on stdout."""
         line = message.splitlines()[0] if message else message
-        as_json = getattr(cli, "_JSON_ERRORS", False) or bool(getattr(args, "json", False))
+        as_json = _common._JSON_ERRORS or bool(getattr(args, "json", False))
         if as_json:
             print(json.dumps({"error": line.removeprefix("error: "), "exit_code": code}))
         else:

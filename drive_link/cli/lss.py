@@ -16,13 +16,16 @@ import threading
 import time
 from typing import Any
 
-__all__ = ["cmd_lss", "register_lss"]
+from ._common import _emit
+from .tools import bus_settings
+
+__all__ = ["add_parsers", "cmd_lss"]
 
 _LSS_RX = 0x7E4  # slave → master
 _LSS_TX = 0x7E5  # master → slave
 
 
-def register_lss(sub: argparse._SubParsersAction, bus: argparse.ArgumentParser) -> None:
+def add_parsers(sub: argparse._SubParsersAction, bus: argparse.ArgumentParser) -> None:
     """Add ``lss`` to drive-link's sub-commands (``bus``: the parent with the bus options)."""
     text = (
         "LSS (CiA 305): find drives without a node-ID by fast scan and give each the next free "
@@ -46,11 +49,9 @@ def cmd_lss(args: argparse.Namespace) -> int:
     """See the module docstring; exit 0 also when no unconfigured drive answered."""
     import canopen.lss
 
-    from . import _connection
-    from ._cli_tools import bus_settings
-    from ._scan import scan
-    from .cli import _emit
-    from .errors import DriveError, InvalidValue
+    from .. import _connection
+    from .._scan import scan
+    from ..errors import DriveError, InvalidValue
 
     if not 1 <= args.first_id <= 127:
         raise InvalidValue(f"--first-id {args.first_id}: must be 1..127")

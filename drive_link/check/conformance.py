@@ -38,9 +38,9 @@ from firmware_protocol import abort_codes, load_od
 from firmware_protocol.entry import BIT_LENGTH, TYPE_NAMES, Entry
 from firmware_protocol.index_ranges import MANUFACTURER, SIMULATION
 
-from .check import CheckFailed, _expect
-from .drive import Drive
-from .errors import SdoAbort
+from ..drive import Drive
+from ..errors import SdoAbort
+from ._base import CheckFailed, _expect
 
 __all__ = ["CONFORMANCE_ITEMS"]
 

@@ -12,8 +12,10 @@ from __future__ import annotations
 
 from typing import Any
 
-from .drive import Drive
-from .errors import DriveError
+from ..drive import Drive
+from ..errors import DriveError
+from ._base import CheckFailed
+from ._snapshot import FOUND
 
 __all__ = ["ERRORS", "HISTORY", "item_as_found", "settle", "take"]
 
@@ -49,8 +51,6 @@ def item_as_found(d: Drive, opts: dict) -> str:
     """After the other items: 0x603F, 0x1001, 0x1003 and the communication objects
     (0x1000–0x1FFF, persistent ones) as the run found them (the history cleared when it was
     empty; one that had entries keeps the run's entries on top, said here)."""
-    from .check import FOUND, CheckFailed
-
     found = opts.get(ERRORS)
     if found is None:
         raise CheckFailed("the drive's error state could not be read before the run")
