@@ -14,10 +14,14 @@ import os
 import socket
 import sys
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 from dashboard.config import BenchConfig
 from drive_link.cli_connect import add_bus_arguments, bus_extras_from_args
 from drive_link.closed_pipe import run_quietly, silence_output
+
+if TYPE_CHECKING:
+    from fastapi import FastAPI
 
 __all__ = ["build_parser", "main"]
 
@@ -189,7 +193,7 @@ def _main(argv: Sequence[str] | None) -> int:
 
     from dashboard.app import create_app
 
-    def ready(app) -> None:
+    def ready(app: FastAPI) -> None:
         gui = app.state.gui
         api = f"http://{_url_host(config.host)}:{config.api_port}"
         try:
@@ -206,7 +210,7 @@ def _main(argv: Sequence[str] | None) -> int:
         """Prints the URLs once the REST port listens: the lifespan's startup runs before
         uvicorn binds, and a URL printed then was refused (UML lane, load 9)."""
 
-        async def startup(self, sockets=None) -> None:
+        async def startup(self, sockets: list[socket.socket] | None = None) -> None:
             await super().startup(sockets=sockets)
             if self.started:
                 ready(app)
