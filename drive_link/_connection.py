@@ -106,11 +106,16 @@ class PacedNetwork(canopen.Network):
         self.check()
 
 
-def _frame_bits(msg: can.Message | tuple[int, bytes, bool]) -> int:
+#: a received frame as the monitor queues it: a Message, or a data frame as
+#: (CAN-ID, data, is_extended) from the hub's direct path
+_Frame = can.Message | tuple[int, bytes, bool]
+
+
+def _frame_bits(msg: _Frame) -> int:
     """Bits ``msg`` occupied on the wire (exact stuffing; :mod:`firmware_protocol.can_bits`).
     A CAN FD frame counts its classical-frame length (47/67 + 8·n, no stuffing). ``msg`` may
     also be a data frame as (CAN-ID, data, is_extended) (:meth:`BusMonitor.on_frame`)."""
-    if type(msg) is tuple:
+    if isinstance(msg, tuple):
         can_id, data, ext = msg
         if len(data) > 8:
             return (67 if ext else 47) + 8 * len(data)
@@ -136,7 +141,7 @@ class BusMonitor(can.Listener):
         self._lock = threading.Lock()
         self._recent: deque[tuple[float, int]] = deque()  # (time, bits)
         #: (arrival, frame) not counted yet; a frame is a Message or (id, data, is_extended)
-        self._inbox: deque[tuple[float, Any]] = deque()
+        self._inbox: deque[tuple[float, _Frame]] = deque()
         self._frames_total = 0
         self._bits_total = 0.0
 
@@ -259,7 +264,8 @@ class Connection:
         self.monitor = BusMonitor()
         self.health = BusHealth(bus)
         self.network = PacedNetwork(bus)
-        self.network.listeners = [dispatcher(self.network, self.monitor, self.health)]
+        # canopen infers list[MessageListener]; can.Notifier takes any callable of a Message
+        self.network.listeners = [dispatcher(self.network, self.monitor, self.health)]  # type: ignore[list-item]
         if owns_bus and hasattr(bus, "rx_direct"):  # the hub client: data frames without
             bus.rx_direct = direct_dispatcher(self.network, self.monitor)  # a Message each
         self.network.NOTIFIER_CYCLE = 0.1
@@ -295,10 +301,11 @@ def acquire(
             conn = Connection(bus, owns_bus=True, bitrate=bitrate)
             _registry[id(bus)] = conn
         else:
-            conn = _registry.get(id(bus))
-            if conn is None or conn.bus is not bus:
-                conn = Connection(bus, owns_bus=False, bitrate=bitrate)
-                _registry[id(bus)] = conn
+            known = _registry.get(id(bus))
+            if known is None or known.bus is not bus:
+                known = Connection(bus, owns_bus=False, bitrate=bitrate)
+                _registry[id(bus)] = known
+            conn = known
         conn.refs += 1
         if conn.bitrate is None:
             conn.bitrate = bitrate or _guess_bitrate(bus)

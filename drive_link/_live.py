@@ -19,11 +19,12 @@ import struct
 import threading
 import time
 from collections import deque
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
 import canopen
 import numpy as np
+from canopen.pdo import PdoVariable
 
 from ._connection import BusMonitor
 from ._objects import ObjectTable
@@ -123,14 +124,17 @@ def read_tpdo_configs(node: canopen.RemoteNode, table: ObjectTable) -> list[Tpdo
     objects on the bus thread, up to 1 kHz per TPDO; :class:`LiveStreams` decodes into numpy).
     """
     out = []
-    for number, pdo_map in sorted(node.tpdo.map.items()):
+    maps = node.tpdo.map
+    assert maps is not None  # canopen's TPDO() builds its maps
+    for number, pdo_map in sorted(maps.items()):
         mapped: list[tuple[int, int, int]] = []
-        add_variable = pdo_map.add_variable
+        add_variable: Callable[[int, int, int | None], PdoVariable] = pdo_map.add_variable
 
         def record(
             index: int, subindex: int = 0, length: int | None = None,
-            _add=add_variable, _mapped=mapped,
-        ):  # fmt: skip
+            _add: Callable[[int, int, int | None], PdoVariable] = add_variable,
+            _mapped: list[tuple[int, int, int]] = mapped,
+        ) -> PdoVariable:  # fmt: skip
             _mapped.append((index, subindex, length or 0))
             return _add(index, subindex, length)
 

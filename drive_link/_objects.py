@@ -180,7 +180,7 @@ class ObjectInfo:
     def encode(self, value: float | int | str | bytes) -> bytes:
         """Bytes on the wire for ``value`` (checked first; canopen's ``encode_raw``)."""
         v = self.check(value)
-        if not self.fmt and not isinstance(v, str):
+        if not self.fmt and isinstance(v, bytes | int):  # (never a float: REAL32 has a format)
             return bytes(v)
         return bytes(self.var.encode_raw(v))
 
@@ -189,13 +189,15 @@ class ObjectInfo:
         ``decode_raw`` after fitting the length: an expedited upload may carry fewer bytes
         than the type (sign-extended here) or the 4 bytes of an unspecified size)."""
         if not self.fmt:
-            return self.var.decode_raw(bytes(data))
+            raw = self.var.decode_raw(bytes(data))  # str, or the bytes as they are
+            return bytes(raw) if isinstance(raw, bytearray) else raw  # (canopen declares it)
         size = struct.calcsize(self.fmt)
         data = bytes(data[:size])
         if len(data) < size:
             negative = bool(data) and self.data_type in _SIGNED_TYPES and data[-1] & 0x80
             data += (b"\xff" if negative else b"\x00") * (size - len(data))
-        return self.var.decode_raw(data)
+        value = self.var.decode_raw(data)  # a struct type unpacks to a number
+        return bytes(value) if isinstance(value, bytearray) else value
 
 
 class ObjectTable:
@@ -212,11 +214,7 @@ class ObjectTable:
         """Table of every entry of :func:`firmware_protocol.load_od` (the shipped EDS)."""
         view = load_od(node_id=node_id)
         od = view.canopen_od()
-        objects = [
-            ObjectInfo(e, od[e.index] if e.object_name == e.name else od[e.index][e.subindex])
-            for e in view.entries
-        ]
-        return cls(objects, od)
+        return cls([ObjectInfo(e, _od_variable(od, e)) for e in view.entries], od)
 
     def __contains__(self, name: object) -> bool:
         return name in self._by_name
@@ -244,6 +242,17 @@ class ObjectTable:
     def by_index(self, index: int, subindex: int = 0) -> ObjectInfo | None:
         """The object at ``index``:``subindex`` or None."""
         return self._by_index.get((index, subindex))
+
+
+def _od_variable(od: canopen.ObjectDictionary, e: Entry) -> ODVariable:
+    """canopen's variable of ``e``: the object itself, or its sub-object in a record/array."""
+    obj = od[e.index]
+    if e.object_name == e.name:
+        if isinstance(obj, ODVariable):
+            return obj
+    elif not isinstance(obj, ODVariable):
+        return obj[e.subindex]
+    raise TypeError(f"{e.name}: the EDS and canopen's dictionary disagree on 0x{e.index:04X}")
 
 
 @lru_cache(maxsize=1)
