@@ -93,7 +93,7 @@ def renderer_pids(page: Any) -> list[int]:
     return [p["id"] for p in info if p["type"] == "renderer"]
 
 
-def stop_process(proc: subprocess.Popen, timeout: float = 10.0) -> None:
+def stop_process(proc: subprocess.Popen[Any], timeout: float = 10.0) -> None:
     """SIGTERM, wait up to ``timeout`` s, then SIGKILL."""
     if proc.poll() is None:
         proc.terminate()
@@ -109,7 +109,7 @@ class Dashboard(NamedTuple):
 
     gui_url: str
     api_url: str
-    proc: subprocess.Popen
+    proc: subprocess.Popen[str]
 
 
 @contextlib.contextmanager

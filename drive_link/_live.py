@@ -21,6 +21,7 @@ import time
 from collections import deque
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
+from typing import Any
 
 import canopen
 import numpy as np
@@ -404,11 +405,11 @@ class LiveStreams:
         return out
 
     @property
-    def stats(self) -> dict:
+    def stats(self) -> dict[str, Any]:
         """Counters: per TPDO frames, dropped (estimated from cadence gaps), rate_hz (measured,
         last second), expected_hz; totals; bus frames/s and bus load (fraction of bitrate)."""
         now = time.monotonic()
-        per: dict[str, dict] = {}
+        per: dict[str, dict[str, Any]] = {}
         with self._lock:
             self._decode_all()
             for s in self._streams.values():
@@ -423,7 +424,7 @@ class LiveStreams:
                     "rate_hz": float(in_last_s),
                     "expected_hz": 1000.0 / s.cfg.event_timer_ms if s.cfg.event_timer_ms else None,
                 }
-        out: dict = {
+        out: dict[str, Any] = {
             "tpdo": per,
             "frames": sum(p["frames"] for p in per.values()),
             "dropped": sum(p["dropped"] for p in per.values()),

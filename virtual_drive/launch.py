@@ -34,7 +34,7 @@ if TYPE_CHECKING:
 __all__ = ["BusSettings", "HubProcess", "parse_nodes", "virtual_bench"]
 
 
-class BusSettings(dict):
+class BusSettings(dict[str, Any]):
     """python-can bus settings of a started bench (``can.Bus(**settings)``,
     ``Drive.connect(node_id=N, **settings)``), plus what was started:
 
