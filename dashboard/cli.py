@@ -14,7 +14,7 @@ import os
 import socket
 import sys
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, NoReturn
 
 from dashboard.config import BenchConfig
 from drive_link.cli_connect import add_bus_arguments, bus_extras_from_args
@@ -29,11 +29,11 @@ __all__ = ["build_parser", "main"]
 class _Parser(argparse.ArgumentParser):
     """One-line usage errors (exit 2); an option is spelled in full (no abbreviations)."""
 
-    def __init__(self, *a: object, **kw: object) -> None:
+    def __init__(self, *a: Any, **kw: Any) -> None:
         kw.setdefault("allow_abbrev", False)
-        super().__init__(*a, **kw)  # type: ignore[arg-type]
+        super().__init__(*a, **kw)
 
-    def error(self, message: str) -> None:  # type: ignore[override]
+    def error(self, message: str) -> NoReturn:
         self.exit(2, f"{self.prog}: error: {message}\n")
 
 
