@@ -10,7 +10,7 @@ from fastapi import APIRouter, Depends, Header, HTTPException, Query, Request, R
 
 from dashboard import _experiments as experiments
 from dashboard import _tuning as tuning
-from dashboard._bench import Bench
+from dashboard._bench import Bench, Capture
 from dashboard._errors import http_error
 from dashboard._export import capture_csv, capture_png
 from dashboard._models import (
@@ -29,6 +29,7 @@ from dashboard._models import (
     SpeedStepIn,
     TraceIn,
 )
+from dashboard._nodes import Nodes
 from dashboard._security import LeaseError
 from drive_link import jsonable
 from drive_link.errors import NodeNotFound
@@ -74,9 +75,10 @@ def get_bench(
 ) -> Bench:
     """The bench of ``?node=N`` (opened on first use; 404 for a node not seen on the bus or
     that does not answer), else the bench's own node."""
-    nodes = getattr(request.app.state, "nodes", None)
+    nodes: Nodes | None = getattr(request.app.state, "nodes", None)
     if nodes is None or node is None:
-        return request.app.state.bench
+        bench: Bench = request.app.state.bench
+        return bench
     try:
         return nodes.get(node)
     except NodeNotFound as exc:
@@ -130,7 +132,7 @@ def run(fn: Callable[[], T]) -> T:
 def get_nodes(request: Request) -> list[dict[str, Any]]:
     """Every other route takes ``?node=N`` (default: the bench's own node); each node has its
     own state, captures and control lease."""
-    return jsonable(request.app.state.nodes.listing())
+    return jsonable(_nodes(request).listing())
 
 
 @router.post(
@@ -140,7 +142,8 @@ def get_nodes(request: Request) -> list[dict[str, Any]]:
     dependencies=[NoBody],
 )
 def post_nodes_scan(request: Request) -> list[dict[str, Any]]:
-    return jsonable(run(lambda: request.app.state.nodes.scan()))
+    nodes = _nodes(request)
+    return jsonable(run(lambda: nodes.scan()))
 
 
 # ------------------------------------------------------------------ state and control
@@ -163,9 +166,7 @@ def post_control(body: ControlIn, bench: BenchDep) -> ControlOut:
     return ControlOut(token=h.token, client=h.client, since=h.since)
 
 
-@router.delete(
-    "/control", tags=["control"], summary="Give control back", dependencies=[NoBody]
-)
+@router.delete("/control", tags=["control"], summary="Give control back", dependencies=[NoBody])
 def delete_control(
     bench: BenchDep, x_control_token: Annotated[str | None, Header()] = None
 ) -> ControlOut:
@@ -372,7 +373,13 @@ def post_identify(body: IdentifyIn, bench: ControlDep) -> dict[str, Any]:
     return jsonable(run(lambda: experiments.identify(bench, body)))
 
 
-def _capture(bench: Bench, cap_id: int):
+def _nodes(request: Request) -> Nodes:
+    """The app's nodes (``app.state`` is untyped; the lifespan in app.py sets them)."""
+    nodes: Nodes = request.app.state.nodes
+    return nodes
+
+
+def _capture(bench: Bench, cap_id: int) -> Capture:
     cap = bench.captures.get(cap_id)
     if cap is None:
         raise HTTPException(404, f"no capture {cap_id}")

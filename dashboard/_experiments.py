@@ -64,10 +64,11 @@ def capture(bench: Bench, body: TraceIn) -> Capture:
         edge=body.trigger_edge,
     )
     action = None
-    if body.trigger == "setpoint_step" and body.step_to_A is not None:
+    step_to_A = body.step_to_A
+    if body.trigger == "setpoint_step" and step_to_A is not None:
 
         def action() -> None:
-            bench.set_current(body.step_to_A)
+            bench.set_current(step_to_A)
 
     sf = _speed_factor(bench)
     deadline = 10.0 + 4.0 * body.length * body.divider * TS / sf

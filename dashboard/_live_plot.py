@@ -10,6 +10,7 @@ import math
 import time
 
 import numpy as np
+import numpy.typing as npt
 
 __all__ = ["STALE_AFTER_S", "data_age_s", "decimate", "freshness_text", "min_span_envelope"]
 
@@ -38,7 +39,9 @@ def decimate(
     keep = [np.array([0, n - 1]), ends - 1]
     lengths = ends - starts
     width = int(lengths.max())
-    grid = pad = seg = None
+    grid: np.ndarray | None = None  # per bucket, one row of sample indices (padded)
+    pad: np.ndarray | None = None  # True where a row runs past its bucket's end
+    seg: npt.NDArray[np.intp] | None = None  # each sample's bucket number
     if width * len(starts) <= 2 * n:  # buckets of similar length: one padded row each
         grid = starts[:, None] + np.arange(width)
         pad = grid >= ends[:, None]
@@ -48,13 +51,13 @@ def decimate(
     for c in cols:
         ok = np.isfinite(c)
         finite = c if ok.all() else np.where(ok, c, np.nanmean(c) if ok.any() else 0.0)
-        if grid is not None:  # argmin/argmax give the first extremum of each row
+        if grid is not None and pad is not None:  # argmin/argmax: first extremum of each row
             rows = finite[grid]
             rows[pad] = np.inf
             keep.append(starts + rows.argmin(axis=1))
             rows[pad] = -np.inf
             keep.append(starts + rows.argmax(axis=1))
-        else:
+        elif seg is not None:
             keep.append(starts + _argext(finite, starts, seg, np.minimum))
             keep.append(starts + _argext(finite, starts, seg, np.maximum))
     mask = np.zeros(n, dtype=bool)  # sorted and unique, without np.unique's sort
@@ -63,7 +66,9 @@ def decimate(
     return t[idx], [c[idx] for c in cols]
 
 
-def _argext(v: np.ndarray, starts: np.ndarray, seg: np.ndarray, ufunc) -> np.ndarray:
+def _argext(
+    v: np.ndarray, starts: npt.NDArray[np.intp], seg: npt.NDArray[np.intp], ufunc: np.ufunc
+) -> npt.NDArray[np.intp]:
     """Per segment (``seg``: each sample's segment number, segments starting at ``starts``) the
     index of its first min (ufunc=np.minimum) or max, relative to its start (vectorised: no
     Python loop over the segments; every segment holds its extremum, so each has a hit)."""

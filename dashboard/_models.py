@@ -158,14 +158,16 @@ class Strict(BaseModel):
 
 
 class ControlIn(Strict):
-    client: str = Field("script", min_length=1, max_length=64, description="display name")
-    take_over: bool = Field(False, description="take control from the present holder (visible)")
+    client: str = Field(default="script", min_length=1, max_length=64, description="display name")
+    take_over: bool = Field(
+        default=False, description="take control from the present holder (visible)"
+    )
 
 
 class ControlOut(BaseModel):
     token: str | None = None
     client: str | None
-    since: float | None = Field(None, description="UNIX s")
+    since: float | None = Field(default=None, description="UNIX s")
 
 
 class CommandIn(Strict):
@@ -205,8 +207,7 @@ class SequenceIn(Strict):
 
 
 class LoadIn(Strict):
-    T_load: float = od_field("sim_load.T_load", description="load torque step (virtual drive)"
-    )
+    T_load: float = od_field("sim_load.T_load", description="load torque step (virtual drive)")
 
 
 class GainsIn(Strict):
@@ -226,7 +227,7 @@ class GainsIn(Strict):
     speed_k_i: float | None = od_field("gain_set.speed_k_i", None, description="IP k_i")
     speed_current_limit: float | None = od_field("gain_set.speed_current_limit", None)
     force: bool = Field(
-        False,
+        default=False,
         description="apply a stable set that fails the margin rule (L_c ≤ 1.5 L, GM ≥ 2 dB, "
         "‖S‖∞ ≤ 5); an unstable set is refused regardless",
     )
@@ -247,14 +248,16 @@ class GainsIn(Strict):
 
 
 class IPDesignIn(Strict):
-    xi: float = Field(1.0, gt=0, le=10, description="damping ratio ξ")
+    xi: float = Field(default=1.0, gt=0, le=10, description="damping ratio ξ")
     omega_n: float = unit_field(
         2.3, unit="rad/s", gt=0, le=1000, description="natural frequency ω_n, rad/s"
     )
     a: float | None = Field(
-        None, gt=0, lt=1, description="identified pole a; default: last identified"
+        default=None, gt=0, lt=1, description="identified pole a; default: last identified"
     )
-    b: float | None = Field(None, gt=0, le=1, description="identified gain b, rpm/(A·sample)")
+    b: float | None = Field(
+        default=None, gt=0, le=1, description="identified gain b, rpm/(A·sample)"
+    )
 
 
 class CurrentStepIn(Strict):
@@ -267,7 +270,7 @@ class CurrentStepIn(Strict):
 
 class TraceIn(Strict):
     channels: list[str] = Field(
-        ["measurements.i_p", "measurements.i_p_ref"],
+        default=["measurements.i_p", "measurements.i_p_ref"],
         min_length=1,
         max_length=int(load_od().entry("trace_config.channel_count").high or 8),
     )
@@ -277,12 +280,16 @@ class TraceIn(Strict):
     length: int = od_field("trace_config.length", 1000, ge=2, description="samples per channel")
     pre_trigger: int = od_field("trace_config.pre_trigger", 100)
     trigger: Literal["immediate", "setpoint_step", "signal", "fault"] = "immediate"
-    trigger_level: float | None = Field(None, description="trigger level in the source's unit")
+    trigger_level: float | None = Field(
+        default=None, description="trigger level in the source's unit"
+    )
     trigger_edge: Literal["rising", "falling", "either"] = "rising"
     step_to_A: float | None = od_field(
         "setpoints.i_p_ref", None, description="with trigger=setpoint_step: i_p* to step to"
     )
-    average_samples: int = Field(5, ge=1, le=1000, description="moving-average window for ī_p")
+    average_samples: int = Field(
+        default=5, ge=1, le=1000, description="moving-average window for ī_p"
+    )
 
     @model_validator(mode="after")
     def _fits(self) -> TraceIn:
@@ -327,5 +334,5 @@ class Margins(BaseModel):
     stable: bool
     gain_margin_dB: float | None
     phase_margin_deg: float | None
-    S_inf: float | None = Field(None, description="‖S‖∞, sensitivity peak")
+    S_inf: float | None = Field(default=None, description="‖S‖∞, sensitivity peak")
     poles: list[list[float]] = Field(default_factory=list, description="closed-loop poles [re, im]")

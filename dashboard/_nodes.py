@@ -72,8 +72,11 @@ class Nodes:
         rows = []
         for node in self.ids():
             heard = self._heard.get(node)
-            age = now - heard[1] if heard else None
-            nmt = None if heard is None else ("OFFLINE" if age > OFFLINE_AFTER_S else heard[0])
+            age: float | None = None
+            nmt: str | None = None
+            if heard is not None:
+                age = now - heard[1]
+                nmt = "OFFLINE" if age > OFFLINE_AFTER_S else heard[0]
             row: dict[str, Any] = {
                 "node_id": node,
                 "nmt_state": nmt,

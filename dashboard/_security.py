@@ -13,6 +13,7 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 from urllib.parse import urlsplit
 
 from dashboard.config import is_loopback
@@ -42,7 +43,7 @@ class Holder:
     client: str
     since: float
 
-    def public(self) -> dict:
+    def public(self) -> dict[str, Any]:
         """The holder without its secret."""
         return {"client": self.client, "since": self.since}
 
@@ -54,7 +55,7 @@ class ControlLease:
         self._lock = threading.Lock()
         self._holder: Holder | None = None
         self._callbacks: list[Callable[[Holder | None, Holder | None], None]] = []
-        self.events: list[dict] = []
+        self.events: list[dict[str, Any]] = []
 
     @property
     def holder(self) -> Holder | None:

@@ -10,6 +10,7 @@ from __future__ import annotations
 import asyncio
 import json
 import time
+from typing import Any
 
 import numpy as np
 from fastapi import APIRouter, WebSocket, WebSocketDisconnect
@@ -77,7 +78,7 @@ async def stream(ws: WebSocket) -> None:
             new = t > last_t
             if new.any():
                 last_t = float(t[new][-1])
-                msg = {"type": "live"}
+                msg: dict[str, Any] = {"type": "live"}
                 msg.update({k: np.asarray(v)[new] for k, v in w.items()})
                 await ws.send_text(json.dumps(jsonable(msg)))
             if tick % per_state == 0:

@@ -13,9 +13,13 @@ from __future__ import annotations
 import contextlib
 import time
 from collections.abc import Iterator
+from typing import TYPE_CHECKING
 
 from dashboard._bench import Bench
 from dashboard.config import BenchConfig
+
+if TYPE_CHECKING:
+    from drive_link import Drive
 
 __all__ = ["open_bench"]
 
@@ -76,7 +80,7 @@ def _virtual_bus(config: BenchConfig) -> Iterator[int]:
         yield bus.port
 
 
-def _wait_operational(drive, timeout: float = 2.0) -> None:
+def _wait_operational(drive: Drive, timeout: float = 2.0) -> None:
     deadline = time.monotonic() + timeout
     while drive.nmt_state != "OPERATIONAL":
         if time.monotonic() > deadline:

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import contextlib
 import math
-from collections.abc import AsyncIterator, Callable
+from collections.abc import AsyncIterator, Awaitable, Callable
 from importlib import resources
 from typing import Any
 
-from fastapi import FastAPI, Request
+from fastapi import FastAPI, Request, Response
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import HTMLResponse, JSONResponse, RedirectResponse
 from starlette.concurrency import run_in_threadpool
@@ -93,7 +93,9 @@ def create_app(
         return JSONResponse({"detail": jsonable(_safe_errors(exc.errors()))}, status_code=422)
 
     @app.middleware("http")
-    async def guard(request: Request, call_next: Any):
+    async def guard(
+        request: Request, call_next: Callable[[Request], Awaitable[Response]]
+    ) -> Response:
         path = request.url.path
         host = request.headers.get("host")
         if not host:
@@ -116,10 +118,7 @@ def create_app(
                 ctype = request.headers.get("content-type", "").split(";")[0].strip().lower()
                 if ctype != "application/json":
                     return JSONResponse(
-                        {
-                            "detail": "a request body must be JSON "
-                            "(Content-Type: application/json)"
-                        },
+                        {"detail": "a request body must be JSON (Content-Type: application/json)"},
                         status_code=415,
                     )
         return await call_next(request)

@@ -48,7 +48,8 @@ def free_port() -> int:
     """A TCP port that is free on 127.0.0.1 right now."""
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+        port: int = s.getsockname()[1]  # typeshed: the address is Any
+        return port
 
 
 def launch(playwright: Any) -> Any:
@@ -92,7 +93,7 @@ def renderer_pids(page: Any) -> list[int]:
     return [p["id"] for p in info if p["type"] == "renderer"]
 
 
-def stop_process(proc: subprocess.Popen, timeout: float = 10.0) -> None:
+def stop_process(proc: subprocess.Popen[Any], timeout: float = 10.0) -> None:
     """SIGTERM, wait up to ``timeout`` s, then SIGKILL."""
     if proc.poll() is None:
         proc.terminate()
@@ -108,7 +109,7 @@ class Dashboard(NamedTuple):
 
     gui_url: str
     api_url: str
-    proc: subprocess.Popen
+    proc: subprocess.Popen[str]
 
 
 @contextlib.contextmanager
@@ -123,6 +124,7 @@ def run_dashboard(args: Sequence[str], timeout: float = 60.0) -> Iterator[Dashbo
     cmd = [sys.executable, "-m", "dashboard.cli", *args, "--port", str(api_port)]
     cmd += ["--gui-port", "0"]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    assert proc.stdout is not None  # stdout=PIPE
     try:
         line = ""
         deadline = time.monotonic() + timeout

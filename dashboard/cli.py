@@ -14,10 +14,14 @@ import os
 import socket
 import sys
 from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any, NoReturn
 
 from dashboard.config import BenchConfig
 from drive_link.cli_connect import add_bus_arguments, bus_extras_from_args
 from drive_link.closed_pipe import run_quietly, silence_output
+
+if TYPE_CHECKING:
+    from fastapi import FastAPI
 
 __all__ = ["build_parser", "main"]
 
@@ -25,11 +29,11 @@ __all__ = ["build_parser", "main"]
 class _Parser(argparse.ArgumentParser):
     """One-line usage errors (exit 2); an option is spelled in full (no abbreviations)."""
 
-    def __init__(self, *a: object, **kw: object) -> None:
+    def __init__(self, *a: Any, **kw: Any) -> None:
         kw.setdefault("allow_abbrev", False)
-        super().__init__(*a, **kw)  # type: ignore[arg-type]
+        super().__init__(*a, **kw)
 
-    def error(self, message: str) -> None:  # type: ignore[override]
+    def error(self, message: str) -> NoReturn:
         self.exit(2, f"{self.prog}: error: {message}\n")
 
 
@@ -189,7 +193,7 @@ def _main(argv: Sequence[str] | None) -> int:
 
     from dashboard.app import create_app
 
-    def ready(app) -> None:
+    def ready(app: FastAPI) -> None:
         gui = app.state.gui
         api = f"http://{_url_host(config.host)}:{config.api_port}"
         try:
@@ -206,7 +210,7 @@ def _main(argv: Sequence[str] | None) -> int:
         """Prints the URLs once the REST port listens: the lifespan's startup runs before
         uvicorn binds, and a URL printed then was refused (UML lane, load 9)."""
 
-        async def startup(self, sockets=None) -> None:
+        async def startup(self, sockets: list[socket.socket] | None = None) -> None:
             await super().startup(sockets=sockets)
             if self.started:
                 ready(app)

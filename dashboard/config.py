@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import ipaddress
 from dataclasses import dataclass, field
+from typing import Any
 
 __all__ = ["LOOPBACK_HOSTS", "BenchConfig", "is_loopback"]
 
@@ -48,7 +49,7 @@ class BenchConfig:
     channel: str | None = None
     bitrate: int = 1_000_000
     #: python-can's other bus options for ``interface`` (fd, data_bitrate, timing, --bus-kwargs)
-    bus_options: dict = field(default_factory=dict)
+    bus_options: dict[str, Any] = field(default_factory=dict)
     node_id: int = 1
     #: with ``virtual``: node-IDs of the drives started on the hub (empty: ``node_id`` alone)
     nodes: tuple[int, ...] = ()

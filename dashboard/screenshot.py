@@ -15,8 +15,12 @@ import sys
 import time
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from dashboard.browser import click, dismiss_notifications, launch, open_bench, run_dashboard
+
+if TYPE_CHECKING:
+    from playwright.sync_api import Page
 
 __all__ = ["SCROLL_TOP", "VIEWPORT", "main", "take"]
 
@@ -26,7 +30,7 @@ SCROLL_TOP = (
 )
 
 
-def _wait_speed(page, target: float, tol: float = 5.0, timeout: float = 30.0) -> float:
+def _wait_speed(page: Page, target: float, tol: float = 5.0, timeout: float = 30.0) -> float:
     """Wait until the status line shows the speed within ``tol`` rpm of ``target``; returns it
     (rpm)."""
     deadline = time.monotonic() + timeout

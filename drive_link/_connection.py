@@ -106,7 +106,12 @@ class PacedNetwork(canopen.Network):
         self.check()
 
 
-def _frame_bits(msg: can.Message | tuple[int, bytes, bool]) -> int:
+#: a received frame as the monitor queues it: a Message, or a data frame as
+#: (CAN-ID, data, is_extended) from the hub's direct path
+_Frame = can.Message | tuple[int, bytes, bool]
+
+
+def _frame_bits(msg: _Frame) -> int:
     """Bits ``msg`` occupied on the wire (exact stuffing; :mod:`firmware_protocol.can_bits`).
     A CAN FD frame counts its classical-frame length (47/67 + 8·n, no stuffing). ``msg`` may
     also be a data frame as (CAN-ID, data, is_extended) (:meth:`BusMonitor.on_frame`)."""
@@ -136,7 +141,7 @@ class BusMonitor(can.Listener):
         self._lock = threading.Lock()
         self._recent: deque[tuple[float, int]] = deque()  # (time, bits)
         #: (arrival, frame) not counted yet; a frame is a Message or (id, data, is_extended)
-        self._inbox: deque[tuple[float, Any]] = deque()
+        self._inbox: deque[tuple[float, _Frame]] = deque()
         self._frames_total = 0
         self._bits_total = 0.0
 

@@ -14,15 +14,32 @@ Everything else is returned as it is.
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, TypeVar, overload
 
 import numpy as np
 
 __all__ = ["jsonable"]
 
+_K = TypeVar("_K")
+_V = TypeVar("_V")
+_T = TypeVar("_T")
 
-def jsonable(x: Any) -> Any:
-    """``x`` with every part JSON-safe (see the module doc)."""
+
+# Generic overloads: a dict or list whose items are ``Any`` still gets its precise return type
+# (with a plain ``object`` fallback, mypy would call the call ambiguous and return ``Any``).
+@overload
+def jsonable(x: dict[_K, _V]) -> dict[str, Any]: ...
+@overload
+def jsonable(x: list[_T]) -> list[Any]: ...
+@overload
+def jsonable(x: tuple[_T, ...]) -> list[Any]: ...
+@overload
+def jsonable(x: _T) -> Any: ...
+
+
+def jsonable(x: object) -> Any:
+    """``x`` with every part JSON-safe (see the module doc): a ``dict`` comes back as a
+    ``dict`` with ``str`` keys, a list or tuple as a ``list``."""
     if isinstance(x, dict):
         return {str(k): jsonable(v) for k, v in x.items()}
     if isinstance(x, list | tuple):

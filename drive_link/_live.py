@@ -19,11 +19,13 @@ import struct
 import threading
 import time
 from collections import deque
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
+from typing import Any
 
 import canopen
 import numpy as np
+from canopen.pdo import PdoVariable
 
 from ._connection import BusMonitor
 from ._objects import ObjectTable
@@ -128,12 +130,13 @@ def read_tpdo_configs(node: canopen.RemoteNode, table: ObjectTable) -> list[Tpdo
         raise TypeError("the node has no TPDO maps")
     for number, pdo_map in sorted(maps.items()):
         mapped: list[tuple[int, int, int]] = []
-        add_variable = pdo_map.add_variable
+        add_variable: Callable[[int, int, int | None], PdoVariable] = pdo_map.add_variable
 
         def record(
             index: int, subindex: int = 0, length: int | None = None,
-            _add=add_variable, _mapped=mapped,
-        ):  # fmt: skip
+            _add: Callable[[int, int, int | None], PdoVariable] = add_variable,
+            _mapped: list[tuple[int, int, int]] = mapped,
+        ) -> PdoVariable:  # fmt: skip
             _mapped.append((index, subindex, length or 0))
             return _add(index, subindex, length)
 
@@ -403,11 +406,11 @@ class LiveStreams:
         return out
 
     @property
-    def stats(self) -> dict:
+    def stats(self) -> dict[str, Any]:
         """Counters: per TPDO frames, dropped (estimated from cadence gaps), rate_hz (measured,
         last second), expected_hz; totals; bus frames/s and bus load (fraction of bitrate)."""
         now = time.monotonic()
-        per: dict[str, dict] = {}
+        per: dict[str, dict[str, Any]] = {}
         with self._lock:
             self._decode_all()
             for s in self._streams.values():
@@ -422,7 +425,7 @@ class LiveStreams:
                     "rate_hz": float(in_last_s),
                     "expected_hz": 1000.0 / s.cfg.event_timer_ms if s.cfg.event_timer_ms else None,
                 }
-        out: dict = {
+        out: dict[str, Any] = {
             "tpdo": per,
             "frames": sum(p["frames"] for p in per.values()),
             "dropped": sum(p["dropped"] for p in per.values()),

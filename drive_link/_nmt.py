@@ -126,14 +126,14 @@ class HeartbeatMonitor:
         self.boot_count = 0
         self.count = 0
         self.arrivals: deque[float] = deque(maxlen=256)  # monotonic times of recent heartbeats
-        self._read: Callable[[str], object] | None = None
+        self._read: Callable[[str], float | int | str | bytes] | None = None
         self._fallback: tuple[float, str] | None = None  # (monotonic time, state) without heartbeat
         self._pdo_cobs = tuple(base + node_id for base in (0x180, 0x280, 0x380, 0x480))
         network.subscribe(self.cob_id, self._on_frame)
         for cob in self._pdo_cobs:
             network.subscribe(cob, self._on_pdo)
 
-    def attach_reader(self, read: Callable[[str], object]) -> None:
+    def attach_reader(self, read: Callable[[str], float | int | str | bytes]) -> None:
         """Let the monitor read objects by name (``Drive.read``): 0x1017 for the first-heartbeat
         wait and device_type as the "answers SDO" probe."""
         self._read = read
@@ -191,7 +191,7 @@ class HeartbeatMonitor:
             return
         try:
             ms = self._read("producer_heartbeat_time")
-            self.producer_time = int(ms) / 1000.0  # type: ignore[call-overload]
+            self.producer_time = int(ms) / 1000.0
         except (DriveError, KeyError, ValueError, TypeError):
             pass
 

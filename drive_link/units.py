@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 import re
 from functools import lru_cache
-from typing import TYPE_CHECKING, Any, cast
+from typing import TYPE_CHECKING, Any
 
 from .errors import InvalidValue
 
@@ -198,7 +198,15 @@ def parse_for(obj: ObjectInfo | str, text: str | float | int) -> float | int | s
     if obj.enum and isinstance(text, str):
         for v, label in obj.enum:
             if text.strip().lower() == str(label).lower():
-                return cast("float | int", obj.check(v))  # an enumerated object: an integer
+                return _number(obj, v)  # an enumerated object: an integer
     integer = not obj.is_float
     value = parse_value(text, obj.unit, integer=integer, name=obj.name)
-    return cast("float | int", obj.check(value))  # an object with a struct format: a number
+    return _number(obj, value)
+
+
+def _number(obj: ObjectInfo, value: float | int) -> float | int:
+    """``value`` checked by ``obj`` (an object with a struct format: a number comes back)."""
+    checked = obj.check(value)
+    if isinstance(checked, str | bytes):
+        raise TypeError(f"{obj.name}: {checked!r} is no number")  # (not for a struct format)
+    return checked

@@ -12,7 +12,7 @@ delimiter 2, EOF 7, plus the 3-bit intermission: 47 + 8·n bits, a lower bound o
 
 from __future__ import annotations
 
-from firmware_protocol import load_od
+from firmware_protocol import ObjectDictionaryView, load_od
 
 __all__ = ["WARN_LOAD", "default_tpdo_bits_per_s", "offered_load", "overload_warning"]
 
@@ -28,17 +28,25 @@ def default_tpdo_bits_per_s() -> float:
     view = load_od(node_id=1)
     bits = 0.0
     for k in range(1, _N_TPDO + 1):
-        cob_id = int(view.entry(f"tpdo{k}_communication.cob_id").default)
-        timer_ms = int(view.entry(f"tpdo{k}_communication.event_timer").default)
+        cob_id = _int_default(view, f"tpdo{k}_communication.cob_id")
+        timer_ms = _int_default(view, f"tpdo{k}_communication.event_timer")
         if cob_id & 0x8000_0000 or timer_ms <= 0:
             continue  # not valid, or not sent periodically
-        count = int(view.entry(f"tpdo{k}_mapping.number_of_mapped_objects").default)
+        count = _int_default(view, f"tpdo{k}_mapping.number_of_mapped_objects")
         data_bits = sum(
-            int(view.entry(f"tpdo{k}_mapping.mapped_object_{j}").default) & 0xFF
+            _int_default(view, f"tpdo{k}_mapping.mapped_object_{j}") & 0xFF
             for j in range(1, count + 1)
         )
         bits += (47 + 8 * ((data_bits + 7) // 8)) * 1000.0 / timer_ms
     return bits
+
+
+def _int_default(view: ObjectDictionaryView, name: str) -> int:
+    """The EDS default of ``name`` as an integer (TypeError if the EDS gives none)."""
+    value = view.entry(name).default
+    if value is None:
+        raise TypeError(f"{name} has no EDS default")
+    return int(value)
 
 
 def offered_load(n_nodes: int, bitrate: float) -> float:

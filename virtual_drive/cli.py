@@ -12,6 +12,7 @@ import importlib
 import os
 import sys
 from collections.abc import Sequence
+from typing import Any, NoReturn
 
 __all__ = ["build_parser", "main"]
 
@@ -27,11 +28,11 @@ class _OneLineErrorParser(argparse.ArgumentParser):
     """Reports bad arguments as one line on stderr and exit status 2; no abbreviated options
     (the sub-parsers are of this class too)."""
 
-    def __init__(self, *a: object, **kw: object) -> None:
+    def __init__(self, *a: Any, **kw: Any) -> None:
         kw.setdefault("allow_abbrev", False)
-        super().__init__(*a, **kw)  # type: ignore[arg-type]
+        super().__init__(*a, **kw)
 
-    def error(self, message: str) -> None:  # type: ignore[override]
+    def error(self, message: str) -> NoReturn:
         self.exit(2, f"{self.prog}: error: {message}\n")
 
 

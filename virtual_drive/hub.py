@@ -35,6 +35,7 @@ import socket
 import threading
 import time
 from dataclasses import dataclass
+from typing import Any
 
 from virtual_drive.hub_bus import CLOSED, RAW, WAIT_MODE, WAIT_OPEN, Bus, Client, HubCounters
 from virtual_drive.hub_faults import FaultInjection
@@ -235,7 +236,7 @@ class Hub:
             bus_busy_s=frames.busy_s,
         )
 
-    def join_kwargs(self, channel: str = "vcan0", tcp_tune: bool = True) -> dict:
+    def join_kwargs(self, channel: str = "vcan0", tcp_tune: bool = True) -> dict[str, Any]:
         """Keyword arguments for ``can.Bus(**hub.join_kwargs())`` to join this hub."""
         return {
             "interface": "socketcand",

@@ -69,7 +69,7 @@ class Client:
         "state",
     )
 
-    def __init__(self, sock: socket.socket, peer: tuple) -> None:
+    def __init__(self, sock: socket.socket, peer: tuple[str, int]) -> None:
         self.sock = sock
         self.fd = sock.fileno()
         self.events = 0  # epoll events registered for it

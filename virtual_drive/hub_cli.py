@@ -17,7 +17,9 @@ from virtual_drive.stop_signal import StopSignal
 __all__ = ["add_parser", "run_hub_command"]
 
 
-def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+def add_parser(
+    subparsers: argparse._SubParsersAction[argparse.ArgumentParser],
+) -> argparse.ArgumentParser:
     """Register the ``hub`` sub-command on a ``virtual-drive`` argparse sub-parser set."""
     p = subparsers.add_parser(
         "hub",

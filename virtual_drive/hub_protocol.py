@@ -245,13 +245,13 @@ _BYTE_VALUES = {w.encode(): v for w, v in _BYTE_WORDS.items()}
 
 
 def _scan(
-    pattern: re.Pattern, chunk: bytes
-) -> tuple[list[tuple[re.Match, int, bytes, bool]], int]:
+    pattern: re.Pattern[bytes], chunk: bytes
+) -> tuple[list[tuple[re.Match[bytes], int, bytes, bool]], int]:
     """The leading matches of ``pattern`` in ``chunk`` (its last three groups: id, length,
     bytes) as ``(match, id, data, is_extended)``, and how many bytes they took; stops at the
     first element that does not match, or has an id out of range or a length that differs from
     its bytes."""
-    found: list[tuple[re.Match, int, bytes, bool]] = []
+    found: list[tuple[re.Match[bytes], int, bytes, bool]] = []
     pos = 0
     match = pattern.match
     get = _BYTE_VALUES.__getitem__

@@ -26,12 +26,15 @@ import tempfile
 import threading
 from collections.abc import Iterable, Iterator
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, TypedDict
+
+if TYPE_CHECKING:
+    from virtual_drive.node import VirtualDrive
 
 __all__ = ["BusSettings", "HubProcess", "parse_nodes", "virtual_bench"]
 
 
-class BusSettings(dict):
+class BusSettings(dict[str, Any]):
     """python-can bus settings of a started bench (``can.Bus(**settings)``,
     ``Drive.connect(node_id=N, **settings)``), plus what was started:
 
@@ -135,7 +138,9 @@ class HubProcess:
             start_new_session=True,
         )
         box: list[str] = []
-        reader = threading.Thread(target=lambda: box.append(self.proc.stdout.readline()))
+        out = self.proc.stdout
+        assert out is not None  # stdout=PIPE
+        reader = threading.Thread(target=lambda: box.append(out.readline()))
         reader.daemon = True
         reader.start()
         reader.join(timeout)
@@ -169,6 +174,15 @@ class HubProcess:
         if self.proc.stdout is not None:
             self.proc.stdout.close()
         self._err.close()
+
+
+class _Faults(TypedDict):
+    """The hub's fault injection, as :class:`~virtual_drive.hub.Hub` takes it."""
+
+    drop_rate: float
+    delay_s: float
+    jitter_s: float
+    seed: int
 
 
 @contextlib.contextmanager
@@ -214,7 +228,12 @@ def virtual_bench(
         settings = BusSettings()
         settings.drives = {}
         settings.stores = {n: Path(store_dir) / f"node{n}.json" for n in ids}
-        faults = {"drop_rate": drop_rate, "delay_s": delay_s, "jitter_s": jitter_s, "seed": seed}
+        faults: _Faults = {
+            "drop_rate": drop_rate,
+            "delay_s": delay_s,
+            "jitter_s": jitter_s,
+            "seed": seed,
+        }
         if hub_process:
             from virtual_drive.hub import Hub
 
@@ -329,7 +348,9 @@ def _stop_drives(settings: BusSettings) -> None:
 
 
 @contextlib.contextmanager
-def _drive_in_process(settings: BusSettings, node_id: int, store: Path, speed: float):
+def _drive_in_process(
+    settings: BusSettings, node_id: int, store: Path, speed: float
+) -> Iterator[VirtualDrive]:
     import can
 
     from virtual_drive.node import VirtualDrive

@@ -11,9 +11,15 @@ from __future__ import annotations
 
 import signal
 import time
+from collections.abc import Callable
 from types import FrameType
+from typing import Any
 
 __all__ = ["StopSignal"]
+
+
+#: a signal disposition as ``signal.signal`` returns and takes it (None: set outside Python)
+_Handler = Callable[[int, FrameType | None], Any] | int | signal.Handlers | None
 
 
 class StopSignal:
@@ -25,7 +31,7 @@ class StopSignal:
     def __init__(self, signals: tuple[signal.Signals, ...] = (signal.SIGINT, signal.SIGTERM)):
         self.signals = signals
         self.requested = False  #: set by the handler (an attribute store takes no lock)
-        self._previous: dict[signal.Signals, object] = {}
+        self._previous: dict[signal.Signals, _Handler] = {}
 
     def _on_signal(self, signum: int, frame: FrameType | None) -> None:
         self.requested = True
@@ -42,5 +48,5 @@ class StopSignal:
 
     def __exit__(self, *exc: object) -> None:
         for s, handler in self._previous.items():
-            signal.signal(s, handler)  # type: ignore[arg-type]
+            signal.signal(s, handler)
         self._previous = {}
