@@ -197,7 +197,7 @@ def counts() -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0], allow_abbrev=False)
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args(argv)
     c = counts()

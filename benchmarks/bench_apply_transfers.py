@@ -96,7 +96,7 @@ def apply(page: Any, value: str) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0], allow_abbrev=False)
     ap.add_argument("--browsers", default="1,3", help="browser counts to measure Apply with")
     args = ap.parse_args(argv)
     counts = [int(n) for n in args.browsers.split(",")]
