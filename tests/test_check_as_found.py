@@ -143,12 +143,12 @@ def test_store_restore_fails_on_a_drive_with_a_store_that_refuses_to_save(
     from canopen.sdo.exceptions import SdoAbortedError
 
     from drive_link import cli
-    from virtual_drive.node import parameters
+    from virtual_drive.node.parameters import ParameterSet
 
-    def refuse(d):
+    def refuse(self):
         raise SdoAbortedError(code)
 
-    monkeypatch.setattr(parameters, "save_parameters", refuse)  # the defect
+    monkeypatch.setattr(ParameterSet, "save", refuse)  # the defect
     rc = cli.main(["check", "--interface", "virtual", "--channel", stored_drive,
                    "--only", "store_restore", "--json"])  # fmt: skip
     (r,) = json.loads(capsys.readouterr().out)

@@ -1,7 +1,7 @@
 """Gain sets and current limits: the staged set 0x20F0 applied at one sample by 0x20F1.
 
-:func:`apply_gain_set` checks the staged set as a whole, against itself: each value in the range
-of the object it becomes, then the cross-object rules (e.g. L_c < 2 motor.L), the IP and
+:meth:`GainSets.apply_gain_set` checks the staged set as a whole, against itself: each value in
+the range of the object it becomes, then the cross-object rules (e.g. L_c < 2 motor.L), the IP and
 current-loop admissibility rules and the cascade with all staged values in place (never one
 staged value against the other active ones, so e.g. predictive control with the back-EMF
 feed-forward is accepted as one set from deadbeat without it); then it applies the

@@ -68,13 +68,13 @@ class DriveLocalNode(LocalNode):
         #: ``(index, sub) -> getter`` of the objects computed on read (:meth:`bind`)
         self.live_getters: dict[tuple[int, int], Callable[[], Any]] = {}
         self.before_write: BeforeWrite = _no_check
-        self._catch_up: Callable[[], None] = lambda: None
+        self._catch_up: Callable[[], object] = lambda: None
 
     def bind(
         self,
         before_write: BeforeWrite,
         live_getters: dict[tuple[int, int], Callable[[], Any]],
-        catch_up: Callable[[], None],
+        catch_up: Callable[[], object],
     ) -> None:
         """Wire the node to the drive: its write checks, its live objects, and ``catch_up``
         (brings the simulation to now before a measurement is read)."""
