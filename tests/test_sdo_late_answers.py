@@ -32,8 +32,10 @@ def _upload_answer(value: float) -> bytes:
 
 
 class _ScriptedClient:
-    """Just what :mod:`drive_link._sdo_segmented` uses of canopen's ``SdoClient``: ``rx_cobid``,
-    ``responses`` and ``network.send_message``; ``script[k]`` = frames queued after the k-th
+    """Just what :mod:`drive_link._sdo_segmented` uses of its channel client
+    (:class:`drive_link._sdo_client.ChannelClient`, a canopen ``SdoClient``): ``rx_cobid``,
+    ``responses``, ``network.send_message``, the per-channel ``not_before``/``stale_answer`` and
+    an unsupervised node (no heartbeat watch); ``script[k]`` = frames queued after the k-th
     request."""
 
     rx_cobid = 0x601
@@ -43,6 +45,14 @@ class _ScriptedClient:
         self.script = script
         self.sent: list[bytes] = []
         self.network = self
+        self.not_before = 0.0
+        self.stale_answer: tuple[bytes, int] | None = None
+
+    def gone_at(self) -> float | None:
+        return None  # no heartbeat watch: requests wait their resends
+
+    def gone_reason(self) -> str:
+        return "heartbeat stopped"
 
     def send_message(self, can_id: int, data: bytes) -> None:
         self.sent.append(bytes(data))
