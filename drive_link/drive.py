@@ -16,9 +16,11 @@ from __future__ import annotations
 
 import threading
 import time
+from collections.abc import Callable
 from typing import Any, overload
 
 import can
+import canopen
 
 from firmware_protocol.cia301 import LOAD_SIGNATURE, SAVE_SIGNATURE
 from firmware_protocol.enums import ModeOfOperation
@@ -243,6 +245,12 @@ class Drive:
         """The python-can bus."""
         return self._conn.bus
 
+    @property
+    def network(self) -> canopen.Network:
+        """canopen's network on this drive's bus (shared by every drive on the bus): for a
+        master's own subscriptions and frames (NMT, SYNC, a raw listener)."""
+        return self._conn.network
+
     # ------------------------------------------------------------------ OD access
     def info(self, name: str) -> ObjectInfo:
         """Type, unit and limits of an object."""
@@ -341,7 +349,7 @@ class Drive:
         """Boot-ups / restarts of the drive noticed during this session."""
         return self.supervisor.boots_seen
 
-    def on_supervision(self, callback) -> None:
+    def on_supervision(self, callback: Callable[[dict[str, Any]], None]) -> None:
         """Call ``callback(event_dict)`` when a drive restart is noticed ("reboot_detected",
         "restart_suspected") and when the session's supervision was re-applied ("rearmed",
         "verified") or could not be ("rearm_failed"); see :mod:`drive_link.supervision`."""
@@ -480,7 +488,7 @@ class Drive:
         """EMCY messages received from this drive since connect, oldest first."""
         return self._emcy.history
 
-    def on_emcy(self, callback) -> None:
+    def on_emcy(self, callback: Callable[[Emcy], None]) -> None:
         """Call ``callback(Emcy)`` for every EMCY (runs on the bus thread: keep it short)."""
         self._emcy.subscribe(callback)
 

@@ -6,7 +6,9 @@
   the modules of any package at any depth, imports made only for the type checker included
   (``lint-imports`` on the command line runs the same contracts).
 - No module reaches into another object's private fields (``obj._x`` where ``obj`` is not
-  ``self``/``cls`` or an imported module), read from the source with :mod:`ast`.
+  ``self``/``cls`` or an imported module), read from the source with :mod:`ast`; the only
+  reaches left are into two libraries that have no public way to do what is needed
+  (:data:`LIBRARY_PRIVATES`, each with its reason).
 - No hand-written module is longer than 600 lines (the generated C header aside).
 """
 
@@ -23,6 +25,15 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("firmware_protocol", "virtual_drive", "drive_link", "dashboard")
 GENERATED = {"firmware_protocol/bldc_drive_od.h"}
 MAX_LINES = 600
+#: private names of libraries the project reaches, because the library has no public way
+LIBRARY_PRIVATES = {
+    "_actions": "argparse: a parser's list of actions (the shell's completion, the bus options)",
+    "_choices_actions": "argparse: a sub-parser group's commands (the shell's completion)",
+    "_negative_number_matcher": "argparse: let '-1e30' be a value, not an option",
+    "_parse_optional": "argparse: the strict parser (no abbreviations) overrides it",
+    "_get_value": "argparse: the strict parser's one-line value errors override it",
+    "_websock_server": "viser: its websocket server, to refuse share-URL tunnels",
+}
 
 
 def _sources(*suffixes: str) -> list[Path]:
@@ -67,7 +78,10 @@ def _reaches(path: Path) -> list[str]:
 
 def test_no_module_reaches_into_another_objects_private_fields():
     found = [r for p in _sources(".py") for r in _reaches(p)]
-    assert not found, f"{len(found)} private-field reaches:\n" + "\n".join(found)
+    ours = [r for r in found if r.rsplit(".", 1)[1] not in LIBRARY_PRIVATES]
+    assert not ours, f"{len(ours)} private-field reaches:\n" + "\n".join(ours)
+    used = {r.rsplit(".", 1)[1] for r in found}
+    assert used == set(LIBRARY_PRIVATES), f"no longer reached: {set(LIBRARY_PRIVATES) - used}"
 
 
 def test_no_hand_written_module_over_600_lines():

@@ -391,7 +391,7 @@ def item_sdo_transfers(d: Drive, opts: dict) -> tuple[str, Evidence]:
     present = d.sdo.upload(hb.index, hb.subindex, hb.name)
     d.sdo.download(hb.index, hb.subindex, present, hb.name)
     ev["expedited_download"] = len(present)
-    net = d._conn.network
+    net = d.network
     client = SdoClient(0x600 + d.node_id, 0x580 + d.node_id, canopen.ObjectDictionary())
     client.network = net
     client.RESPONSE_TIMEOUT = max(1.0, d.sdo.client.RESPONSE_TIMEOUT)
@@ -440,7 +440,7 @@ def _tries(fn: Callable[[], object], n: int = 4) -> None:
 def item_sync_pdo(d: Drive, opts: dict) -> tuple[str, Evidence]:
     """TPDO1 with transmission type 1 answers each SYNC on 0x1005's COB-ID once; RPDO1's
     target_velocity is in the object dictionary. Everything is put back."""
-    net = d._conn.network
+    net = d.network
     sync_id = int(d.read("cob_id_sync")) & 0x7FF if "cob_id_sync" in d.table else 0x080
     cob = int(d.read("tpdo1_communication.cob_id")) & 0x7FF
     ttype = int(d.read("tpdo1_communication.transmission_type"))

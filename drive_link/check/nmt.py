@@ -104,7 +104,7 @@ def _heartbeat_times(d: Drive, window: float) -> np.ndarray:
     busy host's late notifier thread does not bunch up; arrival times if a bus gives none."""
     stamps: list[float] = []
     arrivals: list[float] = []
-    network = d._conn.network
+    network = d.network
     cob = 0x700 + d.node_id
 
     def on_frame(can_id: int, data: bytearray, timestamp: float) -> None:

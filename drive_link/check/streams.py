@@ -37,7 +37,7 @@ def _frame_times(
     interface's stamps: kernel, hub or adapter; arrival times where a bus gives none)."""
     stamps: dict[int, list[float]] = {c: [] for c in cob_ids}
     arrivals: dict[int, list[float]] = {c: [] for c in cob_ids}
-    network = d._conn.network
+    network = d.network
 
     def on_frame(can_id: int, data: bytearray, timestamp: float) -> None:
         stamps[can_id].append(float(timestamp or 0.0))

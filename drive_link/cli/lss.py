@@ -145,7 +145,7 @@ def _fast_scan(lss: Any, timeout: float) -> tuple[bool, list[int] | None]:
     ``fast_scan`` returns the same ``(False, None)`` for "nobody there" and for a scan that
     lost its slave half-way, so without this check ``lss`` reported success with drives left
     unconfigured."""
-    from .errors import DriveError
+    from ..errors import DriveError
 
     wait = max(timeout, lss.RESPONSE_TIMEOUT)
     for _attempt in range(SCAN_RETRIES + 1):
