@@ -9,6 +9,7 @@ checker's, waits, as they would for a CPU on a starved machine.
 
 from __future__ import annotations
 
+import os
 import sys
 import threading
 import time
@@ -52,6 +53,16 @@ def parts():
     b_host.shutdown()
 
 
+def _skip_if_the_host_starved_every_window(r) -> None:
+    """A host that stalls this process in every measuring window (the CI's busy runs at load
+    20: stalls of 70-300 ms in all three) leaves the item "not judged", as it must: what these
+    tests check (a judged verdict) cannot be seen then. Skipped, with the item's own account."""
+    from drive_link.check import NOT_JUDGED
+
+    if r.verdict == NOT_JUDGED:
+        pytest.skip(f"the host stalled every window (load {os.getloadavg()[0]:.1f}): {r.detail}")
+
+
 def test_pdo_rates_fails_a_drive_that_drops_periods_and_counts_them(parts):
     """The drive's transmit path is held 15 ms of every 20 ms: it sends about a quarter of
     its 1 kHz TPDO2 periods and counts the rest in 0x2070 (as a drive with a full transmit
@@ -72,6 +83,7 @@ def test_pdo_rates_fails_a_drive_that_drops_periods_and_counts_them(parts):
     finally:
         stop.set()
         t.join()
+    _skip_if_the_host_starved_every_window(r)
     assert not r.ok, r.detail
     assert "missed)" in r.detail, r.detail  # the drive's own count, shown
 
@@ -87,6 +99,7 @@ def test_a_host_stall_repeats_the_timing_item_and_says_so(parts):
     t.start()
     (r,) = run_checks(d, only=["pdo_rates"])
     t.join()
+    _skip_if_the_host_starved_every_window(r)  # (the test's one stall is in the first only)
     assert "measured again after host stalls of" in r.detail, r.detail
     assert r.ok, r.detail
     assert "bus time stamps" in r.detail  # what it judged
