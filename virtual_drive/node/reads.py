@@ -81,15 +81,25 @@ def make_live_getters(d: DriveParts) -> dict[tuple[int, int], Callable[[], Any]]
         SIM_INFO_TIME: lambda: float(d.sim.time),
         SIM_INFO_SPEED_FACTOR: lambda: d.speed,
     }
+
+    def missed(k: int) -> Callable[[], int]:
+        return lambda: d.pdo.missed[k]
+
+    def history(k: int) -> Callable[[], int]:
+        return lambda: d.emcy.history[k] if k < len(d.emcy.history) else 0
+
+    def measurement(name: str) -> Callable[[], float]:
+        return lambda: float(live[name])
+
     for k, address in enumerate(TPDO_MISSED_EVENTS):
-        g[address] = lambda k=k: d.pdo.missed[k]
+        g[address] = missed(k)
     for k, address in enumerate(ERROR_HISTORY_FIELDS):
-        g[address] = lambda k=k: d.emcy.history[k] if k < len(d.emcy.history) else 0
+        g[address] = history(k)
     for sub, name in MEASUREMENTS.items():
         if name == "hall_sector":
             g[(MEASUREMENTS_INDEX, sub)] = lambda: int(live["hall_sector"])
         else:
-            getter = g[(MEASUREMENTS_INDEX, sub)] = lambda name=name: float(live[name])
+            getter = g[(MEASUREMENTS_INDEX, sub)] = measurement(name)
             getter.live_item = (live, name)  # type: ignore[attr-defined]  # (see pdo: one pick)
     return g
 
