@@ -308,7 +308,7 @@ class Runner:
         if self.timer is None:
             return math.inf
         try:
-            self.timer_due = time.monotonic() + self.timer(now)  # type: ignore[misc]
+            self.timer_due = time.monotonic() + self.timer(now)
         except Exception:
             logger.exception("pacer timer")
             self.timer_due = now + 0.01
