@@ -538,8 +538,9 @@ class PdoEngine:
 
     def _payload(self, t: _Tpdo) -> bytes | None:
         try:
-            if t.live is not None:
-                return t.pack(*t.pick(t.live))  # type: ignore[misc]
+            pick = t.pick  # (set with live: the measurements' one itemgetter)
+            if pick is not None and t.live is not None:
+                return t.pack(*pick(t.live))
             return t.pack(*[g() for g in t.getters])
         except (struct.error, SdoAbortedError) as exc:
             logger.warning("TPDO%d not sent: %s", t.number, exc)
