@@ -125,6 +125,8 @@ def add_run_arguments(p: argparse.ArgumentParser) -> None:
     ``--bus-kwargs``), the loopback hub's ``--host``/``--port``/``--hub``/``--hub-port``, then
     the node options."""
     recording = _RecordingParser(p)
+    # (python-can types the parser as ArgumentParser; the recorder stands in for one by duck
+    # typing: add_argument/add_argument_group, which is all add_bus_arguments calls)
     can.cli.add_bus_arguments(recording, group_title=BUS_GROUP_TITLE)  # type: ignore[arg-type]
     for action in recording.actions:
         action.help = _SHORT_HELP.get(action.dest, action.help)
