@@ -50,14 +50,16 @@ def run_unconfigured(
 
     from .drive_node import VirtualDrive
     from .lss import LssSlave
+    from .od_maps import int_default
 
     n = args.unconfigured
     if not 1 <= n <= 16:
         print(f"virtual-drive: error: --unconfigured must be 1..16, got {n}", file=sys.stderr)
         return 2
     view = load_od()
-    ident = [int(view.entry(f"identity.{k}").default) for k in ("vendor_id", "product_code",
-                                                                  "revision_number")]  # fmt: skip
+    vendor, product, revision = (
+        int_default(view, f"identity.{k}") for k in ("vendor_id", "product_code", "revision_number")
+    )
     slaves: list[LssSlave] = []
     buses: list[can.BusABC] = []
     try:
@@ -78,7 +80,7 @@ def run_unconfigured(
                 p = Path(args.store)
                 lss_file = p.with_name(f"{p.stem}-serial{serial}.lss.json")
             slaves.append(
-                LssSlave(bus, (*ident, serial), make, store=lss_file).start()  # type: ignore[arg-type]
+                LssSlave(bus, (vendor, product, revision, serial), make, store=lss_file).start()
             )
         serials = ",".join(str(s.identity[3]) for s in slaves)
         print(

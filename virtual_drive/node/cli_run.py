@@ -28,7 +28,7 @@ import socket
 import sys
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 import can
 import can.cli
@@ -53,7 +53,9 @@ logger = logging.getLogger("virtual_drive.run")
 MAX_NODES = 16  #: drives one ``virtual-drive run --nodes`` process serves at most
 
 
-def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+def add_parser(
+    subparsers: argparse._SubParsersAction[argparse.ArgumentParser],
+) -> argparse.ArgumentParser:
     """Register the ``run`` sub-command."""
     p = subparsers.add_parser(
         "run",
@@ -106,7 +108,7 @@ class _RecordingParser:
 class _RecordingGroup:
     """An argument group that keeps the actions it adds (see :class:`_RecordingParser`)."""
 
-    def __init__(self, group: Any, actions: list[argparse.Action]) -> None:
+    def __init__(self, group: argparse._ArgumentGroup, actions: list[argparse.Action]) -> None:
         self.group = group
         self.actions = actions
 
@@ -123,6 +125,8 @@ def add_run_arguments(p: argparse.ArgumentParser) -> None:
     ``--bus-kwargs``), the loopback hub's ``--host``/``--port``/``--hub``/``--hub-port``, then
     the node options."""
     recording = _RecordingParser(p)
+    # (python-can types the parser as ArgumentParser; the recorder stands in for one by duck
+    # typing: add_argument/add_argument_group, which is all add_bus_arguments calls)
     can.cli.add_bus_arguments(recording, group_title=BUS_GROUP_TITLE)  # type: ignore[arg-type]
     for action in recording.actions:
         action.help = _SHORT_HELP.get(action.dest, action.help)
@@ -243,7 +247,17 @@ def open_bus(cfg: dict) -> can.BusABC:
     return can.Bus(**cfg)
 
 
-def bus_lost(bus: can.BusABC, drive) -> str | None:
+class SendCounts(Protocol):
+    """What :func:`bus_lost` reads of a drive (:class:`.VirtualDrive`'s send counters)."""
+
+    @property
+    def tx_errors(self) -> int: ...  # frames the bus refused
+
+    @property
+    def last_tx_ok(self) -> float: ...  # monotonic s of the last frame the bus took
+
+
+def bus_lost(bus: can.BusABC, drive: SendCounts) -> str | None:
     """Why the bus is gone, or None while it works.
 
     python-can's socketcand interface does not notice a closed connection (its receive loop
@@ -254,7 +268,7 @@ def bus_lost(bus: can.BusABC, drive) -> str | None:
     if callable(lost):
         reason = lost()
         if reason is not None:
-            return reason
+            return str(reason)  # (HubBus.lost: a str; getattr leaves it untyped)
     sock = getattr(bus, "_SocketCanDaemonBus__socket", None)
     if sock is not None:
         try:

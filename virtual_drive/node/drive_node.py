@@ -66,6 +66,7 @@ from .od_maps import (
     RESET_BRAKE_LIMIT_S,
     SPEED_ZERO_RPM,
     SUPPORTED_MODES,
+    int_default,
 )
 from .parameters import ParameterSet
 from .params import ParamChecker
@@ -139,6 +140,8 @@ class VirtualDrive:
     #: also the longest :meth:`stop` waits for it)
     NOTIFIER_CYCLE: float = 0.2
 
+    runner: Runner  # (made after the PDO engine, whose ``align`` reads it)
+
     def __init__(
         self,
         bus: can.BusABC,
@@ -187,11 +190,11 @@ class VirtualDrive:
         # default COB-IDs of this node-ID from the EDS (0x80+N, 0x600+N, 0x580+N); 0x1014 is
         # applied by the parameter load below, the first SDO server's are fixed
         self.emcy = EmcyManager(
-            int(self.view.entry("cob_id_emcy").default), tx.send, self.nmt.emcy_allowed
+            int_default(self.view, "cob_id_emcy"), tx.send, self.nmt.emcy_allowed
         )
         self.sdo = BlockSdoServer(
-            int(self.view.entry("sdo_server_1.cob_id_client_to_server").default),
-            int(self.view.entry("sdo_server_1.cob_id_server_to_client").default),
+            int_default(self.view, "sdo_server_1.cob_id_client_to_server"),
+            int_default(self.view, "sdo_server_1.cob_id_server_to_client"),
             node,
             self.nmt.sdo_allowed,
             send=tx.send,
@@ -327,7 +330,7 @@ class VirtualDrive:
     # -- parameters -----------------------------------------------------------------------
     def _current_by_name(self, name: str) -> float | int:
         e = self.view.entry(name)
-        return self.node.stored(e.index, e.subindex)
+        return self.node.stored_number(e.index, e.subindex)
 
     @property
     def store_path(self) -> Path | None:

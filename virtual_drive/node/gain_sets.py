@@ -77,8 +77,8 @@ class GainSets:
 
     def _cap(self) -> float:
         """0x6073 per mille of 0x6075 (A)."""
-        rated = self.node.param(MOTOR_RATED_CURRENT) / 1000.0
-        return self.node.param(MAX_CURRENT) / 1000.0 * rated
+        rated = float(self.node.param(MOTOR_RATED_CURRENT)) / 1000.0
+        return float(self.node.param(MAX_CURRENT)) / 1000.0 * rated
 
     def apply_current_limit_with(self, speed_limit: float) -> None:
         """As :meth:`apply_current_limit` with ``speed_limit`` (A) in place of 0x2020:3."""

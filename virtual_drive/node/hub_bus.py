@@ -28,7 +28,8 @@ import socket
 import threading
 import time
 from collections import deque
-from collections.abc import Callable, Container, Iterable
+from collections.abc import Callable, Container, Iterable, Sequence
+from typing import Any
 
 import can
 
@@ -77,7 +78,7 @@ _first = operator.itemgetter(0)
 
 
 def _format_held(
-    held: list[tuple[float, list[tuple[int, bytes]]]], prefixes: dict[tuple[int, int], bytes]
+    held: list[tuple[float, Sequence[tuple[int, bytes]]]], prefixes: dict[tuple[int, int], bytes]
 ) -> bytes:
     """:func:`format_sendat_batch` of every batch in ``held`` as one bytes (the flush of a
     tick), in the order of their times (the hub keeps a sender's order, so a batch stated
@@ -125,9 +126,9 @@ class HubBus(can.BusABC):
         host: str = "127.0.0.1",
         port: int | None = None,
         tcp_tune: bool = True,
-        can_filters=None,
+        can_filters: can.typechecking.CanFilters | None = None,
         connect_timeout: float = 10.0,
-        **kwargs,
+        **kwargs: Any,
     ) -> None:
         if port is None:
             raise can.CanInitializationError("vdhub needs the server's port")
@@ -136,7 +137,7 @@ class HubBus(can.BusABC):
         self._queue: deque[can.Message] = deque()
         self._send_lock = threading.Lock()
         #: timed frames waiting for flush(): (ready time, frames) per send_many call
-        self._held: list[tuple[float, list[tuple[int, bytes]]]] = []
+        self._held: list[tuple[float, Sequence[tuple[int, bytes]]]] = []
         self._prefixes: dict[tuple[int, int], bytes] = {}  #: b"<id> <len> " per (id, len)
         self._eof = False
         #: CAN-IDs to deliver (None: all). Consulted per frame, so a live dict works.
@@ -226,7 +227,7 @@ class HubBus(can.BusABC):
         with self._send_lock:
             self._sock.sendall(line)
 
-    def send_many(self, frames: Iterable[tuple[int, bytes]], at: float | None = None) -> int:
+    def send_many(self, frames: Sequence[tuple[int, bytes]], at: float | None = None) -> int:
         """Send standard frames ``(cob_id, data)`` with one ``sendall``; returns how many.
 
         :param at: the ``time.monotonic()`` at which the frames were ready for the bus (the
@@ -421,7 +422,7 @@ class HubConnection:
         port: int | None = None,
         tcp_tune: bool = True,
         connect_timeout: float = 10.0,
-        **kwargs,
+        **kwargs: Any,
     ) -> None:
         self._bus = HubBus(channel, host, port, tcp_tune, connect_timeout=connect_timeout)
         self.channel_info = self._bus.channel_info

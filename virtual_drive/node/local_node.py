@@ -132,9 +132,11 @@ class DriveLocalNode(LocalNode):
             if subindex != 0:
                 raise SdoAbortedError(ABORT_NO_SUBINDEX)
             return obj
-        if subindex not in obj.subindices:  # an ODArray would make up any sub-index
+        # (canopen's ObjectDictionary is an unparameterised Mapping: its values are these)
+        group: odm.ODRecord | odm.ODArray = obj
+        if subindex not in group.subindices:  # an ODArray would make up any sub-index
             raise SdoAbortedError(ABORT_NO_SUBINDEX)
-        return obj.subindices[subindex]
+        return group[subindex]
 
     def get_data(self, index: int, subindex: int, check_readable: bool = False) -> bytes:
         obj = self._find_object(index, subindex)
@@ -154,6 +156,13 @@ class DriveLocalNode(LocalNode):
         """Decoded parameter value (store, else EDS default), bypassing live values."""
         obj = self._find_object(index, subindex)
         return obj.decode_raw(LocalNode.get_data(self, index, subindex))
+
+    def stored_number(self, index: int, subindex: int) -> float | int:
+        """:meth:`stored` of a numeric object; TypeError for a string or domain object."""
+        value = self.stored(index, subindex)
+        if isinstance(value, (int, float)):
+            return value
+        raise TypeError(f"0x{index:04X}:{subindex} is not a number: {value!r}")
 
     def set_data(
         self, index: int, subindex: int, data: bytes, check_writable: bool = False

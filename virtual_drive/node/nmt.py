@@ -76,7 +76,7 @@ class NmtSlave:
         self,
         node_id: int,
         send: Callable[[int, bytes], None],
-        on_reset_node: Callable[[], None] = lambda: None,
+        on_reset_node: Callable[[], bool | None] = lambda: None,
         on_reset_communication: Callable[[], None] = lambda: None,
         on_state_change: Callable[[int, int], None] = lambda old, new: None,
         on_abort_connection: Callable[[int], None] = lambda command: None,
@@ -127,7 +127,7 @@ class NmtSlave:
             self._set_state(PRE_OPERATIONAL)
         self._on_boot()
 
-    def on_command(self, can_id: int, data: bytes, timestamp: float) -> None:
+    def on_command(self, can_id: int, data: bytes | bytearray, timestamp: float) -> None:
         """Notifier callback for COB-ID 0x000."""
         if len(data) < 2:
             return

@@ -8,7 +8,7 @@ sub-objects after the simulator's signals, ``docs/contracts.md`` §1), the modes
 from __future__ import annotations
 
 from firmware_protocol.enums import ModeOfOperation
-from firmware_protocol.od import load_od
+from firmware_protocol.od import ObjectDictionaryView, load_od
 
 __all__ = [
     "CURRENT_WINDOW_A",
@@ -19,6 +19,7 @@ __all__ = [
     "RESET_BRAKE_LIMIT_S",
     "SPEED_ZERO_RPM",
     "SUPPORTED_MODES",
+    "int_default",
 ]
 
 MODE_CURRENT = int(ModeOfOperation.PSEUDO_CURRENT)
@@ -43,3 +44,12 @@ RESET_BRAKE_LIMIT_S = 5.0
 """A deferred reset node completes after this much braking anyway (s, simulated)."""
 CURRENT_WINDOW_A = 1.0
 """Target-reached window of the current modes (A)."""
+
+
+def int_default(view: ObjectDictionaryView, name: str) -> int:
+    """The EDS default of the integer object ``name`` (a COB-ID, an identity field; ``$NODEID``
+    resolved by the view); TypeError if the EDS gives it no integer default."""
+    default = view.entry(name).default
+    if isinstance(default, int):
+        return default
+    raise TypeError(f"{name}: expected an integer default in the EDS, got {default!r}")

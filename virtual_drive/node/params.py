@@ -102,8 +102,9 @@ class ParamChecker:
         }
         m = {k: changes.get(n, self._current(n)) for k, n in zip(MOTOR_KEYS, _MOTOR, strict=True)}
         if speed is None:
-            speed = (changes.get(n, self._current(n)) for n in _IP_GAINS)
-        k_p, k_i = speed
+            k_p, k_i = (changes.get(n, self._current(n)) for n in _IP_GAINS)
+        else:
+            k_p, k_i = speed
         try:
             check_current_gains(g, m)
             check_cascade(g, m, k_p, k_i)

@@ -51,6 +51,7 @@ from firmware_protocol.entry import LimitError
 from firmware_protocol.index_ranges import RPDO_COMM, RPDO_MAP, TPDO_COMM, TPDO_MAP
 from firmware_protocol.od import load_od
 
+from .local_node import DriveLocalNode
 from .nmt import OPERATIONAL
 
 _OD = load_od()  # where the objects are: the EDS, through firmware_protocol's view
@@ -164,7 +165,7 @@ class PdoEngine:
 
     def __init__(
         self,
-        node,
+        node: DriveLocalNode,
         send: Callable[[int, bytes], None],
         subscribe: Callable,
         unsubscribe: Callable,
@@ -210,8 +211,10 @@ class PdoEngine:
 
     # -- helpers --------------------------------------------------------------------------
     def _u(self, index: int, sub: int) -> int:
-        obj = self.node.find_object(index, sub)
-        return obj.decode_raw(self.node.get_data(index, sub))
+        value = self.node.find_object(index, sub).decode_raw(self.node.get_data(index, sub))
+        if isinstance(value, int):  # (the PDO parameters are UNSIGNED8..32)
+            return value
+        raise TypeError(f"0x{index:04X}:{sub} is not an integer: {value!r}")
 
     def _mapped(self, map_index: int) -> list[tuple[int, int, int]]:
         count = self._u(map_index, PDO_MAPPED_COUNT_SUB)
@@ -250,12 +253,15 @@ class PdoEngine:
             getters = []
             for index, sub, _bits in self._mapped(TPDO_MAP + k):
                 obj = self.node.find_object(index, sub)
+                if obj.data_type is None:  # (canopen's ODVariable: a type from the EDS)
+                    raise KeyError(f"0x{index:04X}:{sub} has no data type")
                 fmt += _FMT[obj.data_type]
                 getters.append(self._getter(index, sub, obj))
             event_ms = self._u(TPDO_COMM + k, PDO_EVENT_TIMER_SUB)
             items = [getattr(g, "live_item", None) for g in getters]
+            pairs: list[tuple[dict, str]] = [it for it in items if it is not None]
             live = items[0][0] if items and items[0] is not None else None
-            if len(items) < 2 or any(it is None or it[0] is not live for it in items):
+            if len(items) < 2 or len(pairs) < len(items) or any(d is not live for d, _ in pairs):
                 live = None
             tpdos.append(
                 _Tpdo(
@@ -267,7 +273,7 @@ class PdoEngine:
                     pack=struct.Struct(fmt).pack,
                     getters=getters,
                     live=live,
-                    pick=None if live is None else operator.itemgetter(*(n for _, n in items)),
+                    pick=None if live is None else operator.itemgetter(*(n for _, n in pairs)),
                     next_due=self._align(now + event_ms / 1000.0),
                     rtr=not cob & COB_BIT30,
                 )
@@ -275,14 +281,19 @@ class PdoEngine:
         self.tpdos = tpdos
         self._wake.set()  # the timer thread recomputes its next wake-up
 
-    def _getter(self, index: int, sub: int, obj) -> Callable[[], float | int]:
+    def _getter(
+        self, index: int, sub: int, obj: odm.ODVariable
+    ) -> Callable[[], float | int]:
         fast = self._fast_getter(index, sub)
         if fast is not None:
             return fast
         node = self.node
 
         def read() -> float | int:
-            return obj.decode_raw(node.get_data(index, sub))
+            value = obj.decode_raw(node.get_data(index, sub))
+            if isinstance(value, (int, float)):  # (a mappable object is a number)
+                return value
+            raise TypeError(f"0x{index:04X}:{sub} is not a number: {value!r}")
 
         return read
 
@@ -498,7 +509,7 @@ class PdoEngine:
         self._earliest, self._tpdos_seen = earliest, tpdos
         return earliest
 
-    def on_sync(self, can_id: int, data: bytes, timestamp: float) -> None:
+    def on_sync(self, can_id: int, data: bytes | bytearray, timestamp: float) -> None:
         """SYNC (0x080): synchronous TPDOs of type 1–240 go out every n-th SYNC."""
         if not self._allowed():
             return
@@ -527,8 +538,9 @@ class PdoEngine:
 
     def _payload(self, t: _Tpdo) -> bytes | None:
         try:
-            if t.live is not None:
-                return t.pack(*t.pick(t.live))  # type: ignore[misc]
+            pick = t.pick  # (set with live: the measurements' one itemgetter)
+            if pick is not None and t.live is not None:
+                return t.pack(*pick(t.live))
             return t.pack(*[g() for g in t.getters])
         except (struct.error, SdoAbortedError) as exc:
             logger.warning("TPDO%d not sent: %s", t.number, exc)

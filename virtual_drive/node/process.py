@@ -126,11 +126,12 @@ def spawn_virtual_drive(
         # the child exits by itself when this process is gone (even after SIGKILL)
         env={**os.environ, PARENT_ENV: str(os.getpid()), **(env or {})},
     )
-    assert proc.stdout is not None
+    stdout = proc.stdout
+    assert stdout is not None  # (stdout=PIPE)
     line_box: list[str] = []
 
     def _read() -> None:
-        line_box.append(proc.stdout.readline())
+        line_box.append(stdout.readline())
 
     reader = threading.Thread(target=_read, daemon=True)
     reader.start()

@@ -49,7 +49,23 @@ TORQUE_ACTUAL_VALUE = _OD.address("torque_actual_value")
 CURRENT_ACTUAL_VALUE = _OD.address("current_actual_value")
 DC_LINK_VOLTAGE = _OD.address("dc_link_circuit_voltage")
 
-__all__ = ["clamp_int", "make_live_getters"]
+__all__ = ["Measurement", "clamp_int", "make_live_getters"]
+
+
+class Measurement:
+    """The getter of one 0x2040 measurement: ``live[name]`` as a float. Its ``live_item``
+    ``(live, name)`` lets the TPDO engine read all the measurements of a TPDO with one
+    :func:`operator.itemgetter` call, and the node bring the simulation to now first."""
+
+    __slots__ = ("_live", "_name", "live_item")
+
+    def __init__(self, live: dict[str, float], name: str) -> None:
+        self._live = live
+        self._name = name
+        self.live_item = (live, name)
+
+    def __call__(self) -> float:
+        return float(self._live[self._name])
 
 
 def make_live_getters(d: DriveParts) -> dict[tuple[int, int], Callable[[], Any]]:
@@ -81,16 +97,22 @@ def make_live_getters(d: DriveParts) -> dict[tuple[int, int], Callable[[], Any]]
         SIM_INFO_TIME: lambda: float(d.sim.time),
         SIM_INFO_SPEED_FACTOR: lambda: d.speed,
     }
+
+    def missed(k: int) -> Callable[[], int]:
+        return lambda: d.pdo.missed[k]
+
+    def history(k: int) -> Callable[[], int]:
+        return lambda: d.emcy.history[k] if k < len(d.emcy.history) else 0
+
     for k, address in enumerate(TPDO_MISSED_EVENTS):
-        g[address] = lambda k=k: d.pdo.missed[k]
+        g[address] = missed(k)
     for k, address in enumerate(ERROR_HISTORY_FIELDS):
-        g[address] = lambda k=k: d.emcy.history[k] if k < len(d.emcy.history) else 0
+        g[address] = history(k)
     for sub, name in MEASUREMENTS.items():
         if name == "hall_sector":
             g[(MEASUREMENTS_INDEX, sub)] = lambda: int(live["hall_sector"])
         else:
-            getter = g[(MEASUREMENTS_INDEX, sub)] = lambda name=name: float(live[name])
-            getter.live_item = (live, name)  # type: ignore[attr-defined]  # (see pdo: one pick)
+            g[(MEASUREMENTS_INDEX, sub)] = Measurement(live, name)
     return g
 
 

@@ -10,6 +10,8 @@ heartbeat (CiA 301 allows either; the EDS has no 0x100C/0x100D, SDO access to th
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import can
 
 __all__ = ["RemoteRequests"]
@@ -18,7 +20,7 @@ __all__ = ["RemoteRequests"]
 class RemoteRequests(can.Listener):
     """Counts remote frames (``seen``) and the TPDOs sent for them (``answered``)."""
 
-    def __init__(self, on_remote) -> None:
+    def __init__(self, on_remote: Callable[[int], bool]) -> None:
         self._on_remote = on_remote
         self.seen = 0
         self.answered = 0

@@ -248,28 +248,29 @@ class Runner:
     def _run_points(self, end: int, now: float) -> bool:
         """The samples up to ``end`` in one ``step_timed`` call, the timer run at each of its
         due points up to ``now`` whose sample is reached by then; False: not possible now."""
+        step_timed, due_times, timer_at = self._step_timed, self._due_times, self.timer_at
+        if step_timed is None or due_times is None or timer_at is None:
+            return False  # (not a timed runner: _run_timed does not call this then)
         scale = self.speed / TS
         t0 = self._t0
         done = self._done
         dues = []
         at = []
-        for due in self._due_times(now):  # type: ignore[misc]
+        for due in due_times(now):
             k = math.ceil((due - t0) * scale - 1e-9)  # the sample that reaches `due`
             if k > end:
                 break  # (its sample comes with the next tick)
             dues.append(due)
             at.append(k - done if k > done else 0)
 
-        timer_at = self.timer_at
-
         def at_point(j: int) -> None:  # (_run_timer_at inlined: this runs at every due point)
             try:
-                self.timer_due = timer_at(dues[j])  # type: ignore[misc]
+                self.timer_due = timer_at(dues[j])
             except Exception:  # the timer never dies: log, retry in 10 ms
                 logger.exception("pacer timer")
                 self.timer_due = now + 0.01
 
-        if not self._step_timed(end - done, at, at_point):  # type: ignore[misc]
+        if not step_timed(end - done, at, at_point):
             return False
         self._count_to(end)
         return True
@@ -292,8 +293,11 @@ class Runner:
                 stats.max_chunk = m
 
     def _run_timer_at(self, at: float, now: float) -> None:
+        timer_at = self.timer_at
+        if timer_at is None:  # (only _run_timed calls this, on a timed runner)
+            return
         try:
-            self.timer_due = self.timer_at(at)  # type: ignore[misc]
+            self.timer_due = timer_at(at)
         except Exception:  # the timer never dies: log, retry in 10 ms
             logger.exception("pacer timer")
             self.timer_due = now + 0.01
@@ -308,7 +312,7 @@ class Runner:
         if self.timer is None:
             return math.inf
         try:
-            self.timer_due = time.monotonic() + self.timer(now)  # type: ignore[misc]
+            self.timer_due = time.monotonic() + self.timer(now)
         except Exception:
             logger.exception("pacer timer")
             self.timer_due = now + 0.01

@@ -72,6 +72,8 @@ from canopen.sdo.constants import (
 
 from firmware_protocol import abort_codes
 
+from .local_node import DriveLocalNode
+
 __all__ = ["MAX_BLKSIZE", "BlockSdoServer", "crc16_ccitt"]
 
 logger = logging.getLogger(__name__)
@@ -118,7 +120,7 @@ class BlockSdoServer(SdoServer):
         self,
         rx_cobid: int,
         tx_cobid: int,
-        node,
+        node: DriveLocalNode,
         allowed: Callable[[], bool] = lambda: True,
         download_blksize: int = MAX_BLKSIZE,
         send: Callable[[int, bytes], None] | None = None,
@@ -212,7 +214,7 @@ class BlockSdoServer(SdoServer):
         return SdoAbortedError(ABORT_INVALID_COMMAND_SPECIFIER)
 
     # -- dispatch ----------------------------------------------------------------------------
-    def on_request(self, can_id: int, data: bytes, timestamp: float) -> None:
+    def on_request(self, can_id: int, data: bytes | bytearray, timestamp: float) -> None:
         if not self._allowed():
             return
         data = bytes(data)

@@ -20,6 +20,7 @@ import errno
 import logging
 import threading
 import time
+from collections.abc import Callable
 
 import can
 
@@ -42,8 +43,14 @@ class Transmitter:
         self.last_tx_ok = time.monotonic()  #: time of the last frame the bus accepted
         #: the bus takes frames with their bus time (the loopback hub)
         self.timed_sends = bool(getattr(bus, "timed_sends", False))
-        # (the pacing thread's frames, held until its flush: no lock)
-        self._hold = bus.send_many if self.timed_sends else None  # type: ignore[attr-defined]
+        # (the pacing thread's frames, held until its flush: no lock); a bus with timed_sends
+        # (HubBus, HubPort) has send_many(frames, at) and flush(), which BusABC does not declare
+        self._hold: Callable[[list[tuple[int, bytes]], float], object] | None = (
+            getattr(bus, "send_many", None) if self.timed_sends else None
+        )
+        self._bus_flush: Callable[[], object] | None = (
+            getattr(bus, "flush", None) if self.timed_sends else None
+        )
 
     def _count_error(self, n: int, what: str, exc: Exception) -> None:
         self.tx_errors += n
@@ -98,8 +105,10 @@ class Transmitter:
     def flush(self) -> None:
         """End of a timed tick: the bus writes the frames it held (one write per tick)."""
         try:
+            if self._bus_flush is None:  # (not a timed bus: nothing is held)
+                return
             with self.send_lock:
-                self.bus.flush()  # type: ignore[attr-defined]
+                self._bus_flush()
             self.last_tx_ok = time.monotonic()
         except (can.CanError, OSError) as exc:
             self._count_error(1, "send of the tick's frames", exc)

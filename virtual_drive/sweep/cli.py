@@ -17,7 +17,9 @@ from typing import Any
 __all__ = ["add_parser", "run_sweep_command"]
 
 
-def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+def add_parser(
+    subparsers: argparse._SubParsersAction[argparse.ArgumentParser],
+) -> argparse.ArgumentParser:
     """Register the ``sweep`` sub-command."""
     p = subparsers.add_parser(
         "sweep",

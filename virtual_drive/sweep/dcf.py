@@ -54,6 +54,7 @@ def read_gain_set(path: str | Path) -> dict[str, float | int | str]:
     objects that have a ``ParameterValue``; the controller type as its name."""
     p = Path(path)
     cp = configparser.RawConfigParser(strict=False, interpolation=None)
+    # (case-kept keys: the configparser idiom, which typeshed's method declaration rejects)
     cp.optionxform = str  # type: ignore[assignment,method-assign]
     try:
         with p.open(encoding="utf-8") as fh:

@@ -43,7 +43,8 @@ def connect(address: str, timeout: float = 10.0) -> Any:
 
 def cluster_threads(client: Any) -> int:
     """Threads of all workers now connected (at least 1)."""
-    return max(1, sum(client.nthreads().values()))
+    nthreads: dict[str, int] = client.nthreads()  # (worker address -> threads)
+    return max(1, sum(nthreads.values()))
 
 
 def iter_dask(

@@ -146,8 +146,11 @@ class Trace:
 def _steady_current(inputs: dict[str, Any], rpm: float, T_load: float) -> float:
     """i_p (A) that holds ``rpm`` against the run's load: (B_tot w + T_load) / K_t, with
     B_tot = B + k_gen (60 / 2 pi) (N m s/rad) and K_t = K_rpm (60 / 2 pi) (N m/A)."""
-    B_tot = inputs["B"] + inputs["k_gen"] * RPM_PER_RAD_S
-    return (B_tot * rpm / RPM_PER_RAD_S + T_load) / (inputs["K_rpm"] * RPM_PER_RAD_S)
+    B: float = inputs["B"]  # (the run's values by name: the spec's variables, checked there)
+    k_gen: float = inputs["k_gen"]
+    K_rpm: float = inputs["K_rpm"]
+    B_tot = B + k_gen * RPM_PER_RAD_S
+    return (B_tot * rpm / RPM_PER_RAD_S + T_load) / (K_rpm * RPM_PER_RAD_S)
 
 
 def _reference(sc: Scenario, n: int) -> np.ndarray:

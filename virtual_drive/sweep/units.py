@@ -27,7 +27,7 @@ class SpecError(ValueError):
 def _registry() -> Any:
     import pint
 
-    ureg = pint.UnitRegistry()
+    ureg: pint.UnitRegistry[float] = pint.UnitRegistry()  # (magnitudes: plain floats)
     ureg.define("Ohm = ohm")
     return ureg
 
