@@ -21,7 +21,7 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable
-from typing import Any, cast
+from typing import Any
 
 import can
 import canopen
@@ -265,9 +265,7 @@ class Connection:
         self.health = BusHealth(bus)
         self.network = PacedNetwork(bus)
         # one plain callback (python-can's Notifier calls any callable) for canopen's listener
-        self.network.listeners = cast(
-            "list[Any]", [dispatcher(self.network, self.monitor, self.health)]
-        )
+        self.network.listeners = [dispatcher(self.network, self.monitor, self.health)]
         if owns_bus and hasattr(bus, "rx_direct"):  # the hub client: data frames without
             bus.rx_direct = direct_dispatcher(self.network, self.monitor)  # a Message each
         self.network.NOTIFIER_CYCLE = 0.1
