@@ -237,7 +237,8 @@ class Bench:
 
     def live(self, seconds: float) -> dict[str, np.ndarray]:
         """The last ``seconds`` of the plotted signals ("t" in s, host clock, plus the signals)."""
-        return self.drive.live.window(seconds, list(LIVE_SIGNALS))
+        window: dict[str, np.ndarray] = self.drive.live.window(seconds, list(LIVE_SIGNALS))
+        return window
 
     # ---------------------------------------------------------------- commands
     def command(self, name: str) -> None:
@@ -270,7 +271,8 @@ class Bench:
             act.cancel_event.set()
         self._sequence_stop.set()
         try:
-            return self.drive.quick_stop()
+            state: str = self.drive.quick_stop()
+            return state
         finally:
             self.stop_sequence()
             self.watch.poke()

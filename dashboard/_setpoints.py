@@ -71,7 +71,7 @@ class SetpointLink:
         with self._lock:
             if name in self._known:
                 return self._known[name]
-        value = self.drive.read(name)  # once; then kept
+        value: float | int = self.drive.read(name)  # once; then kept (a numeric operand)
         self.note(name, value)
         return value
 

@@ -224,7 +224,7 @@ def stored_diff(bench: Bench, *, fresh: bool = False) -> dict[str, Any]:
     return {"live": live, "stored": st["gains"], "stored_at": st["t"], "differs": differs}
 
 
-def _same(a: Any, b: Any) -> bool:
+def _same(a: object, b: object) -> bool:
     if isinstance(a, float) and isinstance(b, float):
         return math.isclose(a, b, rel_tol=1e-6, abs_tol=1e-12)
     return a == b

@@ -21,7 +21,7 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable
-from typing import Any, cast
+from typing import Any
 
 import can
 import canopen
@@ -264,10 +264,9 @@ class Connection:
         self.monitor = BusMonitor()
         self.health = BusHealth(bus)
         self.network = PacedNetwork(bus)
-        # one plain callback (python-can's Notifier calls any callable) for canopen's listener
-        self.network.listeners = cast(
-            "list[Any]", [dispatcher(self.network, self.monitor, self.health)]
-        )
+        # one plain callback (python-can's Notifier calls any callable) for canopen's listener;
+        # canopen infers Network.listeners as list[MessageListener] (no annotation of its own)
+        self.network.listeners = [dispatcher(self.network, self.monitor, self.health)]  # type: ignore[list-item]
         if owns_bus and hasattr(bus, "rx_direct"):  # the hub client: data frames without
             bus.rx_direct = direct_dispatcher(self.network, self.monitor)  # a Message each
         self.network.NOTIFIER_CYCLE = 0.1

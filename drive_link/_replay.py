@@ -20,6 +20,7 @@ from __future__ import annotations
 import binascii
 import bisect
 import collections
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -396,7 +397,9 @@ def _trace_from(upload: BlockUpload, known: _Known) -> Trace | None:
     return Trace(t, signals, units, trig, divider, meta={"t": upload.t, "source": "replay"})
 
 
-def _reader(path: Path) -> can.LogReader:
+def _reader(path: Path) -> Iterable[can.Message]:
+    """python-can's reader for ``path`` (``can.LogReader`` is a function: its result is a
+    ``MessageReader``, iterable over the recorded frames)."""
     if not path.is_file():
         raise InvalidValue(f"{path}: no such file")
     try:

@@ -28,6 +28,7 @@ import contextlib
 import threading
 import time
 from collections.abc import Callable, Iterator
+from typing import TypeVar
 
 import can
 import canopen
@@ -51,6 +52,9 @@ __all__ = [
 
 #: progress(bytes_done, bytes_total_or_None)
 Progress = Callable[[int, "int | None"], None]
+
+#: what one transfer returns (bytes for an upload, None for a download)
+_T = TypeVar("_T")
 
 
 #: Aborts that mean the transfer itself broke (lost or late frames), not a refusal of the
@@ -134,7 +138,9 @@ class SdoChannel:
         except (KeyError, ValueError):
             pass
 
-    def _run(self, what: str, index: int, subindex: int, name: str, fn):
+    def _run(
+        self, what: str, index: int, subindex: int, name: str, fn: Callable[[float], _T]
+    ) -> _T:
         where = name or f"0x{index:04X}:{subindex:02X}"
         deadline = time.monotonic() + self.deadline_s
         attempts = self.restarts + 1

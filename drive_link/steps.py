@@ -104,7 +104,9 @@ def first_commutation(t: np.ndarray, i_abc: np.ndarray) -> float | None:
 def sector_changes(t: np.ndarray, hall_sector: np.ndarray) -> np.ndarray:
     """Times [s] at which the Hall sector changes (commutations), over the whole record."""
     h = np.asarray(hall_sector)
-    return np.asarray(t, dtype=float)[1:][h[1:] != h[:-1]]
+    # (numpy's stubs type an index by an array as Any: the result is a float array)
+    times: np.ndarray = np.asarray(t, dtype=float)[1:][h[1:] != h[:-1]]
+    return times
 
 
 def _settled(pre: np.ndarray, tol: float = 0.02) -> bool:

@@ -49,7 +49,7 @@ from ._rearm_writes import (
     write_entry,
     write_pdo_group,
 )
-from ._sdo import SdoChannel
+from ._sdo import Progress, SdoChannel
 from .errors import DriveError, StateError
 
 __all__ = [
@@ -145,7 +145,9 @@ class SupervisedSdoChannel(SdoChannel):
         if self.supervisor is not None:
             self.supervisor.record(index, subindex, bytes(data))
 
-    def upload_block(self, index: int, subindex: int, name: str = "", progress=None) -> bytes:
+    def upload_block(
+        self, index: int, subindex: int, name: str = "", progress: Progress | None = None
+    ) -> bytes:
         self._gate()
         return super().upload_block(index, subindex, name, progress)
 

@@ -100,7 +100,7 @@ def _put_back_comm(d: Drive, opts: dict) -> int:
     communication objects back as the run found them (``opts[FOUND]``, taken by
     :func:`run_checks`); returns how many differed. :class:`CheckFailed` naming what could
     not be put back."""
-    found = opts.get(FOUND) or {}
+    found: dict[str, bytes] = opts.get(FOUND) or {}
     if not found:
         return 0
     now = {n: d.sdo.upload(d.table[n].index, d.table[n].subindex, n) for n in found}

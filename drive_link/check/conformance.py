@@ -28,6 +28,7 @@ import contextlib
 import struct
 import time
 from collections.abc import Callable, Iterator
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -219,7 +220,7 @@ def _od_vs_eds(d: Drive, opts: dict) -> tuple[str, Evidence]:
         ev["objects"] += 1
         fmt = _fmt(e)
         if e.access == "wo":
-            code = _abort_of(lambda e=e: d.sdo.upload(e.index, e.subindex, e.name))
+            code = _abort_of(partial(d.sdo.upload, e.index, e.subindex, e.name))
             ok = code == abort_codes.READ_WRITE_ONLY
             ev["wo_read_refused"] += ok
             if not ok:
@@ -251,7 +252,7 @@ def _od_vs_eds(d: Drive, opts: dict) -> tuple[str, Evidence]:
             if not ok:
                 problems.append(f"{_where(e)} const {value} != EDS default {e.default}")
         if e.access in ("ro", "const"):
-            code = _abort_of(lambda e=e, raw=raw: d.sdo.download(e.index, e.subindex, raw, e.name))
+            code = _abort_of(partial(d.sdo.download, e.index, e.subindex, raw, e.name))
             ok = code == abort_codes.WRITE_READ_ONLY
             ev["ro_write_refused"] += ok
             if not ok:
@@ -301,7 +302,7 @@ def _sdo_aborts(d: Drive, opts: dict) -> tuple[str, Evidence]:
     for index, sub in sorted(last_sub.items()):
         if sub >= 0xFE:
             continue
-        code = _abort_of(lambda index=index, sub=sub: d.sdo.upload(index, sub + 1))
+        code = _abort_of(partial(d.sdo.upload, index, sub + 1))
         ev["missing_sub"] += code == abort_codes.NO_SUBINDEX
         if code != abort_codes.NO_SUBINDEX:
             problems.append(f"read 0x{index:04X}:{sub + 1:02X}: {_code(code)}")
@@ -314,7 +315,7 @@ def _sdo_aborts(d: Drive, opts: dict) -> tuple[str, Evidence]:
             present = d.sdo.upload(e.index, e.subindex, e.name)
         size = struct.calcsize(fmt)
         wrong = (present or bytes(size))[: size - 1] if size > 1 else bytes(2)
-        code = _abort_of(lambda e=e, w=wrong: d.sdo.download(e.index, e.subindex, w, e.name))
+        code = _abort_of(partial(d.sdo.download, e.index, e.subindex, wrong, e.name))
         ev["wrong_length"] += code in LENGTH_CODES
         if code not in LENGTH_CODES:
             problems.append(f"{_where(e)} {len(wrong)} bytes: {_code(code)}")
@@ -323,7 +324,7 @@ def _sdo_aborts(d: Drive, opts: dict) -> tuple[str, Evidence]:
             continue
         for key, value, want in _outside(e):
             raw = struct.pack(fmt, value)
-            code = _abort_of(lambda e=e, raw=raw: d.sdo.download(e.index, e.subindex, raw, e.name))
+            code = _abort_of(partial(d.sdo.download, e.index, e.subindex, raw, e.name))
             ev[key] += code == want
             if code != want:
                 problems.append(f"{_where(e)} = {value}: {_code(code)}, expected 0x{want:08X}")
@@ -363,7 +364,7 @@ def _type_range(e: Entry) -> tuple[float, float]:
 def _next_f32(x: float, direction: int) -> float:
     """The next REAL32 beyond ``x`` (clearly outside: 1e-6 relative, at least one step)."""
     step = max(abs(x) * 1e-6, 1e-30)
-    return struct.unpack("<f", struct.pack("<f", x + direction * step))[0]
+    return float(struct.unpack("<f", struct.pack("<f", x + direction * step))[0])
 
 
 def _put_back(d: Drive, e: Entry, present: bytes | None, code: int | None) -> None:

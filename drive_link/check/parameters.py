@@ -5,6 +5,7 @@ apply as a whole, store and restore)."""
 from __future__ import annotations
 
 import time
+from functools import partial
 
 from firmware_protocol import abort_codes
 from firmware_protocol.entry import f32 as _f32  # the one float32 rounding
@@ -62,7 +63,7 @@ def item_limits(d: Drive, opts: dict) -> str:
         ("target_velocity", vmax + 100, (ABORT_RANGE, ABORT_HIGH), "target_velocity > max")
     )
     for name, value, codes, what in cases:
-        code = _expect_abort(lambda n=name, v=value: _raw_write(d, n, v), codes, what)
+        code = _expect_abort(partial(_raw_write, d, name, value), codes, what)
         out.append(f"{what}: 0x{code:08X}")
     _expect(float(d.read("current_controller.L_c")) == L_c0, "L_c changed by a refused write")
     code = _expect_abort(
@@ -202,7 +203,7 @@ def item_cob_id_validation(d: Drive, opts: dict) -> str:
     try:
         _raw_write(d, "cob_id_emcy", emcy0 | 0x80000000)  # EMCY invalid: its ID may now change
         for name, value, what in cases:
-            code = _expect_abort(lambda n_=name, v=value: _raw_write(d, n_, v), _cob_aborts(), what)
+            code = _expect_abort(partial(_raw_write, d, name, value), _cob_aborts(), what)
             out.append(f"{what}: 0x{code:08X}")
         _expect(
             int(d.read("cob_id_emcy")) == emcy0 | 0x80000000,
@@ -214,7 +215,7 @@ def item_cob_id_validation(d: Drive, opts: dict) -> str:
                 (0x585, "TPDO on an SDO response identifier"),
                 (0x77F, "TPDO on a heartbeat identifier"),
             ):
-                code = _expect_abort(lambda v=value: _raw_write(d, tpdo, v), _cob_aborts(), what)
+                code = _expect_abort(partial(_raw_write, d, tpdo, value), _cob_aborts(), what)
                 out.append(f"{what}: 0x{code:08X}")
         for value, what in (
             ((0x00 << 16) | 500, "0x1016 node-ID 0"),
@@ -222,7 +223,7 @@ def item_cob_id_validation(d: Drive, opts: dict) -> str:
             ((0xFF << 16) | 500, "0x1016 node-ID 255"),
         ):
             code = _expect_abort(
-                lambda v=value: _raw_write(d, "consumer_heartbeat_time.consumer_1", v),
+                partial(_raw_write, d, "consumer_heartbeat_time.consumer_1", value),
                 _cob_aborts(),
                 what,
             )
@@ -288,8 +289,8 @@ def item_config_only(d: Drive, opts: dict) -> str:
     ENABLED with nothing changed, and accepted again once the power stage is off."""
     names = _config_only_names(d)
     _expect(bool(names), "no configuration-only objects in the object dictionary")
-    orig = {n: d.read(n) for n in names}
-    changed = {}
+    orig = {n: d.read_number(n) for n in names}  # (numeric: each has a struct format)
+    changed: dict[str, float | int] = {}
     for n in names:
         info = d.table[n]
         v = orig[n]
@@ -302,7 +303,7 @@ def item_config_only(d: Drive, opts: dict) -> str:
         _spin(d)
         for n in names:
             _expect_abort(
-                lambda n_=n: _raw_write(d, n_, changed[n_]),
+                partial(_raw_write, d, n, changed[n]),
                 (ABORT_STATE,),
                 f"{n} while OPERATION ENABLED",
             )

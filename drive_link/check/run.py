@@ -135,21 +135,22 @@ def run_checks(
     if unknown:
         raise ValueError(f"unknown check item(s) {', '.join(unknown)}; items: {', '.join(ITEMS)}")
     results = []
-    opts = dict(opts)
+    # the items' option bag: the caller's options and what one item hands the next
+    bag: dict[str, Any] = dict(opts)
     if any(n in RESETS for n in names) or "as_found" in names:
         try:  # what a reset of the communication reverts, as found (see the module doc)
-            opts[FOUND] = _persistent_snapshot(drive, COMM_AREA)
+            bag[FOUND] = _persistent_snapshot(drive, COMM_AREA)
         except DriveError:
-            opts[FOUND] = {}  # the items report the drive's silence themselves
+            bag[FOUND] = {}  # the items report the drive's silence themselves
     try:  # the error state, left as found at the end (drive_link.check.found)
-        opts[found.ERRORS] = found.take(drive)
+        bag[found.ERRORS] = found.take(drive)
     except DriveError:
         pass
     for n in names:
         t0 = time.monotonic()
-        ok, detail, verdict = _run_item(n, drive, opts)
+        ok, detail, verdict = _run_item(n, drive, bag)
         r = CheckResult(
-            n, ok, detail, time.monotonic() - t0, verdict, opts.pop(EVIDENCE, None)
+            n, ok, detail, time.monotonic() - t0, verdict, bag.pop(EVIDENCE, None)
         )
         results.append(r)
         if on_result:
@@ -157,7 +158,7 @@ def run_checks(
     try:
         drive.write("controlword", cia402.CW_DISABLE_VOLTAGE)
         if "as_found" not in names:
-            found.settle(drive, opts.get(found.ERRORS))
+            found.settle(drive, bag.get(found.ERRORS))
     except DriveError:
         pass
     return results

@@ -256,7 +256,7 @@ def _add_bus_options(p: argparse.ArgumentParser, prefix: str = "", omit: tuple =
     add_hidden_aliases(g, prefix + "node")  # -n/--node-id
 
 
-def _bus_parent(omit: tuple = ()) -> argparse.ArgumentParser:
+def _bus_parent(omit: tuple = ()) -> _Parser:
     p = _Parser(add_help=False)
     _add_bus_options(p, omit=omit)
     return p
@@ -269,7 +269,9 @@ def _bus_option_before_only(p: argparse.ArgumentParser, name: str, own: str) -> 
     flags = next(f for f, _kw, _d in _bus_options() if f[0] == f"--{name}")
 
     class _BeforeOnly(argparse.Action):
-        def __call__(self, parser: Any, namespace: Any, values: Any, option_string: Any = None):
+        def __call__(
+            self, parser: Any, namespace: Any, values: Any, option_string: Any = None
+        ) -> None:
             parser.error(
                 f"{option_string} is a bus option: give it before the sub-command "
                 f"(drive-link {flags[0]} VALUE {parser.prog.split()[-1]} ...); did you mean {own}?"

@@ -403,10 +403,10 @@ def _one_line_errors(parser: argparse.ArgumentParser) -> None:
         raise SystemExit(2)
 
     parser.error = error  # type: ignore[method-assign]
-    parser._negative_number_matcher = _NEGATIVE_NUMBER  # type: ignore[attr-defined]
+    parser._negative_number_matcher = _NEGATIVE_NUMBER
 
 
-def add_parsers(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+def add_parsers(subparsers: argparse._SubParsersAction) -> None:
     """Register the ``design`` and ``identify`` sub-commands; each sets ``func``."""
     d = subparsers.add_parser(
         "design",

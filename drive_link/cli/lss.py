@@ -72,7 +72,7 @@ def cmd_lss(args: argparse.Namespace) -> int:
         nid = args.first_id
         while len(done) < args.max:
             found, address = _fast_scan(lss, args.lss_timeout)
-            if not found:
+            if not found or address is None:  # (canopen gives the address when found)
                 break
             while nid in used:
                 nid += 1
@@ -80,7 +80,7 @@ def cmd_lss(args: argparse.Namespace) -> int:
                 raise DriveError("no free node-ID left (1..127 in use)")
             try:
                 lss.configure_node_id(nid)
-                stored = None
+                stored: bool | str | None = None  # True, or why the drive refused
                 if args.store:
                     try:
                         lss.store_configuration()

@@ -95,10 +95,11 @@ def _main(argv: list[str]) -> int:
     _apply_step_defaults(args)
     d: Drive | None = None
     try:
+        func: Callable[..., int] = args.func  # (set by each sub-command's parser)
         if getattr(args, "needs_drive", False):
             d = connect_from_args(args)
-            return args.func(args, d)
-        return args.func(args)
+            return func(args, d)
+        return func(args)
     except Refused as exc:
         return _fail(args, str(exc), EXIT_UNSAFE, prefix="")
     except DriveError as exc:

@@ -71,7 +71,7 @@ class Shell:
         self.drive = drive
         self.args = args
         self.parser = build_parser()
-        self.sub = next(
+        self.sub: argparse._SubParsersAction[argparse.ArgumentParser] = next(
             a for a in self.parser._actions if isinstance(a, argparse._SubParsersAction)
         )
         self.last_rc = 0

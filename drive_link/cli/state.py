@@ -11,7 +11,7 @@ from .. import _connection
 from ..cia402 import OPERATION_ENABLED
 from ..cli_connect import bus_settings_from_args
 from ..drive import Drive
-from ..errors import NodeNotFound, StateError
+from ..errors import InvalidValue, NodeNotFound, StateError
 from ._common import AddCommand, _emit, _object_value, _timeout, _usable_state
 
 __all__ = ["add_parsers"]
@@ -136,7 +136,10 @@ def _set_setpoint(
     enabled is refused unless ``--enable`` (a zero setpoint is written: it is the stopped
     state); prints the read-back as ``key`` with the state."""
     obj = d.table[name]
-    value = obj.check(value)
+    checked = obj.check(value)
+    if not isinstance(checked, float | int):  # (both setpoints are numeric objects)
+        raise InvalidValue(f"{name} is not a number ({obj.type_name})")
+    value = checked
     state = _usable_state(d)
     if state != OPERATION_ENABLED and not args.enable and value != 0:
         raise StateError(
@@ -147,7 +150,7 @@ def _set_setpoint(
     d.write(name, value)
     if args.enable or again:
         d.enable(timeout=_timeout(args, 3.0))
-    out = {key: d.read(name), "state": d.state}
+    out = {key: d.read_number(name), "state": d.state}
     unit = obj.unit
     _emit(args, out, f"{key} {out[key]:g} {unit} ({out['state']})")
     return 0

@@ -8,21 +8,25 @@ tools live in their own modules (:mod:`.shell`, :mod:`.live_plot`, :mod:`.record
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
 from typing import Any
 
 from ..cli_connect import bus_settings_from_args
-from ._common import quantity
+from ._common import _Parser, quantity
 
 __all__ = ["add_parsers", "bus_settings"]
 
 
-def _lazy(module: str, fn: str) -> Any:
+def _lazy(module: str, fn: str) -> Callable[..., int]:
     """A handler that imports ``drive_link.cli.<module>`` on first call and runs its ``fn``."""
 
     def run(*a: Any) -> int:
         import importlib
 
-        return getattr(importlib.import_module(f"drive_link.cli.{module}"), fn)(*a)
+        handler: Callable[..., int] = getattr(
+            importlib.import_module(f"drive_link.cli.{module}"), fn
+        )
+        return handler(*a)
 
     run.__name__ = fn
     return run
@@ -40,7 +44,7 @@ def _unit(unit: str, integer: bool = False) -> Any:
     return quantity(unit, integer=integer)
 
 
-def add_parsers(sub: argparse._SubParsersAction, bus: argparse.ArgumentParser) -> None:
+def add_parsers(sub: argparse._SubParsersAction[_Parser], bus: _Parser) -> None:
     """Add ``shell``, ``record``, ``replay`` to ``sub`` and ``--plot`` to its ``live`` command.
 
     ``bus``: the parent parser carrying the bus options (--interface … --json). Handlers follow
@@ -48,9 +52,7 @@ def add_parsers(sub: argparse._SubParsersAction, bus: argparse.ArgumentParser) -
     """
 
     def add(name: str, fn: Any, help: str, needs_drive: bool = True) -> argparse.ArgumentParser:
-        p = sub.add_parser(
-            name, parents=[bus], help=help, description=help, allow_abbrev=False
-        )
+        p = sub.add_parser(name, parents=[bus], help=help, description=help, allow_abbrev=False)
         p.set_defaults(func=fn, needs_drive=needs_drive)
         return p
 
@@ -143,7 +145,7 @@ def _add_live_plot(p: argparse.ArgumentParser) -> None:
         "--width", type=int, default=None, help="text width, columns (default: terminal)"
     )
     g.add_argument("--height", type=int, default=None, help="text height, rows (default: terminal)")
-    summary = p.get_default("func")
+    summary: Callable[[argparse.Namespace, Any], int] = p.get_default("func")
 
     def run(args: argparse.Namespace, d: Any) -> int:
         if args.plot:
