@@ -1,5 +1,5 @@
-"""One gain-apply path (drive_link.gains.apply_gains) with one force policy: an unstable set is
-never applied, not even with --force/force; poor margins only with it. `drive-link set-gains`
+"""One gain-apply path (drive_link.workflows.gains.apply_gains) with one force policy: an unstable
+set is never applied, not even with --force/force; poor margins only with it. `drive-link set-gains`
 goes through it (the dashboard's PUT /api/gains too: tests/test_dashboard_api.py).
 
 Truth: the closed-loop poles of the paper's PI loop (eq. 22 on eq. 8) from python-control
@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from drive_link import Drive, InvalidValue, cli
-from drive_link.gains import GainsRefused, apply_gains, check_gains
+from drive_link.workflows.gains import GainsRefused, apply_gains, check_gains
 
 pytestmark = [pytest.mark.timeout(90), pytest.mark.unit]
 

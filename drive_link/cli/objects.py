@@ -6,9 +6,9 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from .. import _od_select, units
-from ..drive import GAIN_FIELDS, Drive
 from ..errors import InvalidValue
+from ..link import _od_select, units
+from ..link.drive import GAIN_FIELDS, Drive
 from ._common import AddCommand, Refused, _emit, _parse_value, _timeout
 
 __all__ = ["add_parsers"]
@@ -16,10 +16,10 @@ __all__ = ["add_parsers"]
 
 def _gain_value(name: str, text: str) -> float | int | str:
     """A typed gain (``L_c=20uH``, ``speed_current_limit=50A``) in its object's unit
-    (:func:`drive_link.units.parse_value`); text that is no number passes through for
+    (:func:`drive_link.link.units.parse_value`); text that is no number passes through for
     ``type`` (``type=pi``)."""
-    from .._gain_set import GAIN_OBJECTS as _GAIN_OBJECTS
-    from .._objects import default_table
+    from ..link._gain_set import GAIN_OBJECTS as _GAIN_OBJECTS
+    from ..link._objects import default_table
 
     obj = default_table()[_GAIN_OBJECTS[name][1]]
     if name == "type" and _parse_value(text) == text:
@@ -77,7 +77,7 @@ def cmd_gains_get(args: argparse.Namespace, d: Drive) -> int:
 
 
 def cmd_gains_set(args: argparse.Namespace, d: Drive) -> int:
-    from ..gains import GainsRefused, apply_gains
+    from ..workflows.gains import GainsRefused, apply_gains
 
     changes: dict[str, float | int | str] = {}
     for item in args.assignments:

@@ -21,10 +21,11 @@ import numpy as np
 import pytest
 from conftest import RunQueueProbe
 
-from drive_link import DriveTimeout, SdoAbort, Trigger, scan, steps
-from drive_link.check import ITEMS
-from drive_link.gains import apply_gains
-from drive_link.trace import TS
+from drive_link import DriveTimeout, SdoAbort, Trigger, scan
+from drive_link.link.trace import TS
+from drive_link.workflows import steps
+from drive_link.workflows.check import ITEMS
+from drive_link.workflows.gains import apply_gains
 
 from .conditions import Bench, wait_until
 
