@@ -6,8 +6,9 @@ the set as a whole and aborts with nothing changed if any value is refused.
 
 :func:`stage_and_apply` is that mechanism and nothing more: the one public way to change gains
 is :func:`drive_link.workflows.gains.apply_gains`, which checks the policy (stability, margins) and
-then calls it. :meth:`drive_link.Drive.write` of an active gain object goes through that path too,
-and refuses a raw write of gain_set_apply.
+then calls it. :meth:`drive_link.Drive.write` refuses an active gain object
+(:class:`GainWriteRefused`, naming that path; ``drive-link write`` routes it there) and a raw write
+of gain_set_apply.
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ __all__ = [
     "GAIN_FIELDS",
     "GAIN_OBJECTS",
     "GainSetDrive",
+    "GainWriteRefused",
     "Gains",
     "read_gains",
     "stage_and_apply",
@@ -82,6 +84,23 @@ GAIN_OBJECTS: dict[str, tuple[int, str, str]] = {
 ACTIVE_GAIN_FIELD: dict[str, str] = {active: f for f, (_s, active, _st) in GAIN_OBJECTS.items()}
 #: The object that applies a staged set (0x20F1).
 APPLY_NAME = "gain_set_apply"
+
+
+class GainWriteRefused(InvalidValue):
+    """:meth:`drive_link.Drive.write` of an active gain object, refused with nothing sent: a gain
+    changes only through :func:`drive_link.apply_gains` (its stability and margin policy).
+    ``field`` is the gain's name there (``L_c``, ``speed_k_p`` …), ``value`` the value, already
+    checked against the object's limits and the OD's cross-object rules."""
+
+    def __init__(self, name: str, field: str, value: float | int) -> None:
+        super().__init__(
+            f"{name}: a controller gain changes only through drive_link.apply_gains, which checks "
+            f"the set's stability and margins first (drive-link set-gains {field}=... [--force], "
+            f"or drive-link write {name} VALUE)"
+        )
+        self.name = name
+        self.field = field
+        self.value = value
 
 
 class GainSetDrive(Protocol):

@@ -296,16 +296,17 @@ class Drive:
         re-checks and may abort: :class:`SdoAbort`).
 
         An active controller gain (current_controller.*, speed_controller.k_p/k_i/current_limit)
-        changes through the one gain path, :func:`drive_link.workflows.gains.apply_gains` (its
-        stability and margin policy; :class:`drive_link.GainsRefused` if refused, nothing sent); a
-        raw write of gain_set_apply (0x20F1) is refused (:class:`InvalidValue`): apply a set with
-        :func:`drive_link.workflows.gains.apply_gains`."""
+        changes only through the one gain path, :func:`drive_link.apply_gains` (its stability and
+        margin policy): a write of one, once it passed the checks above, is refused with nothing
+        sent (:class:`~drive_link.link._gain_set.GainWriteRefused`, an :class:`InvalidValue`;
+        ``drive-link write`` routes it to that path), and so is a raw write of gain_set_apply
+        (0x20F1): apply a set with :func:`drive_link.apply_gains`."""
         obj = self.table[name]
         if not obj.writable:
             raise InvalidValue(f"{name} is read-only")
         if name == _gain_set.APPLY_NAME:
             raise InvalidValue(
-                f"{name}: gain sets are applied by drive_link.workflows.gains.apply_gains "
+                f"{name}: gain sets are applied by drive_link.apply_gains "
                 "(drive-link set-gains), which checks the set's stability and margins first"
             )
         data = obj.encode(value)
@@ -314,20 +315,7 @@ class Drive:
             _rules.check_rules(self.read, {name: v})
         field = _gain_set.ACTIVE_GAIN_FIELD.get(name)
         if field is not None and isinstance(v, int | float):
-            from ..workflows.gains import (  # the one gain path, loaded on use
-                GainsRefused,
-                apply_gains,
-            )
-
-            try:
-                apply_gains(self, {field: v})
-            except GainsRefused as exc:
-                raise GainsRefused(
-                    f"{name}: {exc} (gains change through drive_link.workflows.gains.apply_gains: "
-                    f"drive-link set-gains {field}=... [--force])",
-                    exc.check,
-                ) from None
-            return
+            raise _gain_set.GainWriteRefused(name, field, v)
         if isinstance(v, int | float) and name in _rules.LOOP_NAMES:
             _rules.check_loops(self.read, {name: v})
         self.sdo.download(obj.index, obj.subindex, data, name)

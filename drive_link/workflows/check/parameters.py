@@ -151,9 +151,9 @@ def item_store_restore(d: Drive, opts: dict) -> str:
     snapshot = _persistent_snapshot(d)
     failed: list[str] = []
     try:
-        d.write(name, v2)
+        apply_gains(d, {"R_c": v2})  # a gain: the one gain path (Drive.write refuses it)
         d.store()
-        d.write(name, v3)
+        apply_gains(d, {"R_c": v3})
         d.reset(timeout=8.0)
         got = float(d.read(name))
         _expect(got == v2, f"after store + reset node R_c = {got}, expected stored {v2}")
