@@ -5,7 +5,8 @@ Prints, per package:
   import each other, directly or around a ring), with their members;
 - arrows back up: imports against the layering of docs/architecture.md
   (``firmware_protocol`` ← ``virtual_drive``, ``drive_link`` ← ``dashboard``;
-  ``drive_link`` never imports ``virtual_drive``);
+  ``drive_link`` never imports ``virtual_drive``; inside ``drive_link`` its folders
+  ``cli`` → ``workflows`` → ``link`` → ``errors``/``_jsonable``, the facade outside them);
 - private-field reaches: ``obj._name`` read or written where ``obj`` is neither ``self`` nor
   ``cls`` and ``_name`` is an attribute (not a module's private function reached through an
   import alias, which ``from x import _f`` would show just the same);
@@ -31,6 +32,8 @@ ALLOWED = {
     "drive_link": {"firmware_protocol"},
     "dashboard": {"firmware_protocol", "drive_link", "virtual_drive"},
 }
+#: drive_link's folders, top to bottom (docs/architecture.md): an import goes down only
+FOLDERS = {"cli": 0, "workflows": 1, "link": 2, "errors": 3, "_jsonable": 3}
 GENERATED = {"firmware_protocol/bldc_drive_od.h"}
 MAX_LINES = 600
 
@@ -139,6 +142,11 @@ def back_arrows(graph: dict[str, set[str]]) -> list[str]:
             pb = b.split(".")[0]
             if pa != pb and pb not in ALLOWED[pa]:
                 out.append(f"{a} -> {b}")
+            elif pa == pb == "drive_link":
+                fa = FOLDERS.get(a.split(".")[1] if "." in a else "")
+                fb = FOLDERS.get(b.split(".")[1] if "." in b else "")
+                if fa is not None and fb is not None and fb < fa:
+                    out.append(f"{a} -> {b}")
     return sorted(out)
 
 

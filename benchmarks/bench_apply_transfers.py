@@ -32,7 +32,7 @@ from _sdo_transfers import SdoTransfers
 
 from dashboard.browser import click as real_click
 from dashboard.browser import free_port, launch, open_bench, run_dashboard, select_tab, text_input
-from drive_link.bus import open_bus
+from drive_link.link.bus import open_bus
 
 NODE = 1
 QUIET_S = 4.0  #: window over which the background rate is measured (s)

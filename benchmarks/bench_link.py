@@ -18,9 +18,9 @@ import threading
 import time
 
 from drive_link import scan
-from drive_link.cli_connect import add_bus_arguments, connect_from_args
-from drive_link.drive import Drive
+from drive_link.cli.connect import add_bus_arguments, connect_from_args
 from drive_link.errors import DriveError
+from drive_link.link.drive import Drive
 from virtual_drive.launch import virtual_bench
 
 

@@ -42,7 +42,7 @@ def inside(uploads: int) -> int:
             print(f"virtual drive did not start: {line!r}")
             return 1
         with Drive.connect(interface="socketcan", channel="vcan0", node_id=1) as d:
-            from drive_link import _sdo_block as sdo_block
+            from drive_link.link import _sdo_block as sdo_block
 
             d.trace.configure(["i_p", "speed"], divider=1, length=8192)
             d.trace.arm()

@@ -146,7 +146,7 @@ def _pct(values: list[float], q: float) -> float:
 def reliability(args: argparse.Namespace) -> int:
     """``--tries`` uploads through a lossy, jittery hub; prints one line per try and a summary."""
     from drive_link import Drive, DriveError
-    from drive_link._sdo_block import last_stats
+    from drive_link.link._sdo_block import last_stats
 
     faults = ["--drop", str(args.drop), "--delay-ms", str(args.delay_ms),
               "--jitter-ms", str(args.jitter_ms), "--seed", str(args.seed)]  # fmt: skip

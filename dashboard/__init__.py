@@ -18,10 +18,10 @@ Private modules (one job each; they may change without notice):
 pydantic, limits from the EDS: bad input is a 422, nothing applied), ``_errors`` (errors → HTTP),
 ``_bench`` (one drive shared by all clients), ``_actions`` (long actions), ``_security`` (control
 lease, Origin, token), ``_tuning`` (gains through :func:`drive_link.apply_gains`, IP design
-eqs. 28–31) and ``_loop_view`` (Bode and pole curves from :mod:`drive_link.design`),
-``_experiments`` (:mod:`drive_link.steps` run as a long action, turned into plots), ``_export``
-(CSV, PNG), ``_fields`` (number fields with units), ``_live_plot``, ``_virtual`` (opens the
-bench: real bus, running hub, or hub + virtual drive), ``_gui`` + ``_gui_panel`` +
+eqs. 28–31) and ``_loop_view`` (Bode and pole curves from :mod:`drive_link.workflows.design`),
+``_experiments`` (:mod:`drive_link.workflows.steps` run as a long action, turned into plots),
+``_export`` (CSV, PNG), ``_fields`` (number fields with units), ``_live_plot``, ``_virtual`` (opens
+the bench: real bus, running hub, or hub + virtual drive), ``_gui`` + ``_gui_panel`` +
 ``_gui_tabs/`` (one module per tab) + ``_gui_field``, ``_gui_scene`` (3D rotor), ``_gui_guard``,
 ``_gui_pace`` (updates only as fast as each page applies them), ``_gui_status``.
 See ``docs/architecture.md``.

@@ -264,7 +264,7 @@ class Bench:
         """CiA 402 quick stop, at once: without the bench lock (a long action holds it for up
         to a minute), cancelling the long action and the sequence under way; they put back
         what they changed but do not enable the drive again (a quick stop wins over "as
-        found": :mod:`drive_link._stop_guard`). Returns the state reached."""
+        found": :mod:`drive_link.link._stop_guard`). Returns the state reached."""
         act = self.action
         if act is not None:
             act.quick_stopped = True

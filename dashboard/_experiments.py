@@ -1,11 +1,11 @@
 """Recorder-based experiments as the dashboard shows them: a trace capture, the current step test
 (Fig. 13, with the model's predicted response) and the speed-model identification (Fig. 16).
 
-The experiments themselves are drive_link's (:mod:`drive_link.steps`: recording, commutation
-retries, the model prediction with the measured back-EMF, metrics, the least-squares fit); this
-module runs them as a long action of the bench (deadline, progress, cancel, the drive put back
-as found on failure) and turns their results into captures for the plots and downloads. Times in
-s, currents in A, speed in rpm; the loop period Ts is 20 µs (fs = 50 kHz).
+The experiments themselves are drive_link's (:mod:`drive_link.workflows.steps`: recording,
+commutation retries, the model prediction with the measured back-EMF, metrics, the least-squares
+fit); this module runs them as a long action of the bench (deadline, progress, cancel, the drive put
+back as found on failure) and turns their results into captures for the plots and downloads. Times
+in s, currents in A, speed in rpm; the loop period Ts is 20 µs (fs = 50 kHz).
 """
 
 from __future__ import annotations
@@ -17,8 +17,9 @@ import numpy as np
 from dashboard._actions import LongAction
 from dashboard._bench import Bench, Capture, as_dict
 from dashboard._models import CurrentStepIn, IdentifyIn, TraceIn
-from drive_link import Trigger, metrics, steps
-from drive_link.trace import TS
+from drive_link import Trigger
+from drive_link.link.trace import TS
+from drive_link.workflows import metrics, steps
 
 __all__ = ["capture", "current_step", "identify"]
 
@@ -55,7 +56,7 @@ def _speed_factor(bench: Bench) -> float:
 
 
 def capture(bench: Bench, body: TraceIn) -> Capture:
-    """One trace as configured by ``body`` (drive_link.steps.record); adds ī_p (moving
+    """One trace as configured by ``body`` (drive_link.workflows.steps.record); adds ī_p (moving
     average) when i_p is recorded."""
     trig = Trigger(
         mode=body.trigger,
@@ -99,8 +100,8 @@ def capture(bench: Bench, body: TraceIn) -> Capture:
 
 def current_step(bench: Bench, body: CurrentStepIn, average_samples: int = 1) -> dict[str, Any]:
     """Current step from_A → to_A in current mode, recorded at 50 kHz (divider 1) for
-    ``duration_ms`` after the step (drive_link.steps.current_step: commutation retries, the
-    model's predicted response with the measured e_L, metrics of i_p averaged over
+    ``duration_ms`` after the step (drive_link.workflows.steps.current_step: commutation retries,
+    the model's predicted response with the measured e_L, metrics of i_p averaged over
     ``average_samples``); kept as a capture with the model overlaid."""
     if body.from_A == body.to_A:
         raise ValueError("from_A and to_A must differ")
@@ -166,14 +167,14 @@ def current_step(bench: Bench, body: CurrentStepIn, average_samples: int = 1) ->
 
 def identify(bench: Bench, body: IdentifyIn) -> dict[str, Any]:
     """Current step in current mode, trace of i_p and speed, least-squares fit of
-    G(z) = b/(z − a) at the loop rate (drive_link.steps.identify_speed_model); the fit is kept
-    for the IP design and the drive is put back as found."""
+    G(z) = b/(z − a) at the loop rate (drive_link.workflows.steps.identify_speed_model); the fit is
+    kept for the IP design and the drive is put back as found."""
     if body.from_A == body.to_A:
         raise ValueError("from_A and to_A must differ")
     sf = _speed_factor(bench)
     deadline = IDENTIFY_DEADLINE_S + 4.0 * (body.duration_s + 0.1) / sf
     with bench.long_action("identification", deadline) as act:
-        ident = steps.identify_speed_model(  # leaves the drive as found (drive_link.steps)
+        ident = steps.identify_speed_model(  # leaves the drive as found (workflows.steps)
             bench.drive,
             body.from_A,
             body.to_A,

@@ -9,7 +9,7 @@ import numpy as np
 
 from dashboard._bench import Capture
 from dashboard._plot_style import capture_styles
-from drive_link.writers import csv_text, png_bytes
+from drive_link.link.writers import csv_text, png_bytes
 
 __all__ = ["capture_csv", "capture_figure", "capture_png"]
 

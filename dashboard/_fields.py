@@ -7,7 +7,7 @@ Refused: empty text, words, ``nan``/``inf``, underscores, several numbers, value
 field's range (the message names the range; the value is not moved into it).
 
 A field with a display unit (:attr:`NumberSpec.unit`, e.g. ``"µH"``) also takes a quantity with a
-unit, converted by pint through :func:`drive_link.units.parse_value` (the CLI's and the API's
+unit, converted by pint through :func:`drive_link.link.units.parse_value` (the CLI's and the API's
 parser): ``20uH`` or ``0.02 mH`` in a µH field is 20; ``5 A`` in an rpm field is refused naming
 the wrong dimension. A bare number is in the field's unit.
 """
@@ -76,7 +76,7 @@ class NumberSpec:
         FieldError (one line) for anything else (a unit alone, ``1 2 rpm``, ``2*3 rpm``), a wrong
         dimension, nan/inf, a non-whole value in an integer field."""
         from drive_link.errors import InvalidValue
-        from drive_link.units import parse_value
+        from drive_link.link.units import parse_value
 
         if unit_part(s) is None:
             raise FieldError(
@@ -96,7 +96,7 @@ def unit_part(text: str) -> str | None:
     m = _WITH_UNIT.fullmatch(str(text).strip().replace("−", "-"))
     if m is None:
         return None
-    from drive_link.units import registry
+    from drive_link.link.units import registry
 
     try:
         registry().parse_units(m.group(4))  # the unit part alone: no numbers in it

@@ -118,7 +118,7 @@ class BenchGui:
         matplotlib.use("Agg", force=False)  # the report's figures: no display
         import matplotlib.pyplot
 
-        import drive_link.report  # noqa: F401
+        import drive_link.workflows.report  # noqa: F401
 
         install_send_lock()
         install_fast_cast()  # viser's per-assignment cast without rebuilding its type hints

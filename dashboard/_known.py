@@ -26,7 +26,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from drive_link import cia402
+from drive_link.link import cia402
 
 __all__ = ["POLL_PERIOD_S", "STALE_LIMITS_S", "STORE_POLL_S", "DriveWatch", "live_ages"]
 

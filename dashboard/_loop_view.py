@@ -1,8 +1,8 @@
 """The tuning view's curves: Bode plot of the open loops and closed-loop poles (paper Figs. 4, 5,
 12), computed from a gain set before it is applied.
 
-A thin adapter of :mod:`drive_link.design`'s loop responses to uPlot's data layout, no GUI.
-Units: frequency Hz, magnitude dB, phase degrees (unwrapped), poles as complex z (Ts = 20 µs).
+A thin adapter of :mod:`drive_link.workflows.design`'s loop responses to uPlot's data layout, no
+GUI. Units: frequency Hz, magnitude dB, phase degrees (unwrapped), poles as complex z (Ts = 20 µs).
 A gain set is the dictionary of :func:`dashboard._tuning.read_gains` (``type``, ``L_c`` H,
 ``R_c`` Ω, ``k_p``/``k_i``
 V/A, ``speed_k_p`` A/rpm, ``speed_k_i`` 1/sample, ``motor_R`` Ω, ``motor_L`` H).
@@ -25,7 +25,7 @@ __all__ = [
     "z_plane_data",
 ]
 
-N_POINTS = 400  #: frequencies on the log grid (drive_link.design's response grid)
+N_POINTS = 400  #: frequencies on the log grid (drive_link.workflows.design's response grid)
 
 
 @dataclass(frozen=True)
@@ -47,7 +47,7 @@ class LoopView:
 
 
 def frequency_grid() -> np.ndarray:
-    """The frequencies (Hz) every view is drawn on: drive_link.design's response grid."""
+    """The frequencies (Hz) every view is drawn on: drive_link.workflows.design's response grid."""
     return design.speed_loop_response(0.5, 1.0, 0.1, 0.1, n_points=N_POINTS).f_hz
 
 
@@ -57,7 +57,7 @@ def _finite(x: np.ndarray) -> np.ndarray:
 
 def loop_view(g: dict[str, Any], a: float, b: float) -> LoopView:
     """Bode curves and closed-loop poles of gain set ``g`` with speed model (a, b), from
-    drive_link.design's ``current_loop_response`` and ``speed_loop_response``.
+    drive_link.workflows.design's ``current_loop_response`` and ``speed_loop_response``.
 
     :raises ValueError: a value the transfer functions cannot take (e.g. L_c ≤ 0).
     """

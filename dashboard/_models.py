@@ -2,9 +2,9 @@
 
 Units are SI as on the drive (A, V, Ω, H, s, rpm) unless a field's name says otherwise. A field
 with a unit (an OD object's, or ``x-unit`` in its schema) also takes a string of a number and a
-unit (``{"L_c": "22.2 uH"}``), converted by pint (:func:`drive_link.units.parse_value`, the CLI's
-parser) before the bounds are checked; a wrong dimension or nan/inf is a 422 naming the field. A
-JSON number is taken in the field's unit, as before; a string without a unit stays refused.
+unit (``{"L_c": "22.2 uH"}``), converted by pint (:func:`drive_link.link.units.parse_value`, the
+CLI's parser) before the bounds are checked; a wrong dimension or nan/inf is a 422 naming the field.
+A JSON number is taken in the field's unit, as before; a string without a unit stays refused.
 Gain names are the drive's staged gain-set names (object 0x20F0, docs/contracts.md §1).
 A field that carries an OD object's value takes its bounds from the EDS (:func:`od_field`;
 :func:`od_fields` lists them), so the API cannot drift from what the drive accepts.
@@ -149,7 +149,7 @@ class Strict(BaseModel):
                     f"(the field is in {unit})"
                 )
             return value
-        from drive_link.units import parse_value
+        from drive_link.link.units import parse_value
 
         integer = cls.model_fields[info.field_name].annotation in (int, int | None)
         return parse_value(

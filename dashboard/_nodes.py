@@ -20,8 +20,8 @@ from collections.abc import Callable
 from typing import Any
 
 from dashboard._bench import Bench
-from drive_link.bus import NMT_STATES
 from drive_link.errors import NodeNotFound
+from drive_link.link.bus import NMT_STATES
 
 __all__ = ["OFFLINE_AFTER_S", "Nodes"]
 

@@ -1,7 +1,7 @@
-"""Gains: read back, preview (stability, margins, ‖S‖∞ via drive_link.design), apply as one set
-(drive_link.gains.apply_gains, the path ``drive-link set-gains`` takes), IP design from ξ and ω_n
-(eqs. 28–31), store, and live-vs-stored diff. The dashboard only presents: every rule and every
-loop model is drive_link's.
+"""Gains: read back, preview (stability, margins, ‖S‖∞ via drive_link.workflows.design), apply as
+one set (drive_link.workflows.gains.apply_gains, the path ``drive-link set-gains`` takes), IP design
+from ξ and ω_n (eqs. 28–31), store, and live-vs-stored diff. The dashboard only presents: every rule
+and every loop model is drive_link's.
 
 Units: L_c H, R_c Ω, current PI k_p/k_i V/A, speed k_p A/rpm, speed k_i 1/sample (Ts = 20 µs).
 """
@@ -15,9 +15,9 @@ from typing import Any
 from dashboard._bench import LIVE_NAMES, Bench, as_dict
 from dashboard._models import TYPE_NAMES
 from drive_link import design
-from drive_link import gains as link_gains
-from drive_link.drive import GAIN_FIELDS
 from drive_link.errors import InvalidValue
+from drive_link.link.drive import GAIN_FIELDS
+from drive_link.workflows import gains as link_gains
 from firmware_protocol import paper
 
 __all__ = [
@@ -129,7 +129,8 @@ def preview(bench: Bench, changes: dict[str, float | int]) -> dict[str, Any]:
 def response(bench: Bench, changes: dict[str, float | int], n_points: int = 200) -> dict[str, Any]:
     """Bode data (open loop dB and °, |T| and |S| dB over f Hz) and closed-loop poles/zeros in
     the z-plane of the current loop and of the IP speed loop with ``changes`` applied (the
-    paper's Figs. 4, 5, 12; drive_link.design.current_loop_response/speed_loop_response)."""
+    paper's Figs. 4, 5, 12;
+    drive_link.workflows.design.current_loop_response/speed_loop_response)."""
     g = _merged(bench, changes)
     cur = design.current_loop_response(
         g["type"],
@@ -158,9 +159,10 @@ def _ab(bench: Bench) -> tuple[float, float]:
 
 
 def apply(bench: Bench, changes: dict[str, float | int], *, force: bool = False) -> dict[str, Any]:
-    """Apply ``changes`` as one set through :func:`drive_link.gains.apply_gains` (the rule of
-    ``drive-link set-gains``) on the identified speed model; returns the applied set (its
-    :class:`~drive_link.gains.GainResult`), which the bench then holds and every page shows.
+    """Apply ``changes`` as one set through :func:`drive_link.workflows.gains.apply_gains` (the rule
+    of ``drive-link set-gains``) on the identified speed model; returns the applied set (its
+    :class:`~drive_link.workflows.gains.GainResult`), which the bench then holds and every page
+    shows.
 
     The set and the motor the check starts from are the ones the bench holds (:func:`held`):
     only what changes is staged. An unstable set, or one the drive's rule refuses, is refused

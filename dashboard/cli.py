@@ -17,8 +17,8 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, NoReturn
 
 from dashboard.config import BenchConfig
-from drive_link.cli_connect import add_bus_arguments, bus_extras_from_args
-from drive_link.closed_pipe import run_quietly, silence_output
+from drive_link.cli.closed_pipe import run_quietly, silence_output
+from drive_link.cli.connect import add_bus_arguments, bus_extras_from_args
 
 if TYPE_CHECKING:
     from fastapi import FastAPI
@@ -79,7 +79,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="join a running loopback hub on 127.0.0.1:PORT (virtual-drive run --hub)",
     )
     # python-can's --interface/-i, --channel/-c, --bitrate/-b (default 1000000), --fd,
-    # --data-bitrate, --timing, --bus-kwargs, and --node: drive_link.cli_connect, as everywhere
+    # --data-bitrate, --timing, --bus-kwargs, and --node: drive_link.cli.connect, as everywhere
     add_bus_arguments(p, hub=False, defaults={"bitrate": 1_000_000})
     p.add_argument("--host", default="127.0.0.1", help="API bind address (default 127.0.0.1)")
     p.add_argument("--port", type=int, default=8000, help="API port (default 8000)")

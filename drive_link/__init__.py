@@ -6,17 +6,20 @@ trace recorder), step tests, control design and the ``drive-link`` command.
 The public names are those of ``__all__``: the :class:`Drive` and what it returns, the errors,
 the enumerations of the object dictionary (IntEnums from :mod:`firmware_protocol.enums`), the
 gain facade (:func:`check_gains`, :func:`apply_gains`) and the design facade
-(:mod:`drive_link.design`). The gain and design names are imported on first use, so
+(:mod:`drive_link.workflows.design`). The gain and design names are imported on first use, so
 ``import drive_link`` stays light.
 
 Public modules (scripts import from them; documented in ``docs/architecture.md``):
-:mod:`~drive_link.drive`, :mod:`~drive_link.errors`, :mod:`~drive_link.trace`,
-:mod:`~drive_link.gains`, :mod:`~drive_link.design`, :mod:`~drive_link.steps`,
-:mod:`~drive_link.identify`, :mod:`~drive_link.metrics`, :mod:`~drive_link.units`,
-:mod:`~drive_link.restore`, :mod:`~drive_link.config_dcf`, :mod:`~drive_link.record`,
-:mod:`~drive_link.check`, :mod:`~drive_link.bus`, :mod:`~drive_link.cia402`,
-:mod:`~drive_link.supervision`, :mod:`~drive_link.cli` (``drive-link``) and
-:mod:`~drive_link.cli_connect` (the bus options every command line shares). Modules whose name
+:mod:`~drive_link.link.drive`, :mod:`~drive_link.errors`, :mod:`~drive_link.link.trace`,
+:mod:`~drive_link.workflows.gains`, :mod:`~drive_link.workflows.design`,
+:mod:`~drive_link.workflows.steps`,
+:mod:`~drive_link.workflows.identify`, :mod:`~drive_link.workflows.metrics`,
+:mod:`~drive_link.link.units`,
+:mod:`~drive_link.workflows.restore`, :mod:`~drive_link.workflows.config_dcf`,
+:mod:`~drive_link.link.record`,
+:mod:`~drive_link.workflows.check`, :mod:`~drive_link.link.bus`, :mod:`~drive_link.link.cia402`,
+:mod:`~drive_link.link.supervision`, :mod:`~drive_link.cli` (``drive-link``) and
+:mod:`~drive_link.cli.connect` (the bus options every command line shares). Modules whose name
 starts with ``_`` (the SDO client, connection, NMT, TPDO decoding, the CLI's tools …) are
 implementation and may change without notice.
 """
@@ -24,7 +27,7 @@ implementation and may change without notice.
 from __future__ import annotations
 
 import importlib
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from firmware_protocol.enums import (
     ControllerType,
@@ -39,12 +42,7 @@ from firmware_protocol.enums import (
     TraceTriggerMode,
 )
 
-from ._emcy import Emcy
 from ._jsonable import jsonable
-from ._live import LiveStreams
-from ._objects import ObjectInfo, ObjectTable
-from ._scan import NodeInfo, scan
-from .drive import Drive, Gains
 from .errors import (
     BusError,
     DriveError,
@@ -55,17 +53,26 @@ from .errors import (
     StateError,
     UnknownObject,
 )
-from .supervision import SupervisionError
-from .trace import Trace, Trigger
+from .link._emcy import Emcy
+from .link._live import LiveStreams
+from .link._objects import ObjectInfo, ObjectTable
+from .link._scan import NodeInfo, scan
+from .link.drive import Drive, Gains
+from .link.supervision import SupervisionError
+from .link.trace import Trace, Trigger
+
+if TYPE_CHECKING:  # the lazy names below, as the type checker sees them
+    from .workflows import design
+    from .workflows.gains import GainCheck, GainResult, GainsRefused, apply_gains, check_gains
 
 #: Names loaded on first use: name → module (relative to this package).
 _LAZY = {
-    "design": ".design",
-    "GainCheck": ".gains",
-    "GainResult": ".gains",
-    "GainsRefused": ".gains",
-    "apply_gains": ".gains",
-    "check_gains": ".gains",
+    "design": ".workflows.design",
+    "GainCheck": ".workflows.gains",
+    "GainResult": ".workflows.gains",
+    "GainsRefused": ".workflows.gains",
+    "apply_gains": ".workflows.gains",
+    "check_gains": ".workflows.gains",
 }
 
 __all__ = [
@@ -113,7 +120,7 @@ def __getattr__(name: str) -> Any:
     if module is None:
         raise AttributeError(f"module 'drive_link' has no attribute {name!r}")
     mod = importlib.import_module(module, __name__)
-    value = mod if module == f".{name}" else getattr(mod, name)
+    value = mod if module.rpartition(".")[2] == name else getattr(mod, name)
     globals()[name] = value
     return value
 

@@ -45,7 +45,7 @@ class DriveTimeout(DriveError):  # noqa: N818
 class NodeGone(DriveTimeout):
     """The drive's heartbeat stopped for the host's consumer time (3 producer periods, at least
     2 s): the node is gone (dead, unpowered or cut off the bus). A call to it fails after one SDO
-    response timeout (:mod:`drive_link.supervision`)."""
+    response timeout (:mod:`drive_link.link.supervision`)."""
 
 
 class SdoAbort(DriveError):  # noqa: N818

@@ -1,5 +1,5 @@
 """Every command line takes python-can's own bus options (the README's promise), from one helper
-(drive_link.cli_connect), and drive-dashboard hands them to can.Bus.
+(drive_link.cli.connect), and drive-dashboard hands them to can.Bus.
 
 Truth: python-can's own ``can.cli.add_bus_arguments`` (the option set it defines) and the
 python-can bus the dashboard opened (its attributes)."""
@@ -16,7 +16,7 @@ import pytest
 from dashboard import cli as dashboard_cli
 from dashboard.config import BenchConfig
 from drive_link import cli as link_cli
-from drive_link.cli_connect import bus_extras_from_args
+from drive_link.cli.connect import bus_extras_from_args
 
 pytestmark = pytest.mark.timeout(60)
 

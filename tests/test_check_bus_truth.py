@@ -19,7 +19,7 @@ import can
 import pytest
 
 from drive_link import Drive
-from drive_link.check import run_checks
+from drive_link.workflows.check import run_checks
 
 pytestmark = pytest.mark.timeout(90)
 
@@ -109,7 +109,7 @@ def test_a_timing_item_stalled_in_every_window_is_not_judged_and_does_not_fail(p
     """Issue 29: a host stall during a timing item repeats it "instead of failing or passing
     it"; stalled in every window (a GIL-holding thread each window), the verdict is "not
     judged" — neither pass nor fail — and the run is not failed by it."""
-    from drive_link.check import NOT_JUDGED, TIMING_ATTEMPTS
+    from drive_link.workflows.check import NOT_JUDGED, TIMING_ATTEMPTS
 
     d, _vd = parts
     done = threading.Event()

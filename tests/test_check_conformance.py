@@ -19,8 +19,8 @@ import pytest
 from canopen.sdo import SdoAbortedError
 
 from drive_link import Drive, cli
-from drive_link.check import run_checks
-from drive_link.check.conformance import CONFORMANCE_ITEMS, EDS_PATH
+from drive_link.workflows.check import run_checks
+from drive_link.workflows.check.conformance import CONFORMANCE_ITEMS, EDS_PATH
 from firmware_protocol import load_od
 
 pytestmark = pytest.mark.timeout(180)

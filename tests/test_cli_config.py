@@ -111,7 +111,7 @@ def test_config_load_checks_first_then_writes_all(node, capsys, tmp_path):
 
 
 def test_config_load_gains_follow_the_gain_policy(node, capsys, tmp_path):
-    """L_c = 1.6 L has poor margins (drive_link.gains: refused without --force, exit 8 in
+    """L_c = 1.6 L has poor margins (drive_link.workflows.gains: refused without --force, exit 8 in
     set-gains); a DCF with it is refused the same way, nothing written, and loads with --force
     through the gain set."""
     f = tmp_path / "g.dcf"
@@ -201,7 +201,7 @@ def test_dashboard_path_text_in_text_out(node):
     import io
 
     from drive_link import Drive
-    from drive_link.config_dcf import dcf_text, diff, load, read_config
+    from drive_link.workflows.config_dcf import dcf_text, diff, load, read_config
 
     with Drive.connect(interface="virtual", channel=node, node_id=7) as d:
         text = dcf_text(read_config(d), d.node_id)

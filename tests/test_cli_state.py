@@ -130,7 +130,7 @@ def test_step_and_identify_restore_state_mode_setpoint(hub):
     assert rc == 0, err
     assert where(hub) == before
     # an error inside the step also restores: --no-enable fails after the step has selected
-    # current mode and written i_from (drive_link.steps.current_step)
+    # current mode and written i_from (drive_link.workflows.steps.current_step)
     rc, out, err = dl(hub, "step", "current", "--from", "12", "--no-enable")
     assert rc == 1 and "enable it first" in one_line(err)
     assert where(hub) == before

@@ -17,7 +17,7 @@ from fastapi.testclient import TestClient
 
 from dashboard.app import create_app
 from dashboard.config import BenchConfig
-from drive_link.bus import open_bus
+from drive_link.link.bus import open_bus
 from firmware_protocol.entry import f32
 
 

@@ -1,6 +1,6 @@
 """The dashboard's REST API leaves the drive as found after a current step and an
 identification (issue 24 deliverable 2: the API like the CLI), with drive_link doing it
-(drive_link.steps): from speed mode at 1000 rpm, enabled, back to speed mode at 1000 rpm,
+(drive_link.workflows.steps): from speed mode at 1000 rpm, enabled, back to speed mode at 1000 rpm,
 enabled, with the i_p* it had. The truth is the drive's own objects read through drive_link."""
 
 from __future__ import annotations

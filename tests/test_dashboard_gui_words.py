@@ -18,7 +18,7 @@ from fastapi.testclient import TestClient
 from dashboard._gui_words import CONFIG_FORCE_LABEL, diff_rows, gui_text, shown
 from dashboard.app import create_app
 from dashboard.config import BenchConfig
-from drive_link.config_dcf import dcf_text, read_config
+from drive_link.workflows.config_dcf import dcf_text, read_config
 
 pytestmark = pytest.mark.timeout(120)
 
@@ -69,7 +69,7 @@ def test_dcf_dry_run_in_the_gui_names_the_gui_checkbox_and_shows_field_units(ben
     # drive_link itself (the CLI's path) names --force
     import io
 
-    from drive_link.config_dcf import load
+    from drive_link.workflows.config_dcf import load
 
     with pytest.raises(Exception, match="--force"):
         load(d, io.StringIO(poor), dry_run=True)

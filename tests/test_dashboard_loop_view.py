@@ -1,6 +1,7 @@
-"""The tuning view's curves (dashboard._loop_view on drive_link.design) against python-control
-(test-only oracle): Bode magnitude/phase of the open current and speed loops and the closed-loop
-poles, for each controller law, and the z-plane data layout uPlot needs (one ascending x array)."""
+"""The tuning view's curves (dashboard._loop_view on drive_link.workflows.design) against
+python-control (test-only oracle): Bode magnitude/phase of the open current and speed loops and the
+closed-loop poles, for each controller law, and the z-plane data layout uPlot needs (one ascending x
+array)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,6 @@
-"""The Report tab lists drive_link.report's experiments without importing it (its scipy imports
-held up the first page for 2-6 s): its copy of the ids must be the report's, in its order."""
+"""The Report tab lists drive_link.workflows.report's experiments without importing it (its scipy
+imports held up the first page for 2-6 s): its copy of the ids must be the report's, in its
+order."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ import sys
 
 def test_report_tab_ids_are_the_reports():
     from dashboard._gui_tabs.report import REPORT_IDS
-    from drive_link.report import EXPERIMENTS
+    from drive_link.workflows.report import EXPERIMENTS
 
     assert REPORT_IDS == tuple(EXPERIMENTS)
 
@@ -28,7 +29,7 @@ class Page:  # the page the tab is built on: its GUI, notices and action wrapper
         return srv.gui.add_markdown("", visible=False)
 
 ReportTab(Page())
-print("IMPORTED", "drive_link.report" in sys.modules, "scipy.optimize" in sys.modules)
+print("IMPORTED", "drive_link.workflows.report" in sys.modules, "scipy.optimize" in sys.modules)
 srv.stop()
 """
 

@@ -10,7 +10,7 @@ import pytest
 from lti_oracle import discrete_response
 
 from drive_link import design
-from drive_link.metrics import step_metrics
+from drive_link.workflows.metrics import step_metrics
 
 pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 

@@ -16,7 +16,7 @@ import pytest
 
 from drive_link import design
 from drive_link.cli.design import run_cli
-from drive_link.design import speed_loop
+from drive_link.workflows.design import speed_loop
 
 pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 

@@ -1,4 +1,4 @@
-"""One loop as one object (drive_link.design.CurrentLoopPars / SpeedLoopPars): the loop it
+"""One loop as one object (drive_link.workflows.design.CurrentLoopPars / SpeedLoopPars): the loop it
 describes is the paper's. Truth: python-control (test-only oracle) building eq. (8)'s plant
 with eq. (22)'s PI law, and the IP law of eq. (27) on eq. (26)'s model, by its own route."""
 

@@ -1,5 +1,5 @@
-"""The tuning view's data (drive_link.design.current_loop_response / speed_loop_response: Bode
-and z-plane poles, the paper's Figs. 4, 5, 12) against python-control and scipy (test-only
+"""The tuning view's data (drive_link.workflows.design.current_loop_response / speed_loop_response:
+Bode and z-plane poles, the paper's Figs. 4, 5, 12) against python-control and scipy (test-only
 oracles), built independently from the paper's equations."""
 
 from __future__ import annotations

@@ -32,7 +32,7 @@ import pytest
 from eds_utils.core.file_io.read_eds import read_eds
 from objdictgen.node import Node
 
-from drive_link import config_dcf
+from drive_link.workflows import config_dcf
 from firmware_protocol import EDS_PATH
 from firmware_protocol.generate import main as generate_main
 
@@ -177,7 +177,7 @@ def test_dcf_opens_in_both_checkers_with_the_values_written(tmp_path):
     head, _, rest = text.partition("[DeviceComissioning]\n")
     bare.write_text(head + rest.partition("\n\n")[2])
     node = Node.LoadFile(bare)
-    from drive_link._objects import default_table
+    from drive_link.link._objects import default_table
 
     table = default_table()
     for name, value in values.items():

@@ -184,7 +184,7 @@ def test_drive_link_bus_monitor_counts_exact_frame_lengths():
     # bits, the all-zero frame 53, a remote frame follows the oracle; error frames count nothing
     import can
 
-    from drive_link._connection import BusMonitor
+    from drive_link.link._connection import BusMonitor
 
     mon = BusMonitor()
     car = bytes.fromhex("4001087500000000")

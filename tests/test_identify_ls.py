@@ -12,7 +12,11 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from drive_link.identify import fit_first_order, identify_first_order, simulate_first_order
+from drive_link.workflows.identify import (
+    fit_first_order,
+    identify_first_order,
+    simulate_first_order,
+)
 
 pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 

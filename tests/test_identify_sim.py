@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from drive_link.cli.design import run_cli
-from drive_link.identify import fit_first_order
+from drive_link.workflows.identify import fit_first_order
 
 sim_mod = pytest.importorskip("virtual_drive.sim")
 

@@ -14,8 +14,8 @@ import pytest
 from conftest import RunQueueProbe, heartbeat_explained, min_rate
 
 from drive_link import cli
-from drive_link.check import ITEMS
-from drive_link.gains import apply_gains
+from drive_link.workflows.check import ITEMS
+from drive_link.workflows.gains import apply_gains
 
 pytestmark = [pytest.mark.timeout(90), pytest.mark.unit]
 

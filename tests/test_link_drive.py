@@ -27,9 +27,9 @@ from drive_link import (
     StateError,
     scan,
 )
-from drive_link.gains import apply_gains
-from drive_link.restore import switch_mode
-from drive_link.trace import Trigger
+from drive_link.link.trace import Trigger
+from drive_link.workflows.gains import apply_gains
+from drive_link.workflows.restore import switch_mode
 
 pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 

@@ -1,5 +1,5 @@
-"""One gain-apply path (drive_link.gains.apply_gains) with one force policy: an unstable set is
-never applied, not even with --force/force; poor margins only with it. `drive-link set-gains`
+"""One gain-apply path (drive_link.workflows.gains.apply_gains) with one force policy: an unstable
+set is never applied, not even with --force/force; poor margins only with it. `drive-link set-gains`
 goes through it (the dashboard's PUT /api/gains too: tests/test_dashboard_api.py).
 
 Truth: the closed-loop poles of the paper's PI loop (eq. 22 on eq. 8) from python-control
@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from drive_link import Drive, InvalidValue, cli
-from drive_link.gains import GainsRefused, apply_gains, check_gains
+from drive_link.workflows.gains import GainsRefused, apply_gains, check_gains
 
 pytestmark = [pytest.mark.timeout(90), pytest.mark.unit]
 
@@ -109,19 +109,43 @@ def test_apply_gains_force_overrides_margins_only(node):
         apply_gains(d, {"k_p": float("nan")})
 
 
-def test_a_write_of_a_gain_object_takes_the_one_gain_path(node):
-    """Drive.write of an active gain is judged by the same policy as apply_gains (the margin
-    rule too, not only stability), and applying a staged set is only the gain path's."""
+def test_a_library_write_of_a_gain_object_is_refused_for_the_one_gain_path(node):
+    """Drive.write of an active gain sends nothing and names the one gain path (apply_gains),
+    good margins or not; the OD's rules are checked first; applying a staged set is only the gain
+    path's."""
     _, d = node
     before = d.read_gains()
-    with pytest.raises(GainsRefused) as exc:  # stable, GM 0.9 dB: refused like apply_gains'
-        d.write("current_controller.L_c", 1.8 * L)
-    assert not exc.value.unstable and "apply_gains" in str(exc.value)
+    with pytest.raises(InvalidValue, match="apply_gains") as exc:  # good margins: still refused
+        d.write("current_controller.L_c", 0.9 * L)
+    assert not isinstance(exc.value, GainsRefused) and "set-gains L_c=" in str(exc.value)
     with pytest.raises(InvalidValue, match="does not hold"):
         d.write("current_controller.L_c", 2.2 * L)  # unstable: L_c < 2 L (eq. 17) first
     with pytest.raises(InvalidValue, match="apply_gains"):
         d.write("gain_set_apply", 1)
     assert d.read_gains() == before  # nothing applied
-    d.write("current_controller.L_c", 0.9 * L)  # good margins: applied as one set
+
+
+def test_drive_link_write_of_a_gain_object_takes_the_one_gain_path(node):
+    """`drive-link write` of an active gain is judged by the same policy as apply_gains (the
+    margin rule too, not only stability): refused with exit 7 and nothing applied, or applied
+    as one set."""
+    ch, d = node
+    before = d.read_gains()
+
+    def write(name: str, value: float) -> tuple[int, str, str]:
+        out, err = io.StringIO(), io.StringIO()
+        argv = ["write", "--interface", "virtual", "--channel", ch, "--node", "5", name,
+                repr(value)]
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            rc = cli.main(argv)
+        return rc, out.getvalue(), err.getvalue()
+
+    rc, out, err = write("current_controller.L_c", 1.8 * L)  # stable, GM 0.9 dB: refused
+    assert rc == 7 and out == "" and "apply_gains" in err and "--force" in err
+    rc, out, err = write("current_controller.L_c", 2.2 * L)  # unstable: L_c < 2 L (eq. 17)
+    assert rc == 7 and "does not hold" in err
+    assert d.read_gains() == before  # nothing applied
+    rc, out, err = write("current_controller.L_c", 0.9 * L)  # good margins: applied as one set
+    assert rc == 0, err
     assert d.read("current_controller.L_c") == pytest.approx(0.9 * L, rel=1e-6)
-    d.write("current_controller.L_c", before.L_c)
+    apply_gains(d, {"L_c": before.L_c})

@@ -9,7 +9,7 @@ import struct
 import numpy as np
 import pytest
 
-from drive_link._live import BATCH, LiveStreams, MappedField, TpdoConfig
+from drive_link.link._live import BATCH, LiveStreams, MappedField, TpdoConfig
 
 pytestmark = pytest.mark.unit
 

@@ -1,5 +1,5 @@
-"""The gain-set check (drive_link.gains.check_gains: `set-gains` and the dashboard) against
-python-control (test-only oracle): closed-loop poles of the paper's deadbeat loop (eq. 15 on
+"""The gain-set check (drive_link.workflows.gains.check_gains: `set-gains` and the dashboard)
+against python-control (test-only oracle): closed-loop poles of the paper's deadbeat loop (eq. 15 on
 eq. 8) and of the PI loop (eq. 22), and the rule L_c ≤ 1.5 L without force."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import control
 import numpy as np
 import pytest
 
-from drive_link.gains import check_gains
+from drive_link.workflows.gains import check_gains
 
 pytestmark = pytest.mark.unit
 

@@ -14,13 +14,13 @@ import canopen
 import numpy as np
 import pytest
 
-from drive_link import cia402
-from drive_link._connection import acquire, release
-from drive_link._live import LiveStreams, MappedField, TpdoConfig
-from drive_link._objects import default_table
-from drive_link._sdo import SdoChannel
-from drive_link.bus import bus_settings, open_bus
 from drive_link.errors import BusError, DriveTimeout, InvalidValue, SdoAbort, UnknownObject
+from drive_link.link import cia402
+from drive_link.link._connection import acquire, release
+from drive_link.link._live import LiveStreams, MappedField, TpdoConfig
+from drive_link.link._objects import default_table
+from drive_link.link._sdo import SdoChannel
+from drive_link.link.bus import bus_settings, open_bus
 from firmware_protocol import EDS_PATH
 
 pytestmark = pytest.mark.timeout(60)
@@ -316,10 +316,10 @@ def test_drop_estimate_ignores_jitter_and_pauses(lost, pause_s, want):
 # ------------------------------------------------------------ canopen RemoteNode on our channel
 @pytest.mark.unit
 def test_remote_node_shares_the_locked_channel_and_canopen_pieces_work(local_node):
-    """drive_link._remote: canopen's TPDO.read(), NMT master and EMCY consumer on our channel,
+    """drive_link.link._remote: canopen's TPDO.read(), NMT master and EMCY consumer on our channel,
     against canopen's own LocalNode (its OD and NMT state read in-process are the truth)."""
-    from drive_link._nmt import send_command
-    from drive_link._remote import remote_node
+    from drive_link.link._nmt import send_command
+    from drive_link.link._remote import remote_node
 
     srv, conn = local_node
     sdo = SdoChannel(conn.network, 5, 0x605, 0x585, timeout=0.5)
@@ -353,7 +353,7 @@ def test_remote_node_shares_the_locked_channel_and_canopen_pieces_work(local_nod
 
     # a mapping naming an object the EDS lacks: canopen raises KeyError, the field is kept by
     # its index (not decoded) and the other fields keep their offsets
-    from drive_link._live import read_tpdo_configs
+    from drive_link.link._live import read_tpdo_configs
 
     srv.sdo[0x1A00][0].raw = 2
     srv.sdo[0x1A00][1].raw = 0x5FFF0010

@@ -12,8 +12,9 @@ import control
 import numpy as np
 import pytest
 
-from drive_link import Drive, steps
-from drive_link.gains import apply_gains
+from drive_link import Drive
+from drive_link.workflows import steps
+from drive_link.workflows.gains import apply_gains
 
 pytestmark = [pytest.mark.timeout(90), pytest.mark.unit]
 

@@ -1,4 +1,4 @@
-"""Typed reads: drive_link.od_names (the ``Literal`` names Drive.read is overloaded on) is the
+"""Typed reads: drive_link.link.od_names (the ``Literal`` names Drive.read is overloaded on) is the
 EDS's, grouped by the type a read returns.
 
 Truth: canopen's own EDS import (its ODVariable data types, CiA 301 Table 44 codes), not our
@@ -13,7 +13,7 @@ import canopen
 import pytest
 from canopen.objectdictionary import datatypes
 
-from drive_link import _od_names_gen, od_names
+from drive_link.link import _od_names_gen, od_names
 from firmware_protocol import EDS_PATH
 
 pytestmark = pytest.mark.unit
@@ -38,7 +38,7 @@ def test_the_checked_in_names_module_is_the_generated_one():
 
 
 def test_names_are_grouped_by_the_eds_data_type():
-    from drive_link._objects import default_table
+    from drive_link.link._objects import default_table
 
     table = default_table()
     variables = _canopen_variables()

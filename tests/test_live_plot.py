@@ -22,7 +22,7 @@ import pytest
 
 from drive_link import cli
 from drive_link.cli.live_plot import handle_key, resolve_signals, run_text
-from drive_link.drive import Drive
+from drive_link.link.drive import Drive
 
 pytestmark = pytest.mark.timeout(240)
 
@@ -194,8 +194,8 @@ def test_render_of_a_known_ramp_with_lost_frames():
     import canopen
     import numpy as np
 
-    from drive_link._live import LiveStreams, MappedField, TpdoConfig
     from drive_link.cli.live_plot import render
+    from drive_link.link._live import LiveStreams, MappedField, TpdoConfig
 
     cfg = TpdoConfig(2, 0x281, 0xFF, 1, [MappedField("measurements.speed", 0x2040, 5, 0, 32,
                                                      "<f", "rpm")])

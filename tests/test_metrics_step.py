@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from drive_link import design
-from drive_link.metrics import moving_average, step_metrics
+from drive_link.workflows.metrics import moving_average, step_metrics
 
 pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 

@@ -18,7 +18,7 @@ import pytest
 from canopen.emcy import EmcyError
 
 from drive_link import cli
-from drive_link.monitor import BusTable, IdFilter, parse_ids
+from drive_link.link.monitor import BusTable, IdFilter, parse_ids
 from firmware_protocol import EDS_PATH
 from virtual_drive.hub import Hub
 

@@ -23,8 +23,8 @@ import canopen
 import pytest
 
 from drive_link import cli
-from drive_link._nmt import NMT_STATES, HeartbeatMonitor
 from drive_link.errors import DriveTimeout, SdoAbort
+from drive_link.link._nmt import NMT_STATES, HeartbeatMonitor
 
 pytestmark = pytest.mark.timeout(240)
 

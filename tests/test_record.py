@@ -20,9 +20,9 @@ import numpy as np
 import pytest
 
 from drive_link import cli
-from drive_link._replay import SdoFollower, replay_file
-from drive_link.drive import Drive
-from drive_link.record import record_bus
+from drive_link.link._replay import SdoFollower, replay_file
+from drive_link.link.drive import Drive
+from drive_link.link.record import record_bus
 
 pytestmark = pytest.mark.timeout(180)
 

@@ -20,7 +20,7 @@ from pathlib import Path
 import can
 import pytest
 
-from drive_link.record import record_bus
+from drive_link.link.record import record_bus
 
 pytestmark = pytest.mark.timeout(120)
 

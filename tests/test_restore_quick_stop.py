@@ -1,5 +1,5 @@
-"""drive_link: a quick stop wins over "leave the drive as found" (drive_link.restore and
-drive_link._stop_guard). Found enabled in speed mode at 1000 rpm; inside ``leave_as_found`` an
+"""drive_link: a quick stop wins over "leave the drive as found" (drive_link.workflows.restore and
+drive_link.link._stop_guard). Found enabled in speed mode at 1000 rpm; inside ``leave_as_found`` an
 experiment switches to current mode and runs; another thread sends a quick stop. Then the
 experiment's own enable is refused, and the restore puts back the mode and setpoints but leaves
 the drive stopped. The truth is the drive's statusword read over SDO and decoded with the
@@ -14,7 +14,7 @@ import pytest
 
 from drive_link import Drive
 from drive_link.errors import StateError
-from drive_link.restore import leave_as_found, switch_mode
+from drive_link.workflows.restore import leave_as_found, switch_mode
 
 pytestmark = pytest.mark.timeout(120)
 

@@ -15,7 +15,7 @@ import canopen
 import pytest
 from canopen.sdo import SdoAbortedError, SdoClient
 
-from drive_link import Drive, InvalidValue
+from drive_link import Drive, InvalidValue, apply_gains
 
 pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 
@@ -39,22 +39,22 @@ def test_host_refuses_what_the_drive_refuses():
     try:
         # predictive control without the back-EMF feed-forward (issue 10: held 649 of 1000 rpm)
         with pytest.raises(InvalidValue, match="feed-forward"):
-            d.write("current_controller.type", 2)
+            apply_gains(d, {"type": 2})  # a gain changes through the one gain path
         assert d.read("current_controller.type") == 0
         with pytest.raises(SdoAbortedError) as exc:
             sdo.download(0x2010, 1, bytes([2]))
         assert exc.value.code == 0x06090030
         # a PI pair far above the paper's (k_p = 100 V/A): unstable current loop
-        d.write("current_controller.type", 1)
+        apply_gains(d, {"type": 1})
         with pytest.raises(InvalidValue, match="unstable"):
-            d.write("current_controller.k_p", 100.0)
+            apply_gains(d, {"k_p": 100.0})
         with pytest.raises(SdoAbortedError) as exc:
             sdo.download(0x2010, 4, struct.pack("<f", 100.0))
         assert exc.value.code == 0x06090031
         assert d.read("current_controller.k_p") == pytest.approx(0.4647)
         # what both accept goes through
-        d.write("current_controller.emf_feedforward", 1)
-        d.write("current_controller.type", 2)
+        apply_gains(d, {"emf_feedforward": 1})
+        apply_gains(d, {"type": 2})
         assert d.read("current_controller.type") == 2
     finally:
         net.disconnect()

@@ -13,7 +13,7 @@ import can
 import pytest
 
 from drive_link import Drive
-from drive_link.drive import CONSUMER_MIN_MS
+from drive_link.link.drive import CONSUMER_MIN_MS
 
 pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 

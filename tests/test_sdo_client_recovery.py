@@ -25,8 +25,8 @@ from can.interfaces.virtual import VirtualBus
 from canopen.sdo import SdoAbortedError, SdoClient, SdoCommunicationError
 
 from drive_link import Drive, DriveTimeout
-from drive_link import _sdo_block as sdo_block
-from drive_link._sdo import SdoChannel
+from drive_link.link import _sdo_block as sdo_block
+from drive_link.link._sdo import SdoChannel
 from firmware_protocol import load_od
 from virtual_drive.node import VirtualDrive
 

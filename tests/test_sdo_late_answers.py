@@ -15,7 +15,7 @@ import struct
 import pytest
 from canopen.sdo.exceptions import SdoAbortedError
 
-from drive_link import _sdo_segmented as sdo_segmented
+from drive_link.link import _sdo_segmented as sdo_segmented
 
 pytestmark = [pytest.mark.timeout(30), pytest.mark.unit]
 
@@ -32,8 +32,8 @@ def _upload_answer(value: float) -> bytes:
 
 
 class _ScriptedClient:
-    """Just what :mod:`drive_link._sdo_segmented` uses of its channel client
-    (:class:`drive_link._sdo_client.ChannelClient`, a canopen ``SdoClient``): ``rx_cobid``,
+    """Just what :mod:`drive_link.link._sdo_segmented` uses of its channel client
+    (:class:`drive_link.link._sdo_client.ChannelClient`, a canopen ``SdoClient``): ``rx_cobid``,
     ``responses``, ``network.send_message``, the per-channel ``not_before``/``stale_answer`` and
     an unsupervised node (no heartbeat watch); ``script[k]`` = frames queued after the k-th
     request."""

@@ -18,7 +18,7 @@ import can
 import pytest
 from test_node_support import Bench
 
-from drive_link._sdo import SdoChannel
+from drive_link.link._sdo import SdoChannel
 
 pytestmark = pytest.mark.timeout(60)
 

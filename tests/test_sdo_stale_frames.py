@@ -20,7 +20,7 @@ import can
 import canopen
 import pytest
 
-from drive_link._sdo import SdoChannel, stamps_host_time
+from drive_link.link._sdo import SdoChannel, stamps_host_time
 
 pytestmark = pytest.mark.unit
 

@@ -19,7 +19,7 @@ import pytest
 
 from drive_link import cli
 from drive_link.cli.shell import Shell
-from drive_link.drive import Drive
+from drive_link.link.drive import Drive
 
 pytestmark = pytest.mark.timeout(200)
 

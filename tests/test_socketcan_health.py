@@ -17,7 +17,7 @@ import can
 import pytest
 
 from drive_link import Drive, scan
-from drive_link._bus_health import (
+from drive_link.link._bus_health import (
     BUS_OFF,
     ERROR_ACTIVE,
     ERROR_PASSIVE,
@@ -25,7 +25,7 @@ from drive_link._bus_health import (
     BusHealth,
     state_from_error_frame,
 )
-from drive_link._connection import PacedNetwork, queue_full
+from drive_link.link._connection import PacedNetwork, queue_full
 
 pytestmark = [pytest.mark.timeout(60), pytest.mark.unit]
 

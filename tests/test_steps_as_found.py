@@ -89,8 +89,8 @@ def test_mode_switch_coasts_instead_of_braking_at_the_current_limit(hub):
     constant 0.93 s); the drive's own disable ramp (0x605C = 1, kept as found) brakes at the
     current limit to standstill before SWITCHED ON is reached."""
     from drive_link import Drive
-    from drive_link.restore import leave_as_found
-    from drive_link.steps import ensure_mode
+    from drive_link.workflows.restore import leave_as_found
+    from drive_link.workflows.steps import ensure_mode
 
     before = at_1000rpm(hub)
     with Drive.connect(node_id=1, host="127.0.0.1", port=hub.port) as d:

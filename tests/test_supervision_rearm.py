@@ -19,8 +19,8 @@ import pytest
 from can.interfaces.virtual import VirtualBus
 
 from drive_link import Drive
-from drive_link._sdo import SdoChannel
-from drive_link.supervision import SupervisionError
+from drive_link.link._sdo import SdoChannel
+from drive_link.link.supervision import SupervisionError
 
 pytestmark = [pytest.mark.timeout(90), pytest.mark.unit]
 

@@ -10,7 +10,7 @@ import control as ct
 import numpy as np
 import pytest
 
-from drive_link.config_dcf import dcf_text
+from drive_link.workflows.config_dcf import dcf_text
 from virtual_drive.cli import main as cli_main
 from virtual_drive.sim.params import Ts
 from virtual_drive.sweep import SpecError, load_spec, run_sweep

@@ -1,7 +1,7 @@
-"""drive_link.units: typed values with units → the OD unit of the object.
+"""drive_link.link.units: typed values with units → the OD unit of the object.
 
 Oracle: pint's own conversions of the same quantities written out term by term (a separate
-registry, so a wrong alias or a wrong OD unit in drive_link.units shows), and SI facts
+registry, so a wrong alias or a wrong OD unit in drive_link.link.units shows), and SI facts
 (1 rpm = 2π/60 rad/s)."""
 
 from __future__ import annotations
@@ -11,9 +11,9 @@ import math
 import pint
 import pytest
 
-from drive_link._objects import default_table
 from drive_link.errors import InvalidValue
-from drive_link.units import parse_for, parse_value
+from drive_link.link._objects import default_table
+from drive_link.link.units import parse_for, parse_value
 
 pytestmark = pytest.mark.unit
 

@@ -1,4 +1,4 @@
-"""The one CSV and PNG writer (drive_link.writers) that traces, replays, captures and report
+"""The one CSV and PNG writer (drive_link.link.writers) that traces, replays, captures and report
 figures use. Truth: Python's csv reader, numpy's float32 and the PNG signature (ISO/IEC 15948)."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import io
 import numpy as np
 import pytest
 
-from drive_link.writers import column_header, csv_text, png_bytes
+from drive_link.link.writers import column_header, csv_text, png_bytes
 
 pytestmark = pytest.mark.unit
 

@@ -55,7 +55,7 @@ EXIT_CLOSED_PIPE = 141
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``virtual-drive``; returns the process exit status. A reader that closes
     the output pipe (``virtual-drive --hub | head -1``) ends it quietly: no traceback, stdout and
-    stderr pointed at /dev/null, status 141 (drive_link.closed_pipe does the same for
+    stderr pointed at /dev/null, status 141 (drive_link.cli.closed_pipe does the same for
     ``drive-link``; this package does not import it)."""
     try:
         rc = _main(argv)

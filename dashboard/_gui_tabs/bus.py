@@ -1,5 +1,5 @@
 """Bus tab: the raw bus as a table per CAN-ID (count, rate, age, data) with its CANopen meaning,
-as ``drive-link monitor`` shows it (:class:`drive_link.monitor.BusTable`).
+as ``drive-link monitor`` shows it (:class:`drive_link.link.monitor.BusTable`).
 
 "Watch the bus" opens this browser's own connection to the bench's bus (like the Config tab's
 recorder) and redraws the table twice a second; unchecked (the default) it costs nothing.
@@ -18,8 +18,8 @@ import can
 
 from dashboard._gui_page import Page
 from dashboard._gui_tabs.config import bus_kwargs
-from drive_link.bus import open_bus
-from drive_link.monitor import BusTable, IdFilter, TableFeed, parse_ids
+from drive_link.link.bus import open_bus
+from drive_link.link.monitor import BusTable, IdFilter, TableFeed, parse_ids
 
 __all__ = ["BusTab", "rows_html"]
 

@@ -1,7 +1,7 @@
 """Config tab: the drive's writable configuration as a CiA 306 DCF file (download; upload to
-compare or apply, all-or-nothing, limits checked first: :mod:`drive_link.config_dcf`) and a
-recording of the bus that other CAN tools open (.asc Vector, .blf, .log candump:
-:func:`drive_link.record.record_bus`), downloaded when stopped.
+compare or apply, all-or-nothing, limits checked first: :mod:`drive_link.workflows.config_dcf`) and
+a recording of the bus that other CAN tools open (.asc Vector, .blf, .log candump:
+:func:`drive_link.link.record.record_bus`), downloaded when stopped.
 """
 
 from __future__ import annotations
@@ -16,8 +16,8 @@ from typing import Any
 
 from dashboard._gui_page import Page
 from dashboard._gui_words import CONFIG_FORCE_LABEL, diff_rows
-from drive_link import config_dcf
-from drive_link.record import record_bus
+from drive_link.link.record import record_bus
+from drive_link.workflows import config_dcf
 
 __all__ = ["RECORD_FORMATS", "ConfigTab", "bus_kwargs"]
 
@@ -26,7 +26,7 @@ MAX_RECORD_S = 600.0  #: a recording stops by itself after this (s)
 
 
 def bus_kwargs(config: Any, hub_port: int | None) -> dict[str, Any]:
-    """:func:`drive_link.bus.open_bus` keywords for a second connection to the bench's bus."""
+    """:func:`drive_link.link.bus.open_bus` keywords for a second connection to the bench's bus."""
     if config.virtual and hub_port is not None:
         return {"host": "127.0.0.1", "port": hub_port, "bitrate": config.bitrate}
     if config.join_hub is not None:

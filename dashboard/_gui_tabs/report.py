@@ -1,6 +1,6 @@
-"""Report tab: the commissioning report of :mod:`drive_link.report` (the paper's experiments on
-the connected drive) run as a long action of the bench (progress bar, Cancel, the drive put
-back as found by each experiment), with the verdicts shown and report.html / report.json
+"""Report tab: the commissioning report of :mod:`drive_link.workflows.report` (the paper's
+experiments on the connected drive) run as a long action of the bench (progress bar, Cancel, the
+drive put back as found by each experiment), with the verdicts shown and report.html / report.json
 offered for download. The last report is kept per bench, so every browser can download it.
 
 Units: as each metric states (A, rpm, s, Ω, H, %).
@@ -17,9 +17,10 @@ from dashboard._gui_page import Page
 __all__ = ["REPORT_IDS", "ReportTab"]
 
 REPORT_DEADLINE_S = 600.0  #: the whole report gives up (and puts the drive back) after this, s
-#: drive_link.report.EXPERIMENTS' ids in their order (a unit test keeps them equal): the tab is
-#: built without importing drive_link.report, whose scipy imports cost 2-6 s of CPU on a loaded
-#: host and held up the first page's plots (the GUI imports it when it starts: BenchGui.start)
+#: drive_link.workflows.report.EXPERIMENTS' ids in their order (a unit test keeps them equal): the
+#: tab is built without importing drive_link.workflows.report, whose scipy imports cost 2-6 s of CPU
+#: on a loaded host and held up the first page's plots (the GUI imports it when it starts:
+#: BenchGui.start)
 REPORT_IDS = (
     "current_step_deadbeat",
     "lc_sweep",
@@ -58,8 +59,8 @@ class ReportTab:
         self.rep_dl.on_click(page.action(self._download_report, self.rep_md, needs_control=False))
 
     def _run_report(self, event: Any) -> str:
-        from drive_link.report import run_report
-        from drive_link.steps import Hooks
+        from drive_link.workflows.report import run_report
+        from drive_link.workflows.steps import Hooks
 
         only = [k for k, cb in self.rep_checks.items() if cb.value]
         if not only:
@@ -77,7 +78,7 @@ class ReportTab:
                 f"{len(rep.results)} not failed; download it below")
 
     def _download_report(self, event: Any) -> None:
-        from drive_link.report.html import render
+        from drive_link.workflows.report.html import render
 
         rep = _LAST.get(self.page.bench)
         if rep is None:

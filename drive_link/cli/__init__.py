@@ -15,7 +15,7 @@ player and viewer apart over the shared ``can.cli``): :mod:`._common` (exit code
 parser, bus options), :mod:`.main` (``build_parser``, ``main``), :mod:`.state`,
 :mod:`.objects`, :mod:`.experiments`, :mod:`.conformance`, :mod:`.config`, :mod:`.tools`
 (``shell``, ``record``, ``replay``, ``live --plot``), :mod:`.lss`, :mod:`.monitor`,
-:mod:`.design` (offline ``design``/``identify``); ``report`` is :mod:`drive_link.report.cli`.
+:mod:`.design` (offline ``design``/``identify``); ``report`` is :mod:`drive_link.cli.report`.
 """
 
 from __future__ import annotations

@@ -19,11 +19,7 @@ from typing import Any, NoReturn, Protocol
 from firmware_protocol import abort_codes
 from firmware_protocol.index_ranges import PDO_PARAMETERS
 
-from .. import units
 from .._jsonable import jsonable as _jsonable
-from ..cia402 import FAULT, FAULT_REACTION_ACTIVE
-from ..cli_connect import add_hidden_aliases, bus_options
-from ..drive import Drive
 from ..errors import (
     BusError,
     DriveError,
@@ -34,6 +30,10 @@ from ..errors import (
     StateError,
     UnknownObject,
 )
+from ..link import units
+from ..link.cia402 import FAULT, FAULT_REACTION_ACTIVE
+from ..link.drive import Drive
+from .connect import add_hidden_aliases, bus_options
 
 __all__ = [
     "EXIT_CODES",
@@ -198,7 +198,8 @@ class _Parser(argparse.ArgumentParser):
 def quantity(unit: str, integer: bool = False) -> Callable[[str], float | int]:
     """argparse ``type=`` for a value in ``unit`` typed with or without a unit (``20uH``,
     ``1000rpm``, ``-5A``); a wrong dimension, nan/inf or (``integer``) a non-whole value is a
-    one-line usage error. The same parser as the API's (:func:`drive_link.units.parse_value`)."""
+    one-line usage error. The same parser as the API's
+    (:func:`drive_link.link.units.parse_value`)."""
 
     def parse(text: str) -> float | int:
         try:
@@ -212,7 +213,7 @@ def quantity(unit: str, integer: bool = False) -> Callable[[str], float | int]:
 
 def _object_value(name: str) -> Callable[[str], float | int]:
     """argparse ``type=`` for a value of the OD object ``name`` (its unit and integer type)."""
-    from .._objects import default_table
+    from ..link._objects import default_table
 
     obj = default_table()[name]
     return quantity(obj.unit, integer=not obj.is_float)
@@ -222,7 +223,7 @@ def _object_value(name: str) -> Callable[[str], float | int]:
 #: without ``default``, default). The default is filled in after parsing (see :func:`_merge_bus`).
 def _bus_options() -> list[tuple[tuple[str, ...], dict[str, Any], Any]]:
     return [
-        *bus_options(),  # python-can's, --host/--port, --node (drive_link.cli_connect)
+        *bus_options(),  # python-can's, --host/--port, --node (drive_link.cli.connect)
         (
             ("--sdo-timeout",),
             {"type": quantity("s"), "help": "SDO response timeout per frame, s (default 0.3)"},
@@ -325,7 +326,7 @@ _TRACE_OBJECTS = ("trace_config", "trace_channels", "trace_data")
 
 def _state_hint(exc: SdoAbort) -> str:
     """The fix for an object the drive refused in its present state (abort 0x08000022)."""
-    from .._objects import default_table
+    from ..link._objects import default_table
 
     table = default_table()
     obj = table.by_index(exc.index, exc.subindex)

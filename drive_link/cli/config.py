@@ -1,5 +1,5 @@
 """``drive-link config save|load|diff FILE.dcf``: the drive's configuration as a CiA 306 DCF
-(:mod:`drive_link.config_dcf`)."""
+(:mod:`drive_link.workflows.config_dcf`)."""
 
 from __future__ import annotations
 
@@ -8,14 +8,14 @@ import sys
 import warnings
 from pathlib import Path
 
-from ..drive import Drive
+from ..link.drive import Drive
 from ._common import AddCommand, _emit
 
 __all__ = ["add_parsers"]
 
 
 def cmd_config(args: argparse.Namespace, d: Drive) -> int:
-    from .. import config_dcf
+    from ..workflows import config_dcf
 
     if args.action == "save":
         with warnings.catch_warnings(record=True) as caught:

@@ -1,5 +1,5 @@
-"""``drive-link check``: the conformance run (:func:`drive_link.check.run_checks`) with one
-line per item as it finishes and the summary; exit 1 when an item failed."""
+"""``drive-link check``: the conformance run (:func:`drive_link.workflows.check.run_checks`) with
+one line per item as it finishes and the summary; exit 1 when an item failed."""
 
 from __future__ import annotations
 
@@ -7,15 +7,15 @@ import argparse
 import json
 from typing import Any
 
-from ..drive import Drive
 from ..errors import InvalidValue
+from ..link.drive import Drive
 from ._common import AddCommand
 
 __all__ = ["add_parsers"]
 
 
 def cmd_check(args: argparse.Namespace, d: Drive) -> int:
-    from ..check import run_checks
+    from ..workflows.check import run_checks
 
     only = args.only.split(",") if args.only else None
     skip = args.skip.split(",") if args.skip else None

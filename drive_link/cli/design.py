@@ -27,11 +27,11 @@ from typing import Any, NoReturn
 
 import numpy as np
 
-from drive_link import design
 from drive_link._jsonable import jsonable as _clean
-from drive_link.design import analyse_current_loop
-from drive_link.identify import fit_first_order
-from drive_link.metrics import step_metrics
+from drive_link.workflows import design
+from drive_link.workflows.design import analyse_current_loop
+from drive_link.workflows.identify import fit_first_order
+from drive_link.workflows.metrics import step_metrics
 
 
 class UsageError(ValueError):
@@ -87,7 +87,7 @@ def _fmt(x: float | None, spec: str = ".4g", unit: str = "") -> str:
 # --------------------------------------------------------------------------- design
 def _drive_limits_problem(k_p: float, k_i: float) -> str | None:
     """None if the drive's EDS limits of 0x2020 k_p/k_i admit the gains, else one line."""
-    from drive_link._objects import default_table
+    from drive_link.link._objects import default_table
 
     table = default_table()
     for name, v in (("speed_controller.k_p", k_p), ("speed_controller.k_i", k_i)):

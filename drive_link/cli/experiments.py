@@ -1,5 +1,5 @@
 """``drive-link`` commands that record from a running drive: ``live``, ``trace``, ``step``,
-``identify-drive`` (each leaves the drive as found: :mod:`drive_link.steps`)."""
+``identify-drive`` (each leaves the drive as found: :mod:`drive_link.workflows.steps`)."""
 
 from __future__ import annotations
 
@@ -7,8 +7,8 @@ import argparse
 from collections.abc import Callable
 from typing import Any
 
-from .. import units
-from ..drive import Drive
+from ..link import units
+from ..link.drive import Drive
 from ._common import (
     AddCommand,
     _bus_option_before_only,
@@ -49,7 +49,7 @@ def cmd_live(args: argparse.Namespace, d: Drive) -> int:
 
 
 def cmd_trace(args: argparse.Namespace, d: Drive) -> int:
-    from ..trace import Trigger
+    from ..link.trace import Trigger
 
     level = args.level
     if isinstance(level, str):
@@ -94,7 +94,7 @@ def cmd_trace(args: argparse.Namespace, d: Drive) -> int:
 def _settle_args(args: argparse.Namespace) -> Any:
     """The --settle-window/--settle-timeout/--settle-tol options as a :class:`steps.Settle`
     (None: the experiment's defaults)."""
-    from ..steps import Settle
+    from ..workflows.steps import Settle
 
     given = {
         k: v
@@ -115,7 +115,7 @@ def _say(args: argparse.Namespace) -> Callable[[str], None]:
 
 
 def cmd_step(args: argparse.Namespace, d: Drive) -> int:
-    from .. import steps
+    from ..workflows import steps
 
     if args.kind == "current":
         for v in (args.i_from, args.i_to):
@@ -125,7 +125,7 @@ def cmd_step(args: argparse.Namespace, d: Drive) -> int:
             d.table["target_velocity"].check(units.parse_value(v, "rpm", integer=True))
     settle = _settle_args(args)
     _usable_state(d)
-    res = _run_step(args, d, steps, settle)  # leaves the drive as found (drive_link.steps)
+    res = _run_step(args, d, steps, settle)  # leaves the drive as found (workflows.steps)
     out = res.summary()
     _save_outputs(args, res, out)
     m = res.metrics
@@ -148,7 +148,7 @@ def cmd_step(args: argparse.Namespace, d: Drive) -> int:
 
 
 def _run_step(args: argparse.Namespace, d: Drive, steps: Any, settle: Any) -> Any:
-    """The step test itself (drive_link.steps: settled start, drive left as found)."""
+    """The step test itself (drive_link.workflows.steps: settled start, drive left as found)."""
     hooks = steps.Hooks(say=_say(args))
     if args.kind == "current":
         return steps.current_step(
@@ -180,8 +180,8 @@ def _run_step(args: argparse.Namespace, d: Drive, steps: Any, settle: Any) -> An
 
 
 def cmd_identify(args: argparse.Namespace, d: Drive) -> int:
-    from .. import design
-    from ..steps import Hooks, identify_speed_model
+    from ..workflows import design
+    from ..workflows.steps import Hooks, identify_speed_model
 
     for v in (args.i_from, args.i_to):
         d.table["setpoints.i_p_ref"].check(v)

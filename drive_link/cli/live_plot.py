@@ -1,8 +1,8 @@
 """``drive-link live --plot SIGNAL...``: a live terminal plot of TPDO signals (moteus tview-like).
 
 One panel per signal, stacked, the last ``--window`` s of the drive's TPDO streams
-(:class:`~drive_link._live.LiveStreams`: i_p, speed from TPDO2, i_p_ref, speed_ref from TPDO3 …),
-each with its unit, latest value and range; a status line with the frame counts, the dropped
+(:class:`~drive_link.link._live.LiveStreams`: i_p, speed from TPDO2, i_p_ref, speed_ref from TPDO3
+…), each with its unit, latest value and range; a status line with the frame counts, the dropped
 frames (estimated from the event-timer cadence, per TPDO) and the bus load.
 
 On a terminal it is drawn with :mod:`curses` (stdlib): keys ``space`` quick stop (the plot goes
@@ -23,9 +23,9 @@ from typing import TextIO
 
 import numpy as np
 
-from .._live import LiveStreams
-from ..drive import Drive
 from ..errors import InvalidValue
+from ..link._live import LiveStreams
+from ..link.drive import Drive
 
 __all__ = [
     "KEYS",
@@ -261,7 +261,7 @@ def run_curses(
 def drive_state(drive: Drive) -> str:
     """NMT state and the 402 state from the statusword in the TPDOs (no SDO round trip, so a
     silent drive cannot stall the view)."""
-    from ..cia402 import state_from_statusword
+    from ..link.cia402 import state_from_statusword
 
     sw = drive.live.latest().get("statusword", float("nan"))
     state = state_from_statusword(int(sw)) if math.isfinite(sw) else "402 state ?"

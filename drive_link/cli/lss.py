@@ -49,9 +49,9 @@ def cmd_lss(args: argparse.Namespace) -> int:
     """See the module docstring; exit 0 also when no unconfigured drive answered."""
     import canopen.lss
 
-    from .. import _connection
-    from .._scan import scan
     from ..errors import DriveError, InvalidValue
+    from ..link import _connection
+    from ..link._scan import scan
 
     if not 1 <= args.first_id <= 127:
         raise InvalidValue(f"--first-id {args.first_id}: must be 1..127")

@@ -10,11 +10,8 @@ import logging
 import sys
 from collections.abc import Callable
 
-from ..cli_connect import connect_from_args
-from ..closed_pipe import run_quietly
-from ..drive import Drive
 from ..errors import DriveError, SdoAbort
-from ..report.cli import add_parser as add_report_parser
+from ..link.drive import Drive
 from . import _common, config, conformance, design, experiments, lss, monitor, objects, state, tools
 from ._common import (
     _ABORT_STATE,
@@ -30,7 +27,10 @@ from ._common import (
     _Parser,
     _state_hint,
 )
+from .closed_pipe import run_quietly
+from .connect import connect_from_args
 from .experiments import apply_step_defaults as _apply_step_defaults
+from .report import add_parser as add_report_parser
 
 __all__ = ["build_parser", "main"]
 

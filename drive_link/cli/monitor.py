@@ -1,5 +1,5 @@
 """``drive-link monitor``: the raw bus as a live table per CAN-ID with its CANopen meaning
-(:class:`drive_link.monitor.BusTable`), on a terminal or printed once."""
+(:class:`drive_link.link.monitor.BusTable`), on a terminal or printed once."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from typing import Any
 import can
 
 from ..errors import InvalidValue
-from ..monitor import BusTable, IdFilter, TableFeed, parse_ids, render
+from ..link.monitor import BusTable, IdFilter, TableFeed, parse_ids, render
 from ._common import _emit
 from .tools import bus_settings
 
@@ -20,7 +20,7 @@ __all__ = ["add_parsers", "cmd_monitor"]
 
 def cmd_monitor(args: argparse.Namespace) -> int:
     """``drive-link monitor [--show-nodes 1,2] [--ids 0x181,0x700-0x77F] [--seconds S]``."""
-    from ..bus import open_bus
+    from ..link.bus import open_bus
 
     nodes = None
     if args.nodes:

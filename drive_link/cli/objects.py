@@ -6,9 +6,10 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from .. import _od_select, units
-from ..drive import GAIN_FIELDS, Drive
 from ..errors import InvalidValue
+from ..link import _od_select, units
+from ..link._gain_set import GainWriteRefused
+from ..link.drive import GAIN_FIELDS, Drive
 from ._common import AddCommand, Refused, _emit, _parse_value, _timeout
 
 __all__ = ["add_parsers"]
@@ -16,10 +17,10 @@ __all__ = ["add_parsers"]
 
 def _gain_value(name: str, text: str) -> float | int | str:
     """A typed gain (``L_c=20uH``, ``speed_current_limit=50A``) in its object's unit
-    (:func:`drive_link.units.parse_value`); text that is no number passes through for
+    (:func:`drive_link.link.units.parse_value`); text that is no number passes through for
     ``type`` (``type=pi``)."""
-    from .._gain_set import GAIN_OBJECTS as _GAIN_OBJECTS
-    from .._objects import default_table
+    from ..link._gain_set import GAIN_OBJECTS as _GAIN_OBJECTS
+    from ..link._objects import default_table
 
     obj = default_table()[_GAIN_OBJECTS[name][1]]
     if name == "type" and _parse_value(text) == text:
@@ -52,10 +53,29 @@ def cmd_read(args: argparse.Namespace, d: Drive) -> int:
 def cmd_write(args: argparse.Namespace, d: Drive) -> int:
     obj = _od_select.select(args.name, d.table)
     value = units.parse_for(obj, args.value)
-    d.write(obj.name, value)
+    try:
+        d.write(obj.name, value)
+    except GainWriteRefused as gain:  # checked as every write is, then the one gain path
+        _apply_one_gain(d, gain)
     back = d.read(obj.name) if obj.readable else value
     _emit(args, {obj.name: back}, f"{obj.name} = {_with_unit(obj, back)}")
     return 0
+
+
+def _apply_one_gain(d: Drive, gain: GainWriteRefused) -> None:
+    """``drive-link write`` of an active gain object: the one gain path
+    (:func:`drive_link.apply_gains`, its stability and margin policy) with that one change; a
+    refusal names ``set-gains --force`` (exit 7, nothing sent)."""
+    from ..workflows.gains import GainsRefused, apply_gains
+
+    try:
+        apply_gains(d, {gain.field: gain.value})
+    except GainsRefused as exc:
+        raise GainsRefused(
+            f"{gain.name}: {exc} (gains change through drive_link.apply_gains: "
+            f"drive-link set-gains {gain.field}=... [--force])",
+            exc.check,
+        ) from None
 
 
 def cmd_objects(args: argparse.Namespace) -> int:
@@ -77,7 +97,7 @@ def cmd_gains_get(args: argparse.Namespace, d: Drive) -> int:
 
 
 def cmd_gains_set(args: argparse.Namespace, d: Drive) -> int:
-    from ..gains import GainsRefused, apply_gains
+    from ..workflows.gains import GainsRefused, apply_gains
 
     changes: dict[str, float | int | str] = {}
     for item in args.assignments:

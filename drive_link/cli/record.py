@@ -1,5 +1,5 @@
-"""``drive-link record FILE [--seconds S]``: :func:`drive_link.record.record_bus` until S s have
-passed or Ctrl-C (SIGTERM and SIGHUP end it the same way), then the frame counts."""
+"""``drive-link record FILE [--seconds S]``: :func:`drive_link.link.record.record_bus` until S s
+have passed or Ctrl-C (SIGTERM and SIGHUP end it the same way), then the frame counts."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from collections.abc import Callable
 from typing import Any
 
 from ..errors import DriveError, InvalidValue
-from ..record import check_log_path, record_bus
+from ..link.record import check_log_path, record_bus
 from ._common import _emit
 from .tools import bus_settings
 

@@ -1,5 +1,6 @@
 """``drive-link replay FILE``: a bus recording decoded offline
-(:func:`drive_link._replay.replay_file`) as a summary, CSV files, trace files and a text plot."""
+(:func:`drive_link.link._replay.replay_file`) as a summary, CSV files, trace files and a text
+plot."""
 
 from __future__ import annotations
 
@@ -8,15 +9,15 @@ from pathlib import Path
 
 import numpy as np
 
-from .._replay import replay_file
 from ..errors import DriveError
+from ..link._replay import replay_file
 from ._common import _emit
 
 __all__ = ["cmd_replay"]
 
 
 def _write_csv(path: Path, cols: dict[str, np.ndarray], units: dict[str, str]) -> Path:
-    from ..writers import column_header, write_csv
+    from ..link.writers import column_header, write_csv
 
     names = list(cols)
     header = [column_header(n, units.get(n, "s" if n == "t" else ""), keep_empty=False)

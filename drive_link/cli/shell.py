@@ -1,6 +1,6 @@
 """``drive-link shell``: the ``drive-link`` commands in one interactive session.
 
-One :class:`~drive_link.drive.Drive` stays open for the whole session (one bus connection, one
+One :class:`~drive_link.link.drive.Drive` stays open for the whole session (one bus connection, one
 supervision: the host heartbeat runs and the drive's heartbeat consumer watches it unless
 ``--no-heartbeat``), and every line is run through the same argparse sub-parsers and handlers as
 the one-shot command (``read statusword`` = ``drive-link read statusword``), on that Drive.
@@ -24,8 +24,8 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import TextIO
 
-from ..drive import Drive
 from ..errors import DriveError, InvalidValue, SdoAbort
+from ..link.drive import Drive
 from . import _common
 from ._common import _ABORT_STATE, EXIT_CODES, EXIT_UNSAFE, Refused, _merge_bus, _state_hint
 from .experiments import apply_step_defaults

@@ -7,18 +7,18 @@ from __future__ import annotations
 import argparse
 from collections.abc import Callable
 
-from .. import _connection
-from ..cia402 import OPERATION_ENABLED
-from ..cli_connect import bus_settings_from_args
-from ..drive import Drive
 from ..errors import InvalidValue, NodeNotFound, StateError
+from ..link import _connection
+from ..link.cia402 import OPERATION_ENABLED
+from ..link.drive import Drive
 from ._common import AddCommand, _emit, _object_value, _timeout, _usable_state
+from .connect import bus_settings_from_args
 
 __all__ = ["add_parsers"]
 
 
 def cmd_scan(args: argparse.Namespace) -> int:
-    from .._scan import scan
+    from ..link._scan import scan
 
     conn = _connection.acquire(**bus_settings_from_args(args))  # --fd, --bus-kwargs ... too
     listen = _timeout(args, 1.0)
@@ -73,7 +73,7 @@ def _status_text(st: dict) -> str:
         elif k == "supervision_rearmed_at" and v is None:
             v = "never (no restart seen)"
         elif k == "error_code" and isinstance(v, int):
-            from .._emcy import describe
+            from ..link._emcy import describe
 
             v = f"0x{v:04X} ({describe(v)})" if v else "0x0000"
         elif k in ("statusword", "error_register") and isinstance(v, int):

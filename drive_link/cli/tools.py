@@ -11,8 +11,8 @@ import argparse
 from collections.abc import Callable
 from typing import Any
 
-from ..cli_connect import bus_settings_from_args
 from ._common import _Parser, quantity
+from .connect import bus_settings_from_args
 
 __all__ = ["add_parsers", "bus_settings"]
 
@@ -33,8 +33,8 @@ def _lazy(module: str, fn: str) -> Callable[..., int]:
 
 
 def bus_settings(args: argparse.Namespace) -> dict[str, Any]:
-    """:meth:`Drive.connect` / :func:`drive_link.bus.open_bus` keywords from a command line's
-    bus options (:func:`drive_link.cli_connect.bus_settings_from_args` where it exists)."""
+    """:meth:`Drive.connect` / :func:`drive_link.link.bus.open_bus` keywords from a command line's
+    bus options (:func:`drive_link.cli.connect.bus_settings_from_args` where it exists)."""
     return dict(bus_settings_from_args(args))
 
 

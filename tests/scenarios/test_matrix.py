@@ -21,10 +21,11 @@ import numpy as np
 import pytest
 from conftest import RunQueueProbe
 
-from drive_link import DriveTimeout, SdoAbort, Trigger, scan, steps
-from drive_link.check import ITEMS
-from drive_link.gains import apply_gains
-from drive_link.trace import TS
+from drive_link import DriveTimeout, SdoAbort, Trigger, scan
+from drive_link.link.trace import TS
+from drive_link.workflows import steps
+from drive_link.workflows.check import ITEMS
+from drive_link.workflows.gains import apply_gains
 
 from .conditions import Bench, wait_until
 
@@ -356,10 +357,11 @@ def test_store_restart_restores(bench):
             "current_controller.R_c": 0.9 * g0.R_c,
             "speed_controller.k_p": 0.9 * g0.speed_k_p,
         }
-        for k, v in stored.items():
-            d.write(k, v)
+        # gains change through the one gain path (Drive.write refuses them)
+        apply_gains(d, {"R_c": stored["current_controller.R_c"],
+                        "speed_k_p": stored["speed_controller.k_p"]})
         d.store()
-        d.write("current_controller.R_c", 0.8 * g0.R_c)  # changed after the store: not kept
+        apply_gains(d, {"R_c": 0.8 * g0.R_c})  # changed after the store: not kept
     bench.restart()
     with bench.connect(heartbeat_ms=None) as d:
         for k, v in stored.items():
@@ -368,8 +370,7 @@ def test_store_restart_restores(bench):
             assert got == want, f"{_tag(bench)} {k} = {got} after restart, stored {want}"
         if "store_status" in d.table:
             assert int(d.read("store_status")) == 0, "store_status is not 0 (ok) after restart"
-        d.write("current_controller.R_c", g0.R_c)
-        d.write("speed_controller.k_p", g0.speed_k_p)
+        apply_gains(d, {"R_c": g0.R_c, "speed_k_p": g0.speed_k_p})
         d.store()
 
 

@@ -13,7 +13,7 @@ kernel's broadcast manager), the sniffer is a raw python-can socket of its own. 
   acknowledgements keep bytes 3..7 zero;
 * a remote frame for a TPDO gets the TPDO, one on 0x700 + N gets nothing (node guarding absent);
 * a dead drive (SIGSTOP): drive_link's call fails with NodeGone within its documented bound
-  (drive_link/supervision.py: the host's consumer time, then one SDO timeout; once gone, one
+  (drive_link/link/supervision.py: the host's consumer time, then one SDO timeout; once gone, one
   heartbeat period plus one SDO timeout).
 
 Not here: the inhibit time on the bus and the SYNC/RPDO latency of issue 29. UML spends about
@@ -175,7 +175,7 @@ def test_invalid_command_specifier_abort_names_the_request(bench):
 
 
 def test_sdo_block_acks_keep_reserved_bytes_zero(bench):
-    from drive_link._sdo import SdoChannel
+    from drive_link.link._sdo import SdoChannel
 
     t0 = time.monotonic()
     ch = SdoChannel(bench.net, N, 0x600 + N, 0x580 + N, timeout=2.0)
@@ -271,9 +271,9 @@ def test_a_stopped_drive_fails_a_call_with_node_gone_in_time(bench):
     """drive_link with its heartbeat supervision: the drive process is SIGSTOPped (no heartbeat,
     no SDO answer); a read fails with NodeGone once the host's consumer time and one SDO timeout
     are over, and then each call within one heartbeat period plus one SDO timeout, after one
-    request (drive_link/supervision.py), plus :data:`SLACK_S` for UML's scheduling."""
+    request (drive_link/link/supervision.py), plus :data:`SLACK_S` for UML's scheduling."""
     from drive_link import Drive, errors
-    from drive_link.supervision import CONSUMER_MIN_S
+    from drive_link.link.supervision import CONSUMER_MIN_S
 
     b = bench
     d = Drive.connect(interface="socketcan", channel="vcan0", node_id=N, sdo_timeout=1.0)

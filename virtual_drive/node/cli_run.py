@@ -143,7 +143,7 @@ def add_run_arguments(p: argparse.ArgumentParser) -> None:
         help="start a loopback hub in this process (127.0.0.1, --hub-port) and join it",
     )
     bus.add_argument("--hub-port", type=int, default=0, help="port of --hub (0 = any free)")
-    # one spelling with drive-link/drive-dashboard (drive_link.cli_connect; not imported here:
+    # one spelling with drive-link/drive-dashboard (drive_link.cli.connect; not imported here:
     # virtual_drive does not depend on the host package); -n/--node-id stay as hidden aliases
     p.add_argument("--node", dest="node_id", type=int, help="CANopen node-ID 1..127 (default 1)")
     p.add_argument("-n", "--node-id", dest="node_id", type=int, help=argparse.SUPPRESS)
