@@ -57,7 +57,7 @@ def _skip_if_the_host_starved_every_window(r) -> None:
     """A host that stalls this process in every measuring window (the CI's busy runs at load
     20: stalls of 70-300 ms in all three) leaves the item "not judged", as it must: what these
     tests check (a judged verdict) cannot be seen then. Skipped, with the item's own account."""
-    from drive_link.check import NOT_JUDGED
+    from drive_link.workflows.check import NOT_JUDGED
 
     if r.verdict == NOT_JUDGED:
         pytest.skip(f"the host stalled every window (load {os.getloadavg()[0]:.1f}): {r.detail}")
