@@ -10,9 +10,10 @@ How:
   - The clicks are real: headless /usr/bin/chromium (:mod:`dashboard.browser`) types L_c in the
     Tuning tab (the preview) and presses "Apply gains"; the speed setpoint is one
     ``PUT /api/setpoints/speed`` with the drive enabled (OPERATION ENABLED).
-  - The dashboard's own background reads (the drive watch reads the mode every 0.5 s) go on
-    meanwhile: their rate is measured over a quiet window first and subtracted; the raw count
-    and the background are printed beside the figure.
+  - The dashboard's own background reads go on meanwhile: the drive watch uploads the mode
+    display 0x6061 every 0.5 s. The figure is the action's transfers without those uploads
+    (counted by object, listed below each figure); the raw count and the background rate
+    measured over a quiet window first are printed beside it.
   - Load average (/proc/loadavg) printed beside every figure.
 
 Run: python benchmarks/bench_apply_transfers.py [--browsers 1,3]
@@ -35,6 +36,7 @@ from dashboard.browser import free_port, launch, open_bench, run_dashboard, sele
 from drive_link.link.bus import open_bus
 
 NODE = 1
+WATCH_POLL = ("upload", 0x6061, 0)  #: the drive watch's background read (mode display)
 QUIET_S = 4.0  #: window over which the background rate is measured (s)
 SETTLE_S = 1.0  #: after an action completed, transfers it caused may still come this long (s)
 
@@ -61,19 +63,19 @@ class Meter:
         time.sleep(QUIET_S)
         self.rate = (counter.total - n0) / QUIET_S  # background transfers per second
 
-    def measure(self, label: str, action: Callable[[], None]) -> float:
+    def measure(self, label: str, action: Callable[[], None]) -> int:
         before, t0, pdo0 = self.counter.snapshot(), time.monotonic(), self.counter.rpdos
         action()
         time.sleep(SETTLE_S)
         after, dt = self.counter.snapshot(), time.monotonic() - t0
         rpdos = self.counter.rpdos - pdo0
         raw = sum((after - before).values())
-        net = raw - self.rate * dt
+        net = raw - (after - before)[WATCH_POLL]
         objs = ", ".join(
             f"{k[0][0]}{k[1]:04X}:{k[2]}×{v}" for k, v in sorted((after - before).items())
         )
         print(
-            f"{label:<34} {net:6.1f} SDO transfers (raw {raw} in {dt:.1f} s, background "
+            f"{label:<34} {net:4d} SDO transfers (raw {raw} in {dt:.1f} s, background "
             f"{self.rate:.1f}/s), {rpdos} RPDO frames · load {loadavg()}\n    {objs}",
             flush=True,
         )
