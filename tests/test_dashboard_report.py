@@ -66,6 +66,18 @@ class StateSampler(threading.Thread):
                     self.host_s.append(host)
 
 
+def _known_state(api_url: str, timeout: float = 10.0) -> dict:
+    """``GET /api/state`` once the drive watch knows the mode again: right after a long action
+    the dashboard shows the mode as unknown (None) until its next poll (0.5 s) reads it, rather
+    than a mode the action may have changed (seen in an idle run: mode None just after Cancel)."""
+    deadline = time.monotonic() + timeout
+    while True:
+        st = httpx.get(f"{api_url}/api/state", timeout=30).json()
+        if st.get("mode") is not None or time.monotonic() > deadline:
+            return st
+        time.sleep(0.2)
+
+
 def test_report_tab_runs_and_downloads(tmp_path):
     from playwright.sync_api import sync_playwright
 
@@ -77,7 +89,7 @@ def test_report_tab_runs_and_downloads(tmp_path):
         page.on("request", lambda r: requested.append(r.url))
         open_bench(page, dash.gui_url)
         dismiss_notifications(page)
-        before = httpx.get(f"{dash.api_url}/api/state", timeout=30).json()
+        before = _known_state(dash.api_url)
         select_tab(page, "Report")
         for label in ("lc sweep", "current step pi", "current step predictive", "pwm ripple",
                       "identify electrical", "identify speed model", "speed step", "load step"):
@@ -113,7 +125,7 @@ def test_report_tab_runs_and_downloads(tmp_path):
         (e,) = rep["experiments"]
         assert e["id"] == "current_step_deadbeat" and e["verdict"] == "pass"
         assert e["metrics"]["settling_samples"]["measured"] == 2
-        after = httpx.get(f"{dash.api_url}/api/state", timeout=30).json()
+        after = _known_state(dash.api_url)
         for key in ("state", "mode"):
             if key in before:
                 assert after[key] == before[key], (before, after)
@@ -147,7 +159,7 @@ def test_report_tab_runs_and_downloads(tmp_path):
         assert max(lat) < 0.300, (sorted(lat)[-5:], load)
         moved = sum(a != b for a, b in itertools.pairwise(shots))
         assert moved >= len(shots) - 2, f"the live plot stood still: {moved} of {len(shots) - 1}"
-        after = httpx.get(f"{dash.api_url}/api/state", timeout=30).json()
+        after = _known_state(dash.api_url)
         for key in ("state", "mode", "speed_setpoint", "current_setpoint"):
             assert after[key] == before[key], (key, before, after)
         assert all(u.startswith(("http://127.0.0.1", "ws://127.0.0.1", "data:", "blob:"))

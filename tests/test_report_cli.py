@@ -11,6 +11,7 @@ import contextlib
 import io
 import json
 import math
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -106,8 +107,10 @@ def test_report_against_the_papers_equations(hub, tmp_path):
     assert p.returncode == 0, p.stdout + p.stderr
     rep = json.loads((tmp_path / "report.json").read_text())
     html = (tmp_path / "report.html").read_text()
-    assert html.count("data:image/png;base64,") >= 5 and "http" not in html.replace(
-        "http-equiv", "")
+    assert html.count("data:image/png;base64,") >= 5
+    # offline: no address to fetch (the figures' base64 text may hold "http" by chance)
+    text = re.sub(r"data:image/png;base64,[A-Za-z0-9+/=]+", "", html)
+    assert not re.search(r"https?://|//[\w.-]+/|<script|<link|@import", text), text[:400]
     assert set(rep) >= {"drive", "experiments"} and rep["drive"]["virtual"] is True
     for e in rep["experiments"]:
         assert set(e) == {"id", "title", "paper_ref", "verdict", "metrics"}

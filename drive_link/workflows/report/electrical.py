@@ -24,6 +24,7 @@ from scipy import optimize
 
 from firmware_protocol import paper
 
+from ...errors import DriveError
 from ...link.trace import TS
 from .. import design, steps
 from ._base import Context, ExperimentResult, Metric, figure_png, new_figure
@@ -32,6 +33,9 @@ __all__ = ["estimate_R_L", "identify_electrical"]
 
 I_FROM, I_TO = 10.0, 25.0  #: the measuring step, A
 N_FIT = 25  #: loop samples after the step used for the fit of L
+#: steps recorded at most until one has no commutation before the step (at 1000 rpm a sector
+#: lasts ~125 samples, the record 300: with the default 4, one report in some tens got none)
+RETRIES = 8
 
 
 def _clean_end(res: steps.StepResult) -> int:
@@ -58,6 +62,11 @@ def estimate_R_L(res: steps.StepResult) -> dict[str, float]:
     u_pre, u_post = (v - e)[pre], (v - e)[post]
     du = float(np.mean(u_post) - np.mean(u_pre))
     R = du / (2.0 * di)
+    if not (math.isfinite(R) and R > 0.0):  # a disturbed record (a commutation in its windows)
+        raise DriveError(
+            f"the current step's record gives R = {R:.3g} Ω (Δu {du:.3g} V over Δi_p {di:.3g} A):"
+            " a commutation disturbed its windows; run it again (the motor at another angle)"
+        )
     se = math.sqrt(np.var(u_pre) / max(1, u_pre.size - 1)
                    + np.var(u_post) / max(1, u_post.size - 1))
     sigma_R = abs(se / (2.0 * di)) + abs(R) * 0.002
@@ -103,7 +112,7 @@ def identify_electrical(ctx: Context) -> ExperimentResult:
     d = ctx.drive
     with _with_gains(ctx, type=0):
         res = steps.current_step(d, I_FROM, I_TO, length=300, pre_trigger=50,
-                                 hooks=ctx.step_hooks(0.0, 1.0))
+                                 commutation_retries=RETRIES, hooks=ctx.step_hooks(0.0, 1.0))
     est = estimate_R_L(res)
     R_od, L_od = float(res.params["R"]), float(res.params["L"])
     L_c = float(res.params["L_c"])
