@@ -150,27 +150,29 @@ def back_arrows(graph: dict[str, set[str]]) -> list[str]:
     return sorted(out)
 
 
+def reaches(path: Path) -> list[str]:
+    """``file:line: obj._field`` for each reach into another object's private field in
+    ``path``: ``obj`` neither ``self``/``cls`` nor an imported module or name."""
+    tree = ast.parse(path.read_text(), str(path))
+    names = {"self", "cls"}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            names |= {a.asname or a.name.split(".")[0] for a in node.names}
+        elif isinstance(node, ast.ImportFrom):
+            names |= {a.asname or a.name for a in node.names}
+    return [
+        f"{path.relative_to(ROOT)}:{node.lineno}: {ast.unparse(node)}"
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Attribute)
+        and node.attr.startswith("_")
+        and not node.attr.startswith("__")
+        and not (isinstance(node.value, ast.Name) and node.value.id in names)
+    ]
+
+
 def private_reaches(mods: dict[str, Path]) -> dict[str, int]:
-    """module -> count of ``obj._field`` on something other than self/cls or an imported
-    module name."""
-    out: dict[str, int] = {}
-    for mod, path in mods.items():
-        tree = ast.parse(path.read_text(), str(path))
-        aliases = {a.asname or a.name.split(".")[0] for n in ast.walk(tree)
-                   if isinstance(n, ast.Import) for a in n.names}
-        aliases |= {a.asname or a.name for n in ast.walk(tree)
-                    if isinstance(n, ast.ImportFrom) for a in n.names}
-        n = 0
-        for node in ast.walk(tree):
-            if (isinstance(node, ast.Attribute) and node.attr.startswith("_")
-                    and not node.attr.startswith("__")):
-                base = node.value
-                if isinstance(base, ast.Name) and base.id in ({"self", "cls"} | aliases):
-                    continue
-                n += 1
-        if n:
-            out[mod] = n
-    return out
+    """module -> count of :func:`reaches` in it."""
+    return {mod: n for mod, path in mods.items() if (n := len(reaches(path)))}
 
 
 def long_files() -> dict[str, int]:

@@ -14,7 +14,7 @@
 
 from __future__ import annotations
 
-import ast
+import importlib.util
 from pathlib import Path
 
 import pytest
@@ -22,9 +22,7 @@ import pytest
 pytestmark = [pytest.mark.unit, pytest.mark.timeout(300)]
 
 ROOT = Path(__file__).resolve().parents[1]
-PACKAGES = ("firmware_protocol", "virtual_drive", "drive_link", "dashboard")
-GENERATED = {"firmware_protocol/bldc_drive_od.h"}
-MAX_LINES = 600
+COUNTER = ROOT / "benchmarks" / "architecture_counts.py"
 #: private names of libraries the project reaches, because the library has no public way
 LIBRARY_PRIVATES = {
     "_actions": "argparse: a parser's list of actions (the shell's completion, the bus options)",
@@ -36,14 +34,14 @@ LIBRARY_PRIVATES = {
 }
 
 
-def _sources(*suffixes: str) -> list[Path]:
-    return [
-        p
-        for pkg in PACKAGES
-        for p in sorted((ROOT / pkg).rglob("*"))
-        if p.suffix in suffixes and "static" not in p.parts
-        and str(p.relative_to(ROOT)) not in GENERATED
-    ]
+def _counter():
+    """benchmarks/architecture_counts.py (the one home of the reach finder and the line count),
+    loaded by path."""
+    spec = importlib.util.spec_from_file_location("architecture_counts", COUNTER)
+    assert spec and spec.loader
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
 
 
 def test_import_contracts_hold(capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch):
@@ -56,28 +54,9 @@ def test_import_contracts_hold(capsys: pytest.CaptureFixture[str], monkeypatch: 
     assert "0 broken" in out, out
 
 
-def _reaches(path: Path) -> list[str]:
-    tree = ast.parse(path.read_text(), str(path))
-    modules: set[str] = {"self", "cls"}
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Import):
-            modules |= {a.asname or a.name.split(".")[0] for a in node.names}
-        elif isinstance(node, ast.ImportFrom):
-            modules |= {a.asname or a.name for a in node.names}
-    out = []
-    for node in ast.walk(tree):
-        if (
-            isinstance(node, ast.Attribute)
-            and node.attr.startswith("_")
-            and not node.attr.startswith("__")
-            and not (isinstance(node.value, ast.Name) and node.value.id in modules)
-        ):
-            out.append(f"{path.relative_to(ROOT)}:{node.lineno}: {ast.unparse(node)}")
-    return out
-
-
 def test_no_module_reaches_into_another_objects_private_fields():
-    found = [r for p in _sources(".py") for r in _reaches(p)]
+    counter = _counter()
+    found = [r for p in counter.modules().values() for r in counter.reaches(p)]
     ours = [r for r in found if r.rsplit(".", 1)[1] not in LIBRARY_PRIVATES]
     assert not ours, f"{len(ours)} private-field reaches:\n" + "\n".join(ours)
     used = {r.rsplit(".", 1)[1] for r in found}
@@ -85,11 +64,7 @@ def test_no_module_reaches_into_another_objects_private_fields():
 
 
 def test_no_hand_written_module_over_600_lines():
-    long = {
-        str(p.relative_to(ROOT)): n
-        for p in _sources(".py", ".c", ".h")
-        if (n := len(p.read_text().splitlines())) > MAX_LINES
-    }
+    long = _counter().long_files()
     assert not long, long
 
 
@@ -101,7 +76,7 @@ def test_the_reach_finder_sees_a_reach(tmp_path: Path):
           "        cls_ = type(self)\n        os._exit\n        return self.drive._ramp\n"
     probe.write_text(src)
     try:
-        found = _reaches(probe)
+        found = _counter().reaches(probe)
     finally:
         probe.unlink()
     assert [f.split(": ", 1)[1] for f in found] == ["d._param", "self.drive._ramp"], found

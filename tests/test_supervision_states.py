@@ -17,6 +17,7 @@ import time
 
 import pytest
 from canopen.sdo import SdoAbortedError
+from conftest import cia402_state
 from test_node_support import Bench
 
 pytestmark = pytest.mark.timeout(60)
@@ -33,25 +34,6 @@ def abort(bench: Bench, name: str, value) -> int | None:
     except SdoAbortedError as exc:
         return exc.code
     return None
-
-
-def sw_state(sw: int) -> str:
-    """CiA 402 Table 30 (the masks written out here, not the product's copy)."""
-    if sw & 0x4F == 0x40:
-        return "SWITCH ON DISABLED"
-    if sw & 0x6F == 0x21:
-        return "READY TO SWITCH ON"
-    if sw & 0x6F == 0x23:
-        return "SWITCHED ON"
-    if sw & 0x6F == 0x27:
-        return "OPERATION ENABLED"
-    if sw & 0x6F == 0x07:
-        return "QUICK STOP ACTIVE"
-    if sw & 0x4F == 0x0F:
-        return "FAULT REACTION ACTIVE"
-    if sw & 0x4F == 0x08:
-        return "FAULT"
-    return f"0x{sw:04X}"
 
 
 def run_at(bench: Bench, rpm: float = 1000.0) -> None:
@@ -98,14 +80,14 @@ def test_held_quick_stop_keeps_supervision_through_reset_communication(bench):
     reset_communication(bench)
     assert bench.read("consumer_heartbeat_time.consumer_1") == ENTRY
     bench.write("controlword", 0x000F)  # transition 16: back to OPERATION ENABLED
-    assert sw_state(bench.read("statusword")) == "OPERATION ENABLED"
+    assert cia402_state(bench.read("statusword")) == "OPERATION ENABLED"
     assert bench.wait(lambda: bench.read("measurements.speed") > 950.0, 10.0)
     t_lost = time.monotonic()
     bench.beat.stop()
     # 500 ms consumer time, then the 0x6007 quick stop (0x6085 = 20000 rpm/s, capped by the
     # current limit: under 0.5 s from 1000 rpm)
     assert bench.wait(lambda: abs(bench.read("measurements.speed")) < 15.0, 3.0)
-    assert sw_state(bench.read("statusword")) == "QUICK STOP ACTIVE"
+    assert cia402_state(bench.read("statusword")) == "QUICK STOP ACTIVE"
     emcy = bench.log.wait_for(0x81, 0.5, since=t_lost, pred=lambda d: d[:2] == b"\x30\x81")
     assert emcy is not None, "no EMCY 0x8130 heartbeat loss"
 
@@ -134,11 +116,11 @@ def _reach(bench: Bench, row: str) -> None:
     elif row == "FAULT":
         run_at(bench, 300.0)
         bench.write("sim_fault.inject", 1)  # overcurrent trip
-        assert bench.wait(lambda: sw_state(bench.read("statusword")) == "FAULT")
+        assert bench.wait(lambda: cia402_state(bench.read("statusword")) == "FAULT")
     else:
         raise AssertionError(row)
     want = row.replace(" braking", "").replace(" held", "")
-    assert sw_state(bench.read("statusword")) == want
+    assert cia402_state(bench.read("statusword")) == want
 
 
 #: row -> (configuration-only objects writable, 0x1016 kept by NMT reset communication)
