@@ -100,24 +100,20 @@ def _run_item(n: str, drive: Drive, opts: dict) -> tuple[bool, str, str]:
     judged (failed, saying so)."""
     if n not in TIMING_ITEMS:
         return _attempt(n, drive, opts)
-    stalls: list[float] = []
+    stalls: list[str] = []
     for _ in range(TIMING_ATTEMPTS):
         with StallProbe() as probe:
             ok, detail, verdict = _attempt(n, drive, opts)
         if not probe.stalled:
             if stalls:
-                detail += (
-                    " [measured again after host stalls of "
-                    + ", ".join(f"{s * 1e3:.0f} ms" for s in stalls)
-                    + "]"
-                )
+                detail += f" [measured again after the host stalled: {', '.join(stalls)}]"
             return ok, detail, verdict
-        stalls.append(probe.worst)
+        stalls.append(probe.describe())
     # neither failed nor passed (issue 29): the measurement says more about the host than about
     # the drive; the run does not fail on it, and the verdict and the summary say so
     return True, (
         f"not judged: the host stalled in all {TIMING_ATTEMPTS} windows ("
-        + ", ".join(f"{s * 1e3:.0f} ms" for s in stalls)
+        + ", ".join(stalls)
         + f"); last: {detail}"
     ), NOT_JUDGED
 
