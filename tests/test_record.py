@@ -268,8 +268,13 @@ def test_block_upload_reassembly_with_losses():
 
 def test_record_until_ctrl_c(hub_drive, tmp_path):
     """Without --seconds the recording runs until Ctrl-C (SIGINT in the main thread), then
-    the file is closed properly and the summary printed (exit 0)."""
+    the file is closed properly and the summary printed (exit 0).
+
+    Ctrl-C is SIGINT with Python's own handler, as in a user's terminal: a test run started in
+    the background of a non-interactive shell (``cmd &``) inherits SIGINT ignored, and
+    ``_thread.interrupt_main`` then does nothing (the recording ran into the 180 s timeout)."""
     import _thread
+    import signal
 
     path = tmp_path / "ctrl_c.log"
     gone = threading.Event()
@@ -282,12 +287,14 @@ def test_record_until_ctrl_c(hub_drive, tmp_path):
             _thread.interrupt_main()
 
     th = threading.Thread(target=ctrl_c_once_recording, daemon=True)
+    old = signal.signal(signal.SIGINT, signal.default_int_handler)
     th.start()
     try:
         rc, out, err = run_here(hub_drive, "record", str(path), "--json")
     finally:
         gone.set()
         th.join(5)
+        signal.signal(signal.SIGINT, old)
     assert rc == 0, err
     res = json.loads(out)
     assert res["interrupted"] is True and 1.0 < res["seconds"] < 60
