@@ -13,25 +13,15 @@ import weakref
 from typing import Any
 
 from dashboard._gui_page import Page
+from drive_link.workflows.report_ids import EXPERIMENT_IDS
 
 __all__ = ["REPORT_IDS", "ReportTab"]
 
 REPORT_DEADLINE_S = 600.0  #: the whole report gives up (and puts the drive back) after this, s
-#: drive_link.workflows.report.EXPERIMENTS' ids in their order (a unit test keeps them equal): the
-#: tab is built without importing drive_link.workflows.report, whose scipy imports cost 2-6 s of CPU
-#: on a loaded host and held up the first page's plots (the GUI imports it when it starts:
-#: BenchGui.start)
-REPORT_IDS = (
-    "current_step_deadbeat",
-    "lc_sweep",
-    "current_step_pi",
-    "current_step_predictive",
-    "pwm_ripple",
-    "identify_electrical",
-    "identify_speed_model",
-    "speed_step",
-    "load_step",
-)
+#: the experiments' ids in their order, from the light module: the tab is built without
+#: importing drive_link.workflows.report, whose scipy imports cost 2-6 s of CPU on a loaded host
+#: and held up the first page's plots (the GUI imports it when it starts: BenchGui.start)
+REPORT_IDS = EXPERIMENT_IDS
 _LAST: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  #: bench → its last Report
 
 

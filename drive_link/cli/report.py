@@ -17,7 +17,7 @@ __all__ = ["add_parser", "cmd_report"]
 
 def add_parser(sub: argparse._SubParsersAction, bus: argparse.ArgumentParser) -> None:
     """Add the ``report`` command to ``sub`` (``bus``: the parent with the bus options)."""
-    from ..workflows.report import EXPERIMENTS
+    from ..workflows.report_ids import EXPERIMENT_IDS
 
     help = ("commissioning report: the paper's experiments on the connected drive (each leaves "
             "the drive as found), written as one offline report.html and report.json")
@@ -26,7 +26,7 @@ def add_parser(sub: argparse._SubParsersAction, bus: argparse.ArgumentParser) ->
     p.add_argument("--out", default="report", metavar="DIR",
                    help="directory for report.html and report.json (default ./report)")
     p.add_argument("--only", default=None,
-                   help="comma-separated experiments (default all): " + ", ".join(EXPERIMENTS))
+                   help="comma-separated experiments (default all): " + ", ".join(EXPERIMENT_IDS))
     p.add_argument("--progress", action="store_true",
                    help="progress bar even when stderr is not a terminal")
 

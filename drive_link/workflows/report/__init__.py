@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ...errors import DriveError, InvalidValue
+from ..report_ids import EXPERIMENT_IDS
 from ..steps import Hooks
 from . import current, electrical, ripple, speed
 from ._base import Context, ExperimentResult, is_virtual
@@ -43,6 +44,8 @@ EXPERIMENTS: dict[str, Callable[[Context], ExperimentResult]] = {
     "speed_step": speed.speed_step,
     "load_step": speed.load_step,
 }
+if tuple(EXPERIMENTS) != EXPERIMENT_IDS:  # (the light list the parser and the GUI name)
+    raise ImportError("drive_link.workflows.report_ids.EXPERIMENT_IDS differs from EXPERIMENTS")
 
 
 @dataclass
