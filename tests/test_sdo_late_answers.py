@@ -34,7 +34,7 @@ def _upload_answer(value: float) -> bytes:
 class _ScriptedClient:
     """Just what :mod:`drive_link.link._sdo_segmented` uses of its channel client
     (:class:`drive_link.link._sdo_client.ChannelClient`, a canopen ``SdoClient``): ``rx_cobid``,
-    ``responses``, ``network.send_message``, the per-channel ``not_before``/``stale_answer`` and
+    ``responses``, ``network.send_message``, the per-channel ``not_before``/``stale_answers`` and
     an unsupervised node (no heartbeat watch); ``script[k]`` = frames queued after the k-th
     request."""
 
@@ -46,7 +46,7 @@ class _ScriptedClient:
         self.sent: list[bytes] = []
         self.network = self
         self.not_before = 0.0
-        self.stale_answer: tuple[bytes, int] | None = None
+        self.stale_answers: list[list] = []
 
     def gone_at(self) -> float | None:
         return None  # no heartbeat watch: requests wait their resends
@@ -139,3 +139,43 @@ def test_a_long_poll_at_5_percent_loss_never_runs_out_of_resends():
     for _ in range(300):
         assert sdo_segmented.upload(client, IDX, SUB, timeout=0.005, resends=5) == a[4:]
     assert len(client.sent) <= 300 * 1.25, len(client.sent)
+
+
+def _download_answer() -> bytes:
+    return struct.pack("<BHBI", 0x60, IDX, SUB, 0)
+
+
+def test_a_late_copy_two_transfers_on_does_not_answer_a_third_write():
+    """The check's SDO abort item at load 18: bad values written one after another to one
+    object; the "too high" abort of a resent write came after the next write had its own
+    answer, and the write after that took it as its answer (0x06090031 for a valid value)."""
+    too_high, too_low = _abort(0x06090031), _abort(0x06090032)
+    client = _ScriptedClient(
+        [
+            [],  # write 1e30: the drive's answer is slow ...
+            [too_high],  # resent: ... the first answer arrives; the second is on its way
+            [too_low],  # write -1e30: its own answer
+            [too_high, _download_answer()],  # write 0.5: the late copy, then its own answer
+        ]
+    )
+    for value, code in ((1e30, 0x06090031), (-1e30, 0x06090032)):
+        with pytest.raises(SdoAbortedError) as err:
+            sdo_segmented.download(
+                client, IDX, SUB, struct.pack("<f", value), timeout=0.05, resends=3
+            )
+        assert err.value.code == code
+    sdo_segmented.download(client, IDX, SUB, struct.pack("<f", 0.5), timeout=0.05, resends=3)
+    assert len(client.sent) == 4  # no extra resend was needed
+
+
+def test_an_owed_copy_that_never_comes_expires(monkeypatch):
+    """A resent request's first send may have been lost, not slow: its copy never comes. After
+    OWED_FOR_S a later identical answer is taken at once again."""
+    a = _upload_answer(1.0)
+    client = _ScriptedClient([[], [a], [a], [a]])
+    sdo_segmented.upload(client, IDX, SUB, timeout=0.05, resends=3)  # sent twice: one owed
+    assert client.stale_answers and client.stale_answers[0][1] == 1
+    for e in client.stale_answers:
+        e[2] = 0.0  # (its time is up)
+    assert sdo_segmented.upload(client, IDX, SUB, timeout=0.05, resends=3) == a[4:]
+    assert len(client.sent) == 3  # taken at once: no resend

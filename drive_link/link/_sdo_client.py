@@ -114,9 +114,9 @@ class ChannelClient(SdoClient):
         self.not_before = 0.0
         #: frames dropped as older than the transfer they arrived in
         self.stale_dropped = 0
-        #: (frame, copies) late duplicates of the last transfer's final answer the next
-        #: transfer skips (see drive_link.link._sdo_segmented)
-        self.stale_answer: tuple[bytes, int] | None = None
+        #: [frame, copies, owed until (monotonic s)]: late duplicates of earlier transfers'
+        #: answers that transfers skip (see drive_link.link._sdo_segmented)
+        self.stale_answers: list[list] = []
         #: the heartbeat watch of a supervised channel (None: requests wait their resends)
         self.watch: NodeWatch | None = None
 

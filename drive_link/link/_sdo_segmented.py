@@ -13,16 +13,19 @@ harmless for every object of this drive (parameters, controlword commands that n
 state, store/restore, trace commands).
 
 A request that was sent k times and answered may still get k - 1 late answers (the first
-answer was only slow, not lost). They can arrive during the *next* transfer on the channel,
+answer was only slow, not lost). They can arrive during a *later* transfer on the channel,
 e.g. the drive's abort of a refused write arriving while the same object is read back, or an
-old statusword answering a new poll. The next transfer therefore skips up to k - 1 frames
-identical to the last transfer's final answer (``client.stale_answer``, set when a transfer
-ends with a request/answer pair: expedited and segmented transfers, aborts): if a skipped frame
-was in fact the new answer, the identical late one or a resend supplies it. Each frame skipped
-so counts against the copies that transfer in turn leaves owed: it may have been the answer to
-one of that transfer's own sends. (Without that, at 5 % loss a poll of an unchanged statusword
-ratcheted up: every lost answer made all later reads skip one more real answer, until one ran
-out of resends.)
+old statusword answering a new poll — on a starved host not only during the next transfer (the
+check's SDO abort item, writing one bad value after another to one object at load 18, met the
+"value too high" abort of the write before last as the answer to a "value too low" write).
+The client therefore keeps the copies owed (``client.stale_answers``: frame, copies, until
+when; added when a transfer ends with a request/answer pair: expedited and segmented transfers,
+aborts) for :data:`OWED_FOR_S` s, and every transfer skips frames identical to one of them: if
+a skipped frame was in fact the new answer, the identical late one or a resend supplies it.
+Each frame a request skipped that is identical to its own final answer counts against the
+copies it leaves owed: it may have been the answer to one of that request's own sends.
+(Without that, at 5 % loss a poll of an unchanged statusword ratcheted up: every lost answer
+made all later reads skip one more real answer, until one ran out of resends.)
 """
 
 from __future__ import annotations
@@ -56,9 +59,14 @@ from ._sdo_client import (
 #: rounding); frames stamped earlier are dropped (see drive_link.link._sdo_client.ChannelClient)
 CLOCK_TOLERANCE_S = 0.002
 
+#: s a late copy of an answer stays owed (see the module doc): a host that starves the drive
+#: answers a resent request seconds late, and a copy that never comes (its request was lost,
+#: not slow) costs a later identical answer one resend at most this long
+OWED_FOR_S = 5.0
+
 __all__ = [
-    "CLOCK_TOLERANCE_S", "Exchange", "NoAnswer", "NodeGone", "check_gone", "continue_upload",
-    "download", "upload", "wait_slice",
+    "CLOCK_TOLERANCE_S", "OWED_FOR_S", "Exchange", "NoAnswer", "NodeGone", "check_gone",
+    "continue_upload", "download", "upload", "wait_slice",
 ]  # fmt: skip
 
 
@@ -105,13 +113,14 @@ class Exchange:
         # frames stamped before now answer earlier requests (ChannelClient.on_response)
         client.not_before = time.time() - CLOCK_TOLERANCE_S
         self.drain()
-        #: (frame, how many more may come): late duplicates of the last transfer's answer
-        self.stale: tuple[bytes, int] | None = client.stale_answer
-        client.stale_answer = None
+        #: [frame, how many more may come, owed until (monotonic s)]: late duplicates of the
+        #: answers of earlier transfers on the channel
+        now = time.monotonic()
+        self.stale: list[list] = [e for e in client.stale_answers if e[1] > 0 and e[2] > now]
         self.abort_frame = b""
         self._duplicates: tuple[bytes, int] | None = None  # of the last request's answer
         #: frames :meth:`next` skipped as late copies during the present :meth:`request`
-        self.skipped = 0
+        self.skipped: list[bytes] = []
 
     def drain(self) -> None:
         """Forget frames of earlier transfers."""
@@ -139,11 +148,11 @@ class Exchange:
             except queue.Empty:
                 return None
             data = bytes(data).ljust(8, b"\0")
-            if self.stale is not None and data == self.stale[0]:
-                left_over = self.stale[1] - 1
-                self.stale = (data, left_over) if left_over > 0 else None
-                self.skipped += 1
-                continue  # a late duplicate of the previous transfer's last answer
+            owed = next((e for e in self.stale if e[0] == data and e[1] > 0), None)
+            if owed is not None:
+                owed[1] -= 1
+                self.skipped.append(data)
+                continue  # a late duplicate of an earlier transfer's answer
             if data[0] == ABORT:
                 index, subindex, code = struct.unpack_from("<HBI", data, 1)
                 if (index, subindex) == (self.index, self.subindex):
@@ -181,7 +190,7 @@ class Exchange:
         ``timeout``, 2 × ``timeout``, then every 4 × ``timeout`` s without one, at most
         ``resends`` times."""
         wait = timeout
-        self.skipped = 0
+        self.skipped = []
         for sent in range(1, resends + 2):
             self.send(frame)
             deadline = time.monotonic() + wait
@@ -210,13 +219,18 @@ class Exchange:
         in a poll of an unchanged object made every later read skip its real answer and wait
         a timeout, and each further loss added one more (seen: a statusword poll at 5 % loss
         ended in "no answer … (6 attempts)")."""
-        owed = sent - 1 - self.skipped
+        owed = sent - 1 - self.skipped.count(answer)
         return (answer, owed) if owed > 0 else None
 
     def finish(self) -> None:
-        """The transfer ended with the last request's answer: the next transfer on the client
-        skips that many identical late copies of it (see the module doc)."""
-        self.client.stale_answer = self._duplicates
+        """The transfer ended with the last request's answer: later transfers on the client
+        skip that many identical late copies of it for :data:`OWED_FOR_S` s, and the copies
+        still owed from before (see the module doc)."""
+        now = time.monotonic()
+        kept = [e for e in self.stale if e[1] > 0 and e[2] > now]
+        if self._duplicates is not None:
+            kept.append([self._duplicates[0], self._duplicates[1], now + OWED_FOR_S])
+        self.client.stale_answers = kept
 
 
 def _same_object(frame: bytes, index: int, subindex: int) -> bool:
