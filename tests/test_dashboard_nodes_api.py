@@ -35,6 +35,7 @@ def trace_channel(net: canopen.Network, node_id: int) -> canopen.sdo.SdoClient:
     net.add_node(node)
     sdo.network = net  # canopen leaves it unset on an added client
     sdo.RESPONSE_TIMEOUT = 2.0
+    sdo.MAX_RETRIES = 3  # canopen resends an unanswered request (a starved hub at load 16)
     return sdo
 
 

@@ -79,3 +79,4 @@ def test_a_dead_drive_fails_calls_fast_saying_the_node_is_gone(parts):
     assert time.monotonic() - t1 <= producer_s + timeout_s + SLACK_S
     requests = [m for m in iter(lambda: sniff.recv(0), None) if m.arbitration_id == 0x604]
     assert len(requests) == 1
+

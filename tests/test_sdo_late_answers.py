@@ -11,6 +11,8 @@ from __future__ import annotations
 import queue
 import random
 import struct
+import threading
+import time
 
 import pytest
 from canopen.sdo.exceptions import SdoAbortedError
@@ -179,3 +181,49 @@ def test_an_owed_copy_that_never_comes_expires(monkeypatch):
         e[2] = 0.0  # (its time is up)
     assert sdo_segmented.upload(client, IDX, SUB, timeout=0.05, resends=3) == a[4:]
     assert len(client.sent) == 3  # taken at once: no resend
+
+
+class _StallingClient(_ScriptedClient):
+    """A client whose process the host stops for ``stall_s`` during the first wait for an
+    answer: the node's last heartbeat (as the bus thread had it) is then older than its
+    consumer time; the bus thread catches up 50 ms after the stall (a heartbeat received
+    during it, then the answer)."""
+
+    def __init__(self, answer: bytes, stall_s: float) -> None:
+        super().__init__([[]])
+        self.answer, self.stall_s = answer, stall_s
+        self.last_hb = time.monotonic()
+        self.stalled = False
+        outer = self
+
+        class _Responses(queue.Queue):
+            def get(self, block: bool = True, timeout: float | None = None) -> bytes:
+                if block and timeout and not outer.stalled:  # (not the drain of old frames)
+                    outer.stalled = True
+                    time.sleep((timeout or 0.0) + outer.stall_s)  # the host ran nothing
+                    threading.Timer(0.05, outer._catch_up).start()
+                    raise queue.Empty
+                return super().get(block, timeout)
+
+        self.responses = _Responses()
+
+    def _catch_up(self) -> None:
+        self.last_hb = time.monotonic()  # a heartbeat the stall held back
+        self.responses.put(self.answer)
+
+    def gone_at(self) -> float | None:
+        return self.last_hb + 1.0  # consumer time 1 s
+
+    def send_message(self, can_id: int, data: bytes) -> None:
+        self.sent.append(bytes(data))
+
+
+def test_a_host_stall_is_not_a_dead_node():
+    """The SocketCAN lane at host load 11-16: UML stopped for 2 s, and a trace upload failed
+    with "node 1 is gone: no heartbeat for 2178 ms" — the heartbeats were late because this
+    host was, not missing. A wait that overran by a stall judges the node only after the bus
+    thread had its grace to deliver what came meanwhile."""
+    a = _upload_answer(3.0)
+    client = _StallingClient(a, stall_s=1.5)
+    assert sdo_segmented.upload(client, IDX, SUB, timeout=0.3, resends=3) == a[4:]
+    assert len(client.sent) == 1

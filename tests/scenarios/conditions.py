@@ -114,22 +114,34 @@ class CpuHog:
     """Keeps the host CPU busy: ``per_core`` CPU-bound processes per core (``stress-ng --cpu``
     if installed, else busy Python processes). Each process is in its own session and stops by
     itself after ``guard_s`` even if nobody calls :meth:`stop` (Python ones also when their
-    parent is gone)."""
+    parent is gone).
+
+    A host already that busy (1-minute load average ≥ ``per_core`` × cores: the rest of a test
+    run, or other jobs) gets only the processes missing, none at all when the load is there:
+    the condition is a busy host, and doubling an already busy one's load only slowed every
+    other test of the run (a CI run with four CPU hogs beside it had eight during the busy
+    scenarios). :attr:`tool` says what was started and the load found."""
 
     def __init__(self, per_core: int = 2, guard_s: float = 1800.0) -> None:
-        self.n = per_core * (os.cpu_count() or 1)
+        self.target = per_core * (os.cpu_count() or 1)
+        self.n = self.target
         self.guard_s = guard_s
         self.tool = ""
         self._procs: list[subprocess.Popen] = []
 
     def start(self) -> CpuHog:
+        load = os.getloadavg()[0]
+        self.n = max(0, self.target - int(load))
+        if self.n == 0:
+            self.tool = f"none (host load {load:.1f} >= {self.target})"
+            return self
         stress = shutil.which("stress-ng")
         if stress:
-            self.tool = f"stress-ng --cpu {self.n}"
+            self.tool = f"stress-ng --cpu {self.n} (host load {load:.1f})"
             cmd = [stress, "--cpu", str(self.n), "--timeout", f"{int(self.guard_s)}s", "-q"]
             cmds = [[sys.executable, "-c", _WATCH, str(os.getpid()), *cmd]]
         else:
-            self.tool = f"{self.n} busy Python processes"
+            self.tool = f"{self.n} busy Python processes (host load {load:.1f})"
             code = _BUSY_PY.format(guard=self.guard_s)
             cmds = [[sys.executable, "-c", code] for _ in range(self.n)]
         for cmd in cmds:
