@@ -279,7 +279,8 @@ def test_two_drives_on_vcan0_scan_and_a_setpoint_to_one(vcan0_drive):
         for node in nodes.values():
             node.sdo.RESPONSE_TIMEOUT = 5.0  # UML on a busy host
         before = int(nodes[1].sdo["target_velocity"].raw)
-        r = run(["drive-link", *bus, "scan"])
+        # (UML on a busy host: a frame may wait seconds there, as the truth's 5 s allows)
+        r = run(["drive-link", *bus, "scan", "--sdo-timeout", "1"])
         assert r.returncode == 0, r.stderr
         found = scan_lines(r.stdout)
         assert {1, 2, 3} <= set(found), r.stdout
