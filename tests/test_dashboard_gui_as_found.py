@@ -121,6 +121,9 @@ def test_step_test_and_identification_from_the_gui_leave_speed_mode_at_1000_rpm(
             click_until(page, page.get_by_role("button", name="Enable"),
                         lambda t: wait_for(lambda: w.state and w.state[-1][1]
                                            == "OPERATION ENABLED", t, "enabled"))
+            # (the Speed tab again: a click that lands while viser re-renders the panel may
+            # reach a tab header instead, and "+ step" was then not on the page for 60 s)
+            select_tab(page, "Speed")
             for _ in range(2):  # the default step is 500 rpm
                 click(page, page.get_by_role("button", name="+ step"))
             wait_for(lambda: at_1000_rpm_enabled(w), 60, "speed mode at 1000 rpm")
