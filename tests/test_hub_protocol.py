@@ -129,14 +129,15 @@ def test_channels_are_separate_buses(hub):
 
 
 def test_arbitration_lowest_id_wins_and_sender_order_is_kept():
-    # 5 kbit/s: an 8-byte frame occupies the bus for ~24 ms, long enough to queue others behind.
-    with Hub(port=0, bitrate=5_000) as hub:
+    # 500 bit/s: an 8-byte frame occupies the bus for ~0.24 s, long enough to queue the others
+    # behind it (at 5 kbit/s, 24 ms, y's frames came too late at load 17: 600 went first)
+    with Hub(port=0, bitrate=500) as hub:
         x, y, z = RawClient(hub.port), RawClient(hub.port), RawClient(hub.port)
         x.send("< send 700 8 1 2 3 4 5 6 7 8 >")  # takes the idle bus at once
         time.sleep(0.004)
         x.send("< send 600 1 0 >< send 050 1 0 >")  # x's queue: 600 then 050 (FIFO per node)
         y.send("< send 100 1 0 >< send 10000000 1 0 >")  # y: 100, then extended base 0x040
-        ids = [i for i, _ in z.frames(1.0)]
+        ids = [i for i, _ in z.frames(2.0)]  # (all five take ~0.65 s of bus time)
         # bus free after 700: heads x=600, y=100 -> 100; then x=600 vs y=ext(base 0x040)
         # -> ext wins (base 0x040 < 0x600); then 600, then 050.
         assert ids == ["700", "100", "10000000", "600", "050"]

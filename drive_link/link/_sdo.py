@@ -229,14 +229,24 @@ class SdoChannel:
         progress: Progress | None = None,
     ) -> bytes:
         """Read a large object with SDO block upload (CiA 301 §7.2.4.3.10), reporting progress;
-        lost segments are recovered, a broken upload is started again (see the module doc)."""
+        lost segments are recovered, a broken upload is started again (see the module doc).
+        The progress never goes back: an upload started again reports nothing new until it
+        passes what the broken one had (a progress bar went backwards at load 17)."""
+        report = progress
+        if progress is not None:
+            high = [-1]
+
+            def report(done: int, total: int | None) -> None:
+                if done > high[0]:
+                    high[0] = done
+                    progress(done, total)
 
         def go(deadline: float) -> bytes:
             return block_upload(
                 self.client,
                 index,
                 subindex,
-                progress,
+                report,
                 timeout=self.client.RESPONSE_TIMEOUT,
                 resends=self.retries,
                 deadline=deadline,
