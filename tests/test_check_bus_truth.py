@@ -63,6 +63,25 @@ def _skip_if_the_host_starved_every_window(r) -> None:
         pytest.skip(f"the host stalled every window (load {os.getloadavg()[0]:.1f}): {r.detail}")
 
 
+def _pdo_rates_while(d: Drive, step) -> object:
+    """``pdo_rates`` alone, with ``step()`` called over and over in a thread of this process
+    meanwhile; returns the item's result."""
+    done = threading.Event()
+
+    def loop() -> None:
+        while not done.is_set():
+            step()
+
+    t = threading.Thread(target=loop, daemon=True)
+    t.start()
+    try:
+        (r,) = run_checks(d, only=["pdo_rates"])
+    finally:
+        done.set()
+        t.join()
+    return r
+
+
 def test_pdo_rates_fails_a_drive_that_drops_periods_and_counts_them(parts):
     """The drive's transmit path is held 15 ms of every 20 ms: it sends about a quarter of
     its 1 kHz TPDO2 periods and counts the rest in 0x2070 (as a drive with a full transmit
@@ -112,20 +131,12 @@ def test_a_timing_item_stalled_in_every_window_is_not_judged_and_does_not_fail(p
     from drive_link.workflows.check import NOT_JUDGED, TIMING_ATTEMPTS
 
     d, _vd = parts
-    done = threading.Event()
 
-    def stall_every_window() -> None:
-        while not done.is_set():
-            time.sleep(0.3)
-            hold_the_interpreter(0.15)
+    def stall() -> None:
+        time.sleep(0.3)
+        hold_the_interpreter(0.15)
 
-    t = threading.Thread(target=stall_every_window, daemon=True)
-    t.start()
-    try:
-        (r,) = run_checks(d, only=["pdo_rates"])
-    finally:
-        done.set()
-        t.join()
+    r = _pdo_rates_while(d, stall)
     assert r.verdict == NOT_JUDGED and r.ok, (r.verdict, r.detail)
     assert f"the host stalled in all {TIMING_ATTEMPTS} windows" in r.detail, r.detail
 
@@ -139,19 +150,7 @@ def test_a_process_run_late_every_tick_is_not_judged_either(parts):
     from drive_link.workflows.check import NOT_JUDGED
 
     d, _vd = parts
-    done = threading.Event()
-
-    def burn() -> None:
-        while not done.is_set():
-            sum(range(10_000))
-
-    t = threading.Thread(target=burn, daemon=True)
-    t.start()
-    try:
-        (r,) = run_checks(d, only=["pdo_rates"])
-    finally:
-        done.set()
-        t.join()
+    r = _pdo_rates_while(d, lambda: sum(range(10_000)))
     assert r.verdict == NOT_JUDGED and r.ok, (r.verdict, r.detail)
     # (on a busy host a window may hold a long stall too: then that is what it names)
     assert "wake-ups late" in r.detail or " ms" in r.detail.split(";")[0], r.detail
