@@ -131,6 +131,28 @@ def test_sdo_transfers_fails_on_a_drive_without_block_download(drive, monkeypatc
     assert not ok and "canopen's client" in detail, detail
 
 
+def test_sdo_transfers_passes_when_a_block_download_segment_is_lost(drive, monkeypatch):
+    """A lossy link (CI's loss5 scenario): the one segment of canopen's block download is lost.
+    canopen's client then times out, sends its abort (0x05040000) and, closing the stream,
+    the end-of-block request too; the drive, its transfer aborted, answers that request with
+    0x05040001 (no transfer open). That abort answers canopen's own stray request, not a drive
+    fault: the transfer is tried again and passes."""
+    vd, d = drive
+    real = vd.sdo._download_segment
+    lost: list[bytes] = []
+
+    def lose_first(seg):
+        if not lost:
+            lost.append(bytes(seg))
+            return None
+        return real(seg)
+
+    monkeypatch.setattr(vd.sdo, "_download_segment", lose_first)
+    ok, detail = one(d, "sdo_transfers")
+    assert lost, "no block download segment reached the drive"
+    assert ok, detail
+
+
 def test_emcy_fails_on_an_error_history_that_takes_any_value(drive, monkeypatch):
     from virtual_drive.node import writes
 

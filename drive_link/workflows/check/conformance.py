@@ -424,17 +424,31 @@ def item_sdo_transfers(d: Drive, opts: dict) -> tuple[str, Evidence]:
 
 def _tries(fn: Callable[[], object], n: int = 4) -> None:
     """canopen's client resends nothing: on a lossy link a transfer that timed out is started
-    again (an abort is an answer: raised at once)."""
+    again. An abort is an answer and is raised at once, except one that answers canopen's own
+    stray request after a timeout: closing a block-download stream whose sub-block went
+    unacknowledged, canopen sends its abort (0x05040000) and then the end-of-block request
+    too, which the drive, its transfer aborted, rightly answers with 0x05040001."""
     for k in range(n):
         try:
             fn()
             return
-        except SdoAbortedError:
-            raise
+        except SdoAbortedError as exc:
+            if k == n - 1 or not _after_timeout(exc):
+                raise
         except canopen.sdo.SdoCommunicationError:
             if k == n - 1:
                 raise
-            time.sleep(0.1)
+        time.sleep(0.1)
+
+
+def _after_timeout(exc: BaseException) -> bool:
+    """True if ``exc`` was raised while canopen's client handled a response timeout."""
+    seen = exc.__context__
+    while seen is not None:
+        if isinstance(seen, canopen.sdo.SdoCommunicationError):
+            return True
+        seen = seen.__context__
+    return False
 
 
 # -- sync_pdo -----------------------------------------------------------------------------------
