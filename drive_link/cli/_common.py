@@ -231,7 +231,7 @@ def _bus_options() -> list[tuple[tuple[str, ...], dict[str, Any], Any]]:
         ),
         (
             ("--timeout",),
-            {"type": quantity("s"), "help": "state-change timeout, s (default 3) / scan listen "
+            {"type": quantity("s"), "help": "state-change timeout, s (default 10) / scan listen "
              "time, s (default 1)"},
             None,
         ),

@@ -9,7 +9,7 @@ from collections.abc import Callable
 
 from ..errors import InvalidValue, NodeNotFound, StateError
 from ..link import _connection
-from ..link.cia402 import OPERATION_ENABLED
+from ..link.cia402 import OPERATION_ENABLED, STATE_TIMEOUT_S
 from ..link.drive import Drive
 from ._common import AddCommand, _emit, _object_value, _timeout, _usable_state
 from .connect import bus_settings_from_args
@@ -91,7 +91,7 @@ def cmd_status(args: argparse.Namespace, d: Drive) -> int:
 
 def _state_cmd(fn_name: str) -> Callable[[argparse.Namespace, Drive], int]:
     def run(args: argparse.Namespace, d: Drive) -> int:
-        state = getattr(d, fn_name)(timeout=_timeout(args, 3.0))
+        state = getattr(d, fn_name)(timeout=_timeout(args, STATE_TIMEOUT_S))
         _emit(args, {"state": state}, state)
         return 0
 
@@ -114,7 +114,7 @@ def _switch_mode(args: argparse.Namespace, d: Drive, mode: str, allowed: bool, f
                 f"power stage off: run `drive-link disable` first, or add {flag} "
                 "(disable, switch, enable again)"
             )
-        d.disable(timeout=_timeout(args, 3.0))
+        d.disable(timeout=_timeout(args, STATE_TIMEOUT_S))
         d.set_mode(mode)
         return True
     d.set_mode(mode)
@@ -123,7 +123,7 @@ def _switch_mode(args: argparse.Namespace, d: Drive, mode: str, allowed: bool, f
 
 def cmd_mode(args: argparse.Namespace, d: Drive) -> int:
     if _switch_mode(args, d, args.mode, args.re_enable, "--re-enable"):
-        d.enable(timeout=_timeout(args, 3.0))
+        d.enable(timeout=_timeout(args, STATE_TIMEOUT_S))
     _emit(args, {"mode": d.mode, "state": d.state}, f"mode {d.mode} ({d.state})")
     return 0
 
@@ -149,7 +149,7 @@ def _set_setpoint(
     again = _switch_mode(args, d, mode, args.switch_mode, "--switch-mode")
     d.write(name, value)
     if args.enable or again:
-        d.enable(timeout=_timeout(args, 3.0))
+        d.enable(timeout=_timeout(args, STATE_TIMEOUT_S))
     out = {key: d.read_number(name), "state": d.state}
     unit = obj.unit
     _emit(args, out, f"{key} {out[key]:g} {unit} ({out['state']})")

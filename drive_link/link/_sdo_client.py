@@ -11,6 +11,7 @@ code keeps per channel declared on the class (nothing is patched onto canopen's 
 
 from __future__ import annotations
 
+import collections
 from typing import Protocol
 
 from canopen.sdo import constants as cs
@@ -29,6 +30,7 @@ __all__ = [
     "CS_MASK",
     "EXPEDITED",
     "LAST_BLOCK_SEGMENT",
+    "LATENCIES_KEPT",
     "NO_MORE_SEGMENTS",
     "REQUEST_BLOCK_UPLOAD",
     "REQUEST_DOWNLOAD",
@@ -76,6 +78,9 @@ BLOCK_ACK = 2  # CiA 301 §7.2.4.3.14: "block upload response" sub-command (not 
 BLOCK_START = cs.START_BLOCK_UPLOAD  # 3
 
 
+#: answers whose time (s from the last send of their request) a channel keeps
+LATENCIES_KEPT = 8
+
 class NodeWatch(Protocol):
     """Says when the node counts as gone (its heartbeat stopped): a supervised channel."""
 
@@ -119,6 +124,9 @@ class ChannelClient(SdoClient):
         self.stale_answers: list[list] = []
         #: the heartbeat watch of a supervised channel (None: requests wait their resends)
         self.watch: NodeWatch | None = None
+        #: s from the last send of a request to its answer, for the last few answers (how long
+        #: a frame held back as a late copy waits: drive_link.link._sdo_segmented.settle_s)
+        self.latencies: collections.deque[float] = collections.deque(maxlen=LATENCIES_KEPT)
 
     def gone_at(self) -> float | None:
         """Monotonic time at which the node counts as gone (None: no heartbeat watch)."""

@@ -26,6 +26,16 @@ Each frame a request skipped that is identical to its own final answer counts ag
 copies it leaves owed: it may have been the answer to one of that request's own sends.
 (Without that, at 5 % loss a poll of an unchanged statusword ratcheted up: every lost answer
 made all later reads skip one more real answer, until one ran out of resends.)
+
+A copy owed because a request was *lost* (not slow) never comes, and skipping a later
+identical answer in its place cost that transfer a whole response timeout and a resend: at 5 %
+loss, 23 % of controlword writes needed a resend instead of 10 %, 3 % needed four or more
+sends, and ``enable`` (ten transfers) overran its 3 s in about one case of twenty. So a frame
+skipped as a late copy is only held back: if no other frame follows within the settle time
+(:func:`settle_s`: a quarter of the response timeout, at least :data:`SETTLE_MIN_S`, and at
+least three times the slowest of the channel's last answers, so that a slow drive's real late
+copy, which its own answer follows after as long as answers take, is still skipped), it is taken
+as the request's own answer.
 """
 
 from __future__ import annotations
@@ -68,9 +78,12 @@ STALL_GRACE_S = 0.25
 #: not slow) costs a later identical answer one resend at most this long
 OWED_FOR_S = 5.0
 
+#: s a frame held back as a late copy waits at least for a frame after it (see settle_s)
+SETTLE_MIN_S = 0.02
+
 __all__ = [
-    "CLOCK_TOLERANCE_S", "OWED_FOR_S", "Exchange", "NoAnswer", "NodeGone", "check_gone",
-    "continue_upload", "download", "upload", "wait_slice",
+    "CLOCK_TOLERANCE_S", "OWED_FOR_S", "SETTLE_MIN_S", "Exchange", "NoAnswer", "NodeGone",
+    "check_gone", "continue_upload", "download", "settle_s", "upload", "wait_slice",
 ]  # fmt: skip
 
 
@@ -105,6 +118,15 @@ def wait_slice(client: ChannelClient, left: float, floor: float = 0.0) -> float:
     return left if at is None else max(0.0, min(left, max(at, floor) - time.monotonic()))
 
 
+def settle_s(client: ChannelClient, timeout: float) -> float:
+    """s a frame held back as a late copy of an earlier answer waits for another frame before
+    it is taken as the present request's answer: ``timeout``/4, at least :data:`SETTLE_MIN_S`
+    and at least three times the slowest of the client's last few answers
+    (s from the last send of their request; ``client.latencies``)."""
+    latencies = getattr(client, "latencies", ())
+    return max(SETTLE_MIN_S, timeout / 4, 3 * max(latencies, default=0.0))
+
+
 class Exchange:
     """Requests and responses of one transfer on ``client``'s COB-IDs (object
     ``index``:``subindex``; an abort frame naming another object is ignored)."""
@@ -125,6 +147,10 @@ class Exchange:
         self._duplicates: tuple[bytes, int] | None = None  # of the last request's answer
         #: frames :meth:`next` skipped as late copies during the present :meth:`request`
         self.skipped: list[bytes] = []
+        #: s a frame skipped as a late copy waits for a frame after it (None: for ever)
+        self.settle: float | None = None
+        #: monotonic s at which the frame :meth:`next` returned last was received
+        self.received_at = 0.0
 
     def drain(self) -> None:
         """Forget frames of earlier transfers."""
@@ -145,25 +171,49 @@ class Exchange:
         Raises :class:`SdoAbortedError` for an abort of this transfer's object.
         """
         deadline = time.monotonic() + timeout
+        held: bytes | None = None  # a frame skipped as a late copy, until another one comes
+        held_until = held_at = deadline
         while True:
-            left = deadline - time.monotonic()
+            left = min(deadline, held_until) - time.monotonic()
             try:
                 data = self.client.responses.get(timeout=max(0.0, left))
             except queue.Empty:
-                return None
+                if held is None or time.monotonic() >= deadline:
+                    return None
+                # nothing followed it: the copy owed never came (its request was lost, not
+                # slow) and this frame is the present request's own answer
+                self.skipped.remove(held)
+                data, held, held_until = held, None, deadline
+                taken = self._take(data)
+                if taken is not None:
+                    self.received_at = held_at
+                    return taken
+                continue
             data = bytes(data).ljust(8, b"\0")
             owed = next((e for e in self.stale if e[0] == data and e[1] > 0), None)
             if owed is not None:
                 owed[1] -= 1
                 self.skipped.append(data)
+                if held is None and self.settle is not None:
+                    held_at = time.monotonic()
+                    held, held_until = data, held_at + self.settle
                 continue  # a late duplicate of an earlier transfer's answer
-            if data[0] == ABORT:
-                index, subindex, code = struct.unpack_from("<HBI", data, 1)
-                if (index, subindex) == (self.index, self.subindex):
-                    self.abort_frame = data
-                    raise SdoAbortedError(code)
-                continue  # the end of some other transfer
-            return data
+            held, held_until = None, deadline  # (it was one: this frame came after it)
+            taken = self._take(data)
+            if taken is not None:
+                self.received_at = time.monotonic()
+                return taken
+
+    def _take(self, data: bytes) -> bytes | None:
+        """``data`` as a response of this transfer, None for another object's abort; raises
+        :class:`SdoAbortedError` for an abort of this transfer's object."""
+        if data[0] == ABORT:
+            index, subindex, code = struct.unpack_from("<HBI", data, 1)
+            if (index, subindex) == (self.index, self.subindex):
+                self.abort_frame = data
+                raise SdoAbortedError(code)
+            return None  # the end of some other transfer
+        return data
 
     def next_or_gone(self, timeout: float, floor: float = 0.0) -> bytes | None:
         """:meth:`next`, but raises :class:`NodeGone` as soon as the node's heartbeat watch
@@ -207,9 +257,11 @@ class Exchange:
         ``resends`` times."""
         wait = timeout
         self.skipped = []
+        self.settle = settle_s(self.client, timeout)
         for sent in range(1, resends + 2):
             self.send(frame)
-            deadline = time.monotonic() + wait
+            t_sent = time.monotonic()
+            deadline = t_sent + wait
             floor = time.monotonic() + timeout  # one response timeout, even for a gone node
             while (left := deadline - time.monotonic()) > 0:
                 try:
@@ -222,6 +274,9 @@ class Exchange:
                     break
                 if accept(resp):
                     self._duplicates = self._owed(resp, sent)
+                    latencies = getattr(self.client, "latencies", None)
+                    if latencies is not None:
+                        latencies.append(max(0.0, self.received_at - t_sent))
                     return resp
             wait = min(2 * wait, 4 * timeout)  # back off, but keep probing a slow node
         what = "initiate" if initial else "segment"

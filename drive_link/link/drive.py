@@ -408,7 +408,9 @@ class Drive:
         return cia402.mode_name(int(self.read("modes_of_operation_display")))
 
     def enable(self, timeout: float = cia402.STATE_TIMEOUT_S) -> str:
-        """Go to OPERATION ENABLED; :class:`DriveTimeout` / :class:`StateError` otherwise."""
+        """Go to OPERATION ENABLED; :class:`DriveTimeout` / :class:`StateError` otherwise.
+
+        ``timeout``: s each state change may take after its controlword was written."""
         return self.sm.enable(timeout)
 
     def disable(self, timeout: float = cia402.STATE_TIMEOUT_S) -> str:
