@@ -198,6 +198,34 @@ def pytest_runtest_protocol(item, nextitem):
 
 
 # --------------------------------------------------------------------------------------------
+# How many workers ``pytest -n auto`` starts (pytest-xdist's hook)
+# --------------------------------------------------------------------------------------------
+
+
+def auto_workers(cores: int, load1: float) -> int:
+    """Workers for ``-n auto`` on a host with ``cores`` CPUs and 1-minute load ``load1``, like
+    ``make -j -l``: most tests wait on a real-time drive, so an idle host runs two workers more
+    than it has cores; a host whose CPUs are taken (load ≥ cores) one more. Measured on the
+    2-core host: idle, 4 workers took 501-514 s and 3 took 578-720 s; with four CPU hogs, 3
+    stayed green (1,065 s, 991 s) and 4 failed two to four timing tests at load 16-17."""
+    return cores + (2 if load1 < cores else 1)
+
+
+_AUTO: list[str] = []  # what -n auto chose, for the run's header (and so the CI log)
+
+
+def pytest_xdist_auto_num_workers(config):
+    cores, load1 = os.cpu_count() or 1, os.getloadavg()[0]
+    n = auto_workers(cores, load1)
+    _AUTO.append(f"-n auto: {n} workers ({cores} cores, load {load1:.2f})")
+    return n
+
+
+def pytest_report_header(config):
+    return _AUTO[-1:] or None
+
+
+# --------------------------------------------------------------------------------------------
 # Order and grouping of the run (serial or pytest-xdist ``-n N --dist loadgroup``)
 # --------------------------------------------------------------------------------------------
 

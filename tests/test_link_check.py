@@ -236,12 +236,17 @@ def test_pdo_rates_fails_for_a_drive_that_silently_drops_periods(virtual_node, c
         # (a passing item says "(N missed)", a failing one "+ N Hz missed periods …" over its
         # 1 s window: both about the periods the drive counted)
         detail = result["detail"]
+        if result.get("verdict") == "not judged":  # the host stalled in every window
+            starved.append(detail[:80])
+            continue
         counted = re.search(r"TPDO1 [^,(]*(?:, expected \d+ Hz)? \((\d+) missed\)", detail)
         if not counted or int(counted[1]) <= 10:
             break
         starved.append(result["detail"][:80])
     else:
-        pytest.skip(f"the drive counted its own missed TPDO1 periods in 3 windows: {starved}")
+        pytest.skip(
+            f"3 runs not judged or the drive counted its own missed TPDO1 periods: {starved}"
+        )
     assert rc == 1 and not result["ok"], result
     m = re.match(r"TPDO1 at (\d+) Hz", result["detail"])
     assert m and 40 <= int(m[1]) <= 60, result["detail"]
