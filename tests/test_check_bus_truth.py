@@ -87,21 +87,13 @@ def test_pdo_rates_fails_a_drive_that_drops_periods_and_counts_them(parts):
     its 1 kHz TPDO2 periods and counts the rest in 0x2070 (as a drive with a full transmit
     queue would). The bus shows the shortfall; the item fails and says what the drive counted."""
     d, vd = parts
-    stop = threading.Event()
 
     def choke() -> None:
-        while not stop.is_set():
-            with vd.tx.send_lock:
-                time.sleep(0.015)
-            time.sleep(0.005)
+        with vd.tx.send_lock:
+            time.sleep(0.015)
+        time.sleep(0.005)
 
-    t = threading.Thread(target=choke, daemon=True)
-    t.start()
-    try:
-        (r,) = run_checks(d, only=["pdo_rates"])
-    finally:
-        stop.set()
-        t.join()
+    r = _pdo_rates_while(d, choke)
     _skip_if_the_host_starved_every_window(r)
     assert not r.ok, r.detail
     assert "missed)" in r.detail, r.detail  # the drive's own count, shown

@@ -24,9 +24,10 @@ NEXT = {0x06: 0x0231, 0x07: 0x0233, 0x0F: 0x0237}
 
 
 class _SlowLinkDrive:
-    def __init__(self, read_s: float) -> None:
+    def __init__(self, read_s: float, table: dict[int, int] = NEXT) -> None:
         self.sw = 0x0250  # SWITCH ON DISABLED
         self.read_s = read_s
+        self.table = table
         self.written: list[int] = []
 
     def read(self) -> int:
@@ -35,7 +36,7 @@ class _SlowLinkDrive:
 
     def write(self, cw: int) -> None:
         self.written.append(cw)
-        self.sw = NEXT.get(cw, self.sw)
+        self.sw = self.table.get(cw, self.sw)
 
 
 def test_a_slow_link_does_not_time_out_a_drive_that_changes_state_at_once():
@@ -48,10 +49,8 @@ def test_a_slow_link_does_not_time_out_a_drive_that_changes_state_at_once():
 
 
 def test_a_drive_that_stays_in_a_state_still_times_out_and_says_where():
-    drv = _SlowLinkDrive(read_s=0.0)
-    NEVER = dict(NEXT)
-    NEVER[0x0F] = 0x0233  # refuses to enable operation: stays SWITCHED ON
-    drv.write = lambda cw: (drv.written.append(cw), setattr(drv, "sw", NEVER.get(cw, drv.sw)))
+    refuses = {**NEXT, 0x0F: 0x0233}  # refuses to enable operation: stays SWITCHED ON
+    drv = _SlowLinkDrive(read_s=0.0, table=refuses)
     sm = StateMachine(drv.read, drv.write)
     with pytest.raises(DriveTimeout, match=r"stayed in SWITCHED ON for 0\.3 s"):
         sm.enable(timeout=0.3)
