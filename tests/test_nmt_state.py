@@ -10,8 +10,6 @@ from __future__ import annotations
 import contextlib
 import io
 import json
-import os
-import signal
 import subprocess
 import sys
 import threading
@@ -21,6 +19,7 @@ import uuid
 import can
 import canopen
 import pytest
+from scenarios.conditions import CpuHog
 
 from drive_link import cli
 from drive_link.errors import DriveTimeout, SdoAbort
@@ -31,21 +30,14 @@ pytestmark = pytest.mark.timeout(240)
 
 # --------------------------------------------------------------------------- helpers
 @contextlib.contextmanager
-def busy_host(per_core: int = 2):
-    """Keep every core busy with ``per_core`` CPU-bound processes (each in its own session,
-    stopped by its process id, and by itself after 10 min)."""
-    code = "import time\nt = time.monotonic()\nwhile time.monotonic() - t < 600:\n    pass\n"
-    procs = [
-        subprocess.Popen([sys.executable, "-c", code], start_new_session=True)
-        for _ in range(per_core * (os.cpu_count() or 1))
-    ]
+def busy_host():
+    """A busy host: two CPU-bound processes per core, fewer or none where the host's load is
+    already there (a run beside other jobs; :class:`scenarios.conditions.CpuHog`)."""
+    hog = CpuHog().start()
     try:
         yield
     finally:
-        for p in procs:
-            with contextlib.suppress(ProcessLookupError):
-                os.killpg(p.pid, signal.SIGKILL)
-            p.wait(10)
+        hog.stop()
 
 
 def status_here(port: int) -> tuple[int, dict | str]:
