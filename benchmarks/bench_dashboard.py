@@ -331,6 +331,10 @@ def main(argv: list[str] | None = None) -> int:
         help="only the 3D rotor's cost: shown vs hidden vs --no-3d (1 browser)",
     )
     ap.add_argument(
+        "--plot-rate", type=float, metavar="HZ",
+        help="drive-dashboard --plot-rate HZ (default: the dashboard's, 24)",
+    )
+    ap.add_argument(
         "--hogs", type=int, default=0,
         help="stress-ng --cpu N in a separate session meanwhile (the busy-host figures)",
     )
@@ -369,6 +373,8 @@ def main(argv: list[str] | None = None) -> int:
         ready = drive.stdout.readline()
         assert "ready" in ready, f"virtual drive did not start: {ready!r}"
         args_dash = ["--join-hub", str(hub_port)] + (["--show-3d"] if args.scene else [])
+        if args.plot_rate is not None:
+            args_dash += ["--plot-rate", repr(args.plot_rate)]
         running = stack.enter_context(run_dashboard(args_dash))
         dash, url = running.proc, running.gui_url
         gui_port = int(url.rstrip("/").rsplit(":", 1)[1])

@@ -123,15 +123,7 @@ def run_dashboard(args: Sequence[str], timeout: float = 60.0) -> Iterator[Dashbo
     api_port = free_port()
     cmd = [sys.executable, "-m", "dashboard.cli", *args, "--port", str(api_port)]
     cmd += ["--gui-port", "0"]
-    # its own session, as a user's bench runs in a terminal of its own: Linux shares the CPU
-    # per session (autogroup), so the bench gets its own share beside the browser and the caller
-    proc = subprocess.Popen(
-        cmd,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.DEVNULL,
-        text=True,
-        start_new_session=True,
-    )
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     assert proc.stdout is not None  # stdout=PIPE
     try:
         line = ""

@@ -16,7 +16,7 @@ import sys
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, NoReturn
 
-from dashboard.config import BenchConfig
+from dashboard.config import GUI_RATE_HZ, GUI_RATE_RANGE_HZ, BenchConfig
 from drive_link.cli.closed_pipe import run_quietly, silence_output
 from drive_link.cli.connect import add_bus_arguments, bus_extras_from_args
 
@@ -84,6 +84,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--host", default="127.0.0.1", help="API bind address (default 127.0.0.1)")
     p.add_argument("--port", type=int, default=8000, help="API port (default 8000)")
     p.add_argument("--gui-port", type=int, default=8080, help="GUI port (default 8080; 0 = any)")
+    p.add_argument(
+        "--plot-rate",
+        type=float,
+        default=GUI_RATE_HZ,
+        metavar="HZ",
+        help=f"plot refreshes per second in each browser (default {GUI_RATE_HZ:g}; "
+        f"{GUI_RATE_RANGE_HZ[0]:g}..{GUI_RATE_RANGE_HZ[1]:g}): a lower rate costs the bench "
+        "and each browser less CPU (a weak laptop, many tabs); a step is pushed at once",
+    )
     p.add_argument("--no-3d", action="store_true", help="no 3D rotor view (lighter browsers)")
     p.add_argument(
         "--show-3d",
@@ -156,6 +165,7 @@ def _main(argv: Sequence[str] | None) -> int:
         bitrate=args.bitrate,
         bus_options=bus_extras_from_args(args),
         scene_3d=not args.no_3d,
+        gui_rate_hz=args.plot_rate,
         scene_3d_shown=args.show_3d,
         node_id=args.node,
         nodes=nodes,

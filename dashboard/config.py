@@ -6,7 +6,7 @@ import ipaddress
 from dataclasses import dataclass, field
 from typing import Any
 
-__all__ = ["LOOPBACK_HOSTS", "BenchConfig", "is_loopback"]
+__all__ = ["GUI_RATE_HZ", "GUI_RATE_RANGE_HZ", "LOOPBACK_HOSTS", "BenchConfig", "is_loopback"]
 
 LOOPBACK_HOSTS = ("127.0.0.1", "localhost", "::1")
 
@@ -19,6 +19,13 @@ def is_loopback(host: str) -> bool:
         return ipaddress.ip_address(host).is_loopback
     except ValueError:
         return False
+
+
+#: Plot refreshes per second in each browser by default (``--plot-rate``): smooth to the eye.
+GUI_RATE_HZ = 24.0
+#: ``--plot-rate`` accepted, Hz: below 1 Hz a plot is no longer live; above 60 Hz no screen shows
+#: more, and every refresh costs the bench and each browser CPU.
+GUI_RATE_RANGE_HZ = (1.0, 60.0)
 
 
 @dataclass
@@ -36,6 +43,7 @@ class BenchConfig:
     join_hub: TCP port of an already running loopback hub to join (instead of interface).
     token: access token; required (and checked on every request) when ``allow_remote``.
     scene_3d: the 3D rotor view exists (each browser then has a "3D rotor" checkbox).
+    gui_rate_hz: plot refreshes per second in each browser (``--plot-rate``, 1..60 Hz).
     scene_3d_shown: the checkbox starts checked. Off by default: a turning rotor keeps the
     page re-rendering, 50–130 % of a core in a browser with software WebGL (benchmarks/
     bench_dashboard.py --rotor), while hidden it costs nothing.
@@ -60,7 +68,7 @@ class BenchConfig:
     allow_remote: bool = False
     token: str | None = None
     live_window_s: float = 4.0
-    gui_rate_hz: float = 24.0  # plot refreshes/s (≤ 0.5 MB/s per tab); a step pushes at once
+    gui_rate_hz: float = GUI_RATE_HZ  # plot refreshes/s (≤ 0.5 MB/s per tab); a step pushes at once
     scene_3d: bool = True
     scene_3d_shown: bool = False
     stream_rate_hz: float = 20.0
@@ -80,6 +88,9 @@ class BenchConfig:
             raise ValueError(f"node id {self.node_id} is outside 1..127")
         if self.speed_factor <= 0:
             raise ValueError("--speed-factor must be > 0")
+        lo, hi = GUI_RATE_RANGE_HZ
+        if not lo <= self.gui_rate_hz <= hi:  # (also refuses nan)
+            raise ValueError(f"--plot-rate must be {lo:g}..{hi:g} Hz, got {self.gui_rate_hz:g}")
         if self.nodes and not self.virtual:
             raise ValueError("--nodes starts virtual drives: it needs --virtual")
         if self.nodes and self.node_id not in self.nodes:

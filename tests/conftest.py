@@ -110,6 +110,16 @@ class HostDelay:
         return "; ".join(repr(p) for p in self.probes)
 
 
+#: Plot refreshes/s of the benches most browser tests open (``drive-dashboard --plot-rate``):
+#: they test what the page does, not how smooth its plots are, and each open page costs CPU in
+#: proportion (benchmarks/bench_dashboard.py --plot-rate: see the README's dashboard options).
+#: tests/test_dashboard_e2e.py, tests/test_dashboard_freshness.py and
+#: tests/test_dashboard_browsers.py (the live plot, its staleness, a starved page's pace) and the
+#: README's sessions run at the default.
+TEST_PLOT_RATE_HZ = 6.0
+PLOT_RATE_ARGS = ["--plot-rate", repr(TEST_PLOT_RATE_HZ)]
+
+
 @pytest.fixture(scope="module")
 def hub_drive(tmp_path_factory):
     """A loopback hub in this process with a ``virtual-drive run`` child on it (node 1, its own

@@ -21,7 +21,7 @@ import time
 import can
 import httpx
 import pytest
-from conftest import cia402_state
+from conftest import PLOT_RATE_ARGS, cia402_state
 
 from dashboard.browser import (
     CHROMIUM,
@@ -108,7 +108,7 @@ def test_step_test_and_identification_from_the_gui_leave_speed_mode_at_1000_rpm(
     from playwright.sync_api import sync_playwright
 
     hub = free_port()
-    with run_dashboard(["--virtual", "--no-3d", "--hub-port", str(hub)]) as dash, \
+    with run_dashboard(["--virtual", "--no-3d", "--hub-port", str(hub), *PLOT_RATE_ARGS]) as dash, \
             sync_playwright() as p:
         w = BusWatch(hub)
         try:

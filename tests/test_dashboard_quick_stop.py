@@ -28,7 +28,7 @@ import time
 import can
 import httpx
 import pytest
-from conftest import HostDelay, cia402_state
+from conftest import PLOT_RATE_ARGS, HostDelay, cia402_state
 from fastapi.testclient import TestClient
 
 from dashboard.app import create_app
@@ -155,7 +155,7 @@ def test_watcher_quick_stop_over_rest_during_identification():
 
 def _hub_port_arg() -> tuple[list[str], int]:
     port = free_port()
-    return ["--virtual", "--no-3d", "--hub-port", str(port)], port
+    return ["--virtual", "--no-3d", "--hub-port", str(port), *PLOT_RATE_ARGS], port
 
 
 @pytest.mark.skipif(not os.path.exists(CHROMIUM), reason="needs Debian's chromium")

@@ -19,7 +19,7 @@ import time
 
 import httpx
 import pytest
-from conftest import RunQueueProbe
+from conftest import PLOT_RATE_ARGS, RunQueueProbe
 
 from dashboard.browser import (
     CHROMIUM,
@@ -79,9 +79,10 @@ def _known_state(api_url: str, timeout: float = 10.0) -> dict:
 
 
 def test_report_tab_runs_and_downloads(tmp_path):
+    from playwright.sync_api import TimeoutError as PlaywrightTimeoutError
     from playwright.sync_api import sync_playwright
 
-    with run_dashboard(["--virtual", "--no-3d"]) as dash, sync_playwright() as p:
+    with run_dashboard(["--virtual", "--no-3d", *PLOT_RATE_ARGS]) as dash, sync_playwright() as p:
         browser = launch(p)
         page = browser.new_page(viewport={"width": 1400, "height": 900}, accept_downloads=True)
         page.set_default_timeout(90_000)
@@ -135,10 +136,16 @@ def test_report_tab_runs_and_downloads(tmp_path):
         click(page, page.get_by_role("button", name="Run report"))
         page.get_by_role("button", name="Cancel action").wait_for(timeout=60_000)
         t_min, t_end = time.monotonic() + 2.0, time.monotonic() + 5.0
-        # 2 s of shots, longer until 4 (one shot took over 0.6 s at load 16)
+        # 2 s of shots, longer until 4 (one shot took over 0.6 s at load 16). Each shot gets
+        # only the time left, so Cancel is pressed while the step still runs (ci27, load 10: a
+        # shot with 60 s outlasted the whole speed step, and Cancel was gone)
         while time.monotonic() < t_min or (len(shots) < 4 and time.monotonic() < t_end):
+            left = (t_end if len(shots) < 4 else t_min) - time.monotonic()
             if sampler.running:
-                shots.append(plot.screenshot(timeout=60_000))
+                try:
+                    shots.append(plot.screenshot(timeout=max(500.0, 1e3 * left)))
+                except PlaywrightTimeoutError:
+                    break
             time.sleep(0.2)
         click(page, page.get_by_role("button", name="Cancel action"))
         deadline = time.monotonic() + 60

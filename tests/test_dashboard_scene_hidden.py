@@ -28,6 +28,7 @@ from pathlib import Path
 import msgspec
 import pytest
 import viser
+from conftest import TEST_PLOT_RATE_HZ
 from fastapi.testclient import TestClient
 from websockets.sync.client import connect
 
@@ -137,7 +138,12 @@ def wrap(a: float) -> float:
 @pytest.fixture(scope="module")
 def bench():
     cfg = BenchConfig(
-        virtual=True, speed_factor=1.0, gui_port=0, scene_3d=True, scene_3d_shown=True
+        virtual=True,
+        speed_factor=1.0,
+        gui_port=0,
+        scene_3d=True,
+        scene_3d_shown=True,
+        gui_rate_hz=TEST_PLOT_RATE_HZ,
     )
     with TestClient(create_app(cfg), base_url="http://127.0.0.1:8000") as c:
         yield c.app.state.gui, c.app.state.bench

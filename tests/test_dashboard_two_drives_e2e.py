@@ -23,6 +23,7 @@ from pathlib import Path
 import canopen
 import httpx
 import pytest
+from conftest import PLOT_RATE_ARGS
 
 from dashboard.browser import (
     CHROMIUM,
@@ -50,7 +51,7 @@ pytestmark = [
 def bench() -> Iterator[tuple[str, str, int]]:
     """``drive-dashboard --virtual --nodes 1,2``; yields (gui_url, api_url, hub_port)."""
     api_port = free_port()
-    cmd = [str(DASHBOARD), "--virtual", "--nodes", "1,2", "--no-3d"]
+    cmd = [str(DASHBOARD), "--virtual", "--nodes", "1,2", "--no-3d", *PLOT_RATE_ARGS]
     cmd += ["--port", str(api_port), "--gui-port", "0"]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     try:

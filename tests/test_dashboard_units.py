@@ -60,6 +60,9 @@ def test_origin_check():
         ({"virtual": False}, "--interface"),
         ({"virtual": True, "node_id": 0}, "1..127"),
         ({"virtual": True, "speed_factor": 0.0}, "speed-factor"),
+        ({"virtual": True, "gui_rate_hz": 0.0}, "plot-rate must be 1..60 Hz"),
+        ({"virtual": True, "gui_rate_hz": 61.0}, "plot-rate must be 1..60 Hz"),
+        ({"virtual": True, "gui_rate_hz": float("nan")}, "plot-rate must be 1..60 Hz"),
     ],
 )
 def test_config_refuses_unsafe_or_incomplete(kw, words):
@@ -77,6 +80,9 @@ def test_config_refuses_unsafe_or_incomplete(kw, words):
         [],
         ["--virtual", "--node", "200"],
         ["--virtual", "--port", "notanumber"],
+        ["--virtual", "--plot-rate", "0"],
+        ["--virtual", "--plot-rate", "nan"],
+        ["--virtual", "--plot-rate", "fast"],
     ],
 )
 def test_cli_bad_input_one_line_nonzero(argv, capsys):

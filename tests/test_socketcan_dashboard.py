@@ -33,6 +33,7 @@ from pathlib import Path
 import can
 import canopen
 import pytest
+from conftest import PLOT_RATE_ARGS
 from test_dashboard_two_drives_e2e import select_node, wait_text
 
 from dashboard.browser import CHROMIUM, click, click_until, launch, open_bench, run_dashboard
@@ -121,7 +122,7 @@ def test_dashboard_two_drives_on_vcan0_in_a_browser(tmp_path):
             r = res["uml"]
             pytest.fail(f"UML ended before the drives were up: {r.problem or r.output[-1500:]}")
         t_ready = time.monotonic() - t0
-        args = ["--interface", "slcan", "--channel", pts, "--node", "1", "--no-3d"]
+        args = ["--interface", "slcan", "--channel", pts, "--node", "1", "--no-3d", *PLOT_RATE_ARGS]
         args += ["--bus-kwargs", "sleep_after_open=0"]
         with run_dashboard(args, timeout=120) as dash:
             from playwright.sync_api import sync_playwright

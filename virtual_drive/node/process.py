@@ -125,11 +125,6 @@ def spawn_virtual_drive(
         text=True,
         # the child exits by itself when this process is gone (even after SIGKILL)
         env={**os.environ, PARENT_ENV: str(os.getpid()), **(env or {})},
-        # A session of its own, as a drive on the bench is a device of its own: a Ctrl-C at
-        # the terminal reaches its master, which stops it in order (it does not die under the
-        # master first), and Linux's scheduler, which shares the CPU per session (autogroup),
-        # gives it its own share, so its pacing does not depend on how busy its master is.
-        start_new_session=True,
     )
     stdout = proc.stdout
     assert stdout is not None  # (stdout=PIPE)
