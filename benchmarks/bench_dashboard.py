@@ -143,16 +143,41 @@ class _Sink:
 class _SimulatedViewer:
     """Stands in for a browser's panel: plot handles that keep what is assigned."""
 
-    def __init__(self) -> None:
+    def __init__(self, bench) -> None:
+        self.bench = bench  # the node it shows (the plot thread groups panels by bench)
         self.speed_plot, self.current_plot = _Sink(), _Sink()
+        self.plots = _SimulatedPlots(self)
         self.controller_md = _Sink()
         self.cid, self.token = -1, None
         self.plot_newest = None
         self.pace = PagePace(object())  # no page: never held back
 
 
-    def __getattr__(self, name: str):  # show_status, show_legends ...: nothing to show
-        return lambda *a, **k: None
+    def __getattr__(self, name: str):  # status, readout, legends ...: nothing to show
+        return _NoOp()
+
+
+class _NoOp:
+    """Any call or attribute, at any depth, does nothing."""
+
+    def __call__(self, *a, **k) -> None:
+        return None
+
+    def __getattr__(self, name: str) -> _NoOp:
+        return self
+
+
+class _SimulatedPlots:
+    """The panel's plots: keeps what the plot thread shows (x, reference, measurement, envelope)."""
+
+    def __init__(self, viewer: _SimulatedViewer) -> None:
+        self.viewer = viewer
+
+    def show_live(self, speed: tuple, current: tuple) -> None:
+        self.viewer.speed_plot.data, self.viewer.current_plot.data = speed, current
+
+    def __getattr__(self, name: str) -> _NoOp:
+        return _NoOp()
 
 
 def server_side_latency(hub_port: int, steps: int) -> list[float]:
@@ -170,7 +195,7 @@ def server_side_latency(hub_port: int, steps: int) -> list[float]:
     cfg = BenchConfig(join_hub=hub_port, gui_port=0, api_port=free_port(), scene_3d=False)
     with TestClient(create_app(cfg)) as client:
         gui, bench = client.app.state.gui, client.app.state.bench
-        gui.panels[-1] = _SimulatedViewer()  # one (simulated) viewer: plots are pushed
+        gui.panels[-1] = _SimulatedViewer(bench)  # one (simulated) viewer: plots are pushed
         bench.drive.enable(timeout=2.0)
         time.sleep(1.0)
         for k in range(steps):
