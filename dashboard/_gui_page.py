@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import contextlib
 import secrets
+import threading
 import time
 from collections.abc import Callable, Iterator
 from typing import Any, Protocol
@@ -61,7 +62,7 @@ class Page:
         self.token: str | None = None  # this browser's lease token once it took control
         self.authenticated = config.token is None
         self.plot_newest: float | None = None  # host time of the newest sample sent here
-        self._muted = 0
+        self._mute = threading.local()  # per thread: see mute()
         self._plots: PlotArea | None = None
 
     # ------------------------------------------------------------------ plots
@@ -80,16 +81,21 @@ class Page:
     # ------------------------------------------------------------------ echo guard
     @contextlib.contextmanager
     def mute(self) -> Iterator[None]:
-        """Callbacks fired while muted (a read-back shown in a field) do nothing."""
-        self._muted += 1
+        """Callbacks fired while muted (a read-back shown in a field) do nothing.
+
+        Per thread: viser calls a field's callbacks in the thread that sets its value, so the
+        echo of a value set here is muted, while what the browser sends meanwhile (handled in
+        viser's other threads) is not lost (a shared count dropped a keystroke that came in
+        while another callback was muted: the L_c box showed 22.2, the Loop tab 22)."""
+        self._mute.n = getattr(self._mute, "n", 0) + 1
         try:
             yield
         finally:
-            self._muted -= 1
+            self._mute.n -= 1
 
     @property
     def muted(self) -> bool:
-        return self._muted > 0
+        return getattr(self._mute, "n", 0) > 0
 
     # ------------------------------------------------------------------ notices
     def name(self) -> str:

@@ -9,6 +9,7 @@ b rpm/(A·sample).
 
 from __future__ import annotations
 
+import threading
 from typing import Any
 
 from dashboard import _tuning as tuning
@@ -26,6 +27,7 @@ class TuningTab:
 
     def __init__(self, page: Page) -> None:
         self.page = page
+        self._lock = threading.RLock()  # one preview at a time (see preview())
         gui = page.gui
         # preview, Apply and its notice first: visible without scrolling
         self.preview_md = gui.add_markdown("")
@@ -109,18 +111,20 @@ class TuningTab:
         return tuning.A_PAPER, tuning.B_PAPER
 
     def _on_Lc_uH(self) -> None:
-        if self.page.muted or not self.Lc_uH.validate():
-            return
-        with self.page.mute():
-            self.Lc_ratio.set(round(self.Lc_uH.value() * 1e-6 / self.motor_L(), 6))
-        self.preview()
+        with self._lock:
+            if self.page.muted or not self.Lc_uH.validate():
+                return
+            with self.page.mute():
+                self.Lc_ratio.set(round(self.Lc_uH.value() * 1e-6 / self.motor_L(), 6))
+            self.preview()
 
     def _on_Lc_ratio(self) -> None:
-        if self.page.muted or not self.Lc_ratio.validate():
-            return
-        with self.page.mute():
-            self.Lc_uH.set(round(self.Lc_ratio.value() * self.motor_L() * 1e6, 6))
-        self.preview()
+        with self._lock:
+            if self.page.muted or not self.Lc_ratio.validate():
+                return
+            with self.page.mute():
+                self.Lc_uH.set(round(self.Lc_ratio.value() * self.motor_L() * 1e6, 6))
+            self.preview()
 
     def changes(self) -> dict[str, float | int]:
         """This browser's gain set in drive units; FieldError (shown at the fields) if any typed
@@ -153,20 +157,25 @@ class TuningTab:
         return {**self.gains, **changes, "type": self.type_in.value}
 
     def preview(self) -> None:
-        """The typed set's verdict and Loop plots, from what this page holds (no bus)."""
-        if self.page.muted:
-            return
-        try:
-            changes = self.changes()
-            p = tuning.preview(self.page.bench, changes)
-        except FieldError:
-            self.preview_md.content = "**Preview:** fix the marked fields"
-            return
-        except Exception as exc:
-            self.preview_md.content = f"**Not applicable:** {exc}"
-            return
-        self.preview_md.content = tuning.preview_markdown(p)
-        self.show_loop_preview(changes)
+        """The typed set's verdict and Loop plots, from what this page holds (no bus).
+
+        One at a time per page, each from the fields as they are when it runs: viser runs the
+        callbacks of quick keystrokes side by side, and the last preview drawn must be the
+        last value typed (not an earlier keystroke's, drawn after it)."""
+        with self._lock:
+            if self.page.muted:
+                return
+            try:
+                changes = self.changes()
+                p = tuning.preview(self.page.bench, changes)
+            except FieldError:
+                self.preview_md.content = "**Preview:** fix the marked fields"
+                return
+            except Exception as exc:
+                self.preview_md.content = f"**Not applicable:** {exc}"
+                return
+            self.preview_md.content = tuning.preview_markdown(p)
+            self.show_loop_preview(changes)
 
     def show_loop_preview(self, changes: dict[str, float | int] | None = None) -> None:
         """Redraw the Loop tab: the typed set (``changes``) against the applied one."""
