@@ -54,6 +54,7 @@ from _socket_bytes import bytes_sent
 
 from dashboard._gui_pace import PagePace
 from dashboard.browser import free_port, launch, run_dashboard, stop_process
+from dashboard.config import GUI_RATE_HZ
 
 INIT_JS = """
 (() => {
@@ -167,17 +168,15 @@ class _NoOp:
         return self
 
 
-class _SimulatedPlots:
-    """The panel's plots: keeps what the plot thread shows (x, reference, measurement, envelope)."""
+class _SimulatedPlots(_NoOp):
+    """The panel's plots: keep what the plot thread shows (x, reference, measurement, envelope);
+    everything else does nothing."""
 
     def __init__(self, viewer: _SimulatedViewer) -> None:
         self.viewer = viewer
 
     def show_live(self, speed: tuple, current: tuple) -> None:
         self.viewer.speed_plot.data, self.viewer.current_plot.data = speed, current
-
-    def __getattr__(self, name: str) -> _NoOp:
-        return _NoOp()
 
 
 def server_side_latency(hub_port: int, steps: int) -> list[float]:
@@ -357,7 +356,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     ap.add_argument(
         "--plot-rate", type=float, metavar="HZ",
-        help="drive-dashboard --plot-rate HZ (default: the dashboard's, 24)",
+        help=f"drive-dashboard --plot-rate HZ (default: the dashboard's, {GUI_RATE_HZ:g})",
     )
     ap.add_argument(
         "--hogs", type=int, default=0,
