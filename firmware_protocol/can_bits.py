@@ -120,8 +120,9 @@ def _chunk_tables() -> tuple[tuple[int, ...], ...]:
     return tuple(tables)
 
 
-_CHUNK_TABLES = _chunk_tables()
-_BYTE_TABLE = _CHUNK_TABLES[8]
+#: the stuffing tables, built on the first count (about 13 ms: not a cost of every process
+#: that imports this module, such as each drive-link command)
+_CHUNK_TABLES: tuple[tuple[int, ...], ...] = ()
 
 
 def stuff_bit_count(bits: int, n_bits: int) -> int:
@@ -136,15 +137,22 @@ def _stuff_count(bits: int, n_bits: int) -> int:
     """Byte by byte through the state machine (the last byte padded on the right)."""
     if not n_bits:
         return 0
+    tables = _CHUNK_TABLES or _built_chunk_tables()
     tail = -n_bits & 7
     octets = (bits << tail).to_bytes((n_bits + 7) >> 3, "big")
     state, stuffs = _START, 0
-    table = _BYTE_TABLE
+    table = tables[8]
     for byte in octets[:-1]:
         packed = table[state * 256 + byte]
         stuffs += packed >> 4
         state = packed & 15
-    return stuffs + (_CHUNK_TABLES[8 - tail][state * 256 + octets[-1]] >> 4)
+    return stuffs + (tables[8 - tail][state * 256 + octets[-1]] >> 4)
+
+
+def _built_chunk_tables() -> tuple[tuple[int, ...], ...]:
+    global _CHUNK_TABLES
+    _CHUNK_TABLES = _chunk_tables()  # (two threads may both build it: same tables)
+    return _CHUNK_TABLES
 
 
 def frame_bits(

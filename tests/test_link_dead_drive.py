@@ -80,3 +80,47 @@ def test_a_dead_drive_fails_calls_fast_saying_the_node_is_gone(parts):
     requests = [m for m in iter(lambda: sniff.recv(0), None) if m.arbitration_id == 0x604]
     assert len(requests) == 1
 
+
+
+class _StallingClock:
+    """``time`` for :mod:`drive_link.link._sdo_segmented` whose monotonic clock jumps ahead by
+    ``stall_s`` at its ``at``-th reading: the host did not run the caller for that long there
+    (a busy host can preempt it between any two statements)."""
+
+    def __init__(self, at: int, stall_s: float) -> None:
+        self.at, self.stall_s, self.readings, self.offset = at, stall_s, 0, 0.0
+
+    def monotonic(self) -> float:
+        self.readings += 1
+        if self.readings == self.at:
+            self.offset = self.stall_s
+        return time.monotonic() + self.offset
+
+    def __getattr__(self, name: str):
+        return getattr(time, name)
+
+
+def test_a_stall_anywhere_in_a_call_to_a_gone_node_sends_one_request(parts, monkeypatch):
+    """The SocketCAN lane at host load 7.8 (ci33) saw a call to a stopped drive send its request
+    twice, one SDO timeout apart. The property: whatever point of the call the host stalls at,
+    a node that is gone gets one request, and the call fails with NodeGone, not a resend."""
+    from drive_link.link import _sdo_segmented
+
+    d, vd, sniff = parts
+    time.sleep(0.25)
+    vd.stop()
+    with pytest.raises(NodeGone):
+        d.read("statusword")  # gone now
+    stall_s = 0.05
+    for at in range(1, 16):
+        while sniff.recv(0) is not None:
+            pass
+        clock = _StallingClock(at, stall_s)
+        monkeypatch.setattr(_sdo_segmented, "time", clock)
+        with pytest.raises(NodeGone):
+            d.write("target_velocity", 10)
+        monkeypatch.setattr(_sdo_segmented, "time", time)
+        time.sleep(0.05)
+        requests = [m for m in iter(lambda: sniff.recv(0), None) if m.arbitration_id == 0x604]
+        assert len(requests) == 1, f"stall of {stall_s} s at clock reading {at}: " \
+            f"{len(requests)} requests"  # fmt: skip

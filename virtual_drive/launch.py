@@ -122,6 +122,8 @@ class HubProcess:
     def __init__(
         self, bitrate: int = 1_000_000, port: int = 0, timeout: float = 60.0, **faults: Any
     ) -> None:
+        from virtual_drive.node import process
+
         cmd = [sys.executable, "-m", "virtual_drive.cli", "hub", "--port", str(port)]
         cmd += ["--bitrate", str(int(bitrate))]
         cmd += ["--drop-rate", repr(float(faults.get("drop_rate", 0.0)))]
@@ -136,6 +138,7 @@ class HubProcess:
             stderr=self._err,
             text=True,
             start_new_session=True,
+            env=process.child_env(),
         )
         box: list[str] = []
         out = self.proc.stdout

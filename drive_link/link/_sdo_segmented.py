@@ -82,6 +82,10 @@ OWED_FOR_S = 5.0
 #: s a frame held back as a late copy waits at least for a frame after it (see settle_s)
 SETTLE_MIN_S = 0.02
 
+#: s a timed wait may end before the time it was given (the queue's wait): a wait that ends
+#: at a request's floor this close has reached it (see Exchange.next_or_gone)
+FLOOR_HAIR_S = 0.001
+
 __all__ = [
     "CLOCK_TOLERANCE_S", "OWED_FOR_S", "SETTLE_MIN_S", "Exchange", "NoAnswer", "NodeGone",
     "check_gone", "continue_upload", "download", "settle_s", "upload", "wait_slice",
@@ -108,7 +112,7 @@ class NodeGone(SdoCommunicationError):  # noqa: N818
 def check_gone(client: ChannelClient) -> None:
     """Raise :class:`NodeGone` if the node's heartbeat watch says it is gone now."""
     at = client.gone_at()
-    if at is not None and time.monotonic() >= at - 0.001:  # (a wait may end a hair early)
+    if at is not None and time.monotonic() >= at - FLOOR_HAIR_S:  # (a wait may end early)
         raise NodeGone(client.gone_reason())
 
 
@@ -240,7 +244,7 @@ class Exchange:
                 floor = max(floor, now + STALL_GRACE_S)
                 deadline = max(deadline, floor)  # (an answer may be waiting too: no resend)
                 continue
-            if now >= floor:
+            if now >= floor - FLOOR_HAIR_S:
                 check_gone(self.client)
             if step >= left or now >= deadline:
                 return None
@@ -263,7 +267,11 @@ class Exchange:
             self.send(frame)
             t_sent = time.monotonic()
             deadline = t_sent + wait
-            floor = time.monotonic() + timeout  # one response timeout, even for a gone node
+            # one response timeout, even for a gone node; from the same reading as the
+            # deadline (wait >= timeout), so a wait that reaches the deadline has reached it
+            # too and asks whether the node is gone before any resend (two readings let a host
+            # stall between them put the floor past the deadline: a resend to a gone node)
+            floor = t_sent + timeout
             while (left := deadline - time.monotonic()) > 0:
                 try:
                     resp = self.next_or_gone(left, floor)
