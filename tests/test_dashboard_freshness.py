@@ -22,7 +22,6 @@ from __future__ import annotations
 import contextlib
 import os
 import signal
-import statistics
 import time
 
 import httpx
@@ -115,6 +114,20 @@ def state_calls(api_url: str, n: int = 6) -> tuple[list[float], dict]:
     return took, last
 
 
+def assert_answered_at_once(took: list[float], host: HostDelay, what: str) -> None:
+    """``took``: durations (s) of /api/state calls made while the drive was frozen. The state is
+    what is known, so a call costs the product at most 0.1 s on average and never a drive's SDO
+    timeout; what the host kept the dashboard and this process waiting for a CPU meanwhile
+    (``host``, started before the calls) is the host's part (ci34 at load 10.8: a median of
+    0.25 s with calls of 0.008-0.84 s, the SDO timeout not in sight)."""
+    extra = host.allowance()
+    load = os.getloadavg()[0]
+    seen = f"/api/state took {[round(t, 3) for t in took]} s {what}"
+    detail = f"host run-queue allowance {extra:.2f} s: {host!r}; load {load:.1f}"
+    assert sum(took) <= 0.100 * len(took) + extra, f"{seen} ({detail})"
+    assert max(took) < 1.0 + extra, f"{seen}: it waited on the drive ({detail})"
+
+
 def wait_live(api_url: str, timeout: float = 30.0) -> dict:
     """The state once its live data is fresh (a precondition: the drive may still be catching
     up after the last freeze, or the host may have held it back; ci28 at load 10), else the
@@ -134,7 +147,9 @@ def check_frozen(page, api_url: str, pid: int, what: str, dash_pid: int) -> None
         shown = time.monotonic() - t_stop
         extra = host.allowance()
         page.wait_for_function(PLOTS_STALE, polling=20, timeout=20_000)
+        calls = HostDelay(dash_pid, os.getpid())
         took, s = state_calls(api_url)
+        assert_answered_at_once(took, calls, f"while the {what} was frozen")
         time.sleep(max(0.0, FREEZE_S - (time.monotonic() - t_stop)))
         text = page.inner_text(".bench-statusbar")
     load = os.getloadavg()[0]
@@ -145,8 +160,6 @@ def check_frozen(page, api_url: str, pid: int, what: str, dash_pid: int) -> None
         f"host run-queue allowance {extra:.2f} s: {host!r}; load {load:.1f})"
     )
     assert "STALE" in text and " s old" in text, text
-    assert statistics.median(took) <= 0.100, f"/api/state took {took} s (load {load:.1f})"
-    assert max(took) < 1.0, f"/api/state took {took} s: it waited on the drive"
     assert "live" in s["stale"] and s["ages_s"]["live"] > 0.5, s["ages_s"]
     # let go: the page is live again
     page_waits(page, BAR_LIVE, 30.0)
@@ -163,10 +176,9 @@ def test_api_state_answers_at_once_while_the_drive_is_frozen(rig):
     assert "live" not in s.get("stale", ()), s
     with frozen(bus.drives[1].pid):
         time.sleep(1.0)
+        calls = HostDelay(dash.proc.pid, os.getpid())
         took, s = state_calls(dash.api_url)
-    load = os.getloadavg()[0]
-    assert statistics.median(took) <= 0.100, f"/api/state took {took} s (load {load:.1f})"
-    assert max(took) < 1.0, f"/api/state took {took} s: it waited on the drive"
+        assert_answered_at_once(took, calls, "while the drive was frozen")
     assert {"live", "heartbeat", "statusword"} <= set(s["stale"]), s["stale"]
     assert s["ages_s"]["live"] >= 0.9 and s["ages_s"]["heartbeat"] >= 0.8, s["ages_s"]
 
@@ -204,16 +216,15 @@ def test_a_stopped_bus_node_is_stale_within_a_second_while_its_heartbeat_goes_on
                 "() => /NMT STOPPED/.test(document.querySelector('.bench-statusbar').innerText)",
                 polling=20, timeout=20_000,
             )
+            calls = HostDelay(dash.proc.pid, os.getpid())
             took, s = state_calls(dash.api_url)
+            assert_answered_at_once(took, calls, "while the drive was STOPPED")
         finally:
             d.nmt("start")
-    load = os.getloadavg()[0]
     # nmt() returns once a heartbeat confirmed STOPPED: up to a producer period after the stop
     assert shown <= SHOWN_WITHIN_S + 0.25 + extra, (
         f"the page showed STALE {shown:.2f} s after (host allowance {extra:.2f} s: {host!r})"
     )
-    assert statistics.median(took) <= 0.100, f"/api/state took {took} s (load {load:.1f})"
-    assert max(took) < 1.0, f"/api/state took {took} s: it waited on an SDO timeout"
     assert s["nmt_state"] == "STOPPED" and "live" in s["stale"], s
     assert "heartbeat" not in s["stale"], s["ages_s"]  # the node itself is alive
     page_waits(page, BAR_LIVE, 30.0)
