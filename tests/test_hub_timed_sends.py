@@ -46,6 +46,7 @@ def _skip_if_starved(probe: RunQueueProbe, what: str) -> None:
         pytest.skip(f"{what} not observable: {probe!r}")
 
 _WALL = time.time() - time.monotonic()
+TOL_MS = 3e-3  #: µs stamps at both ends (the sender states µs, the hub stamps µs), ms
 
 
 @pytest.mark.unit
@@ -429,3 +430,34 @@ def test_batched_drive_keeps_an_inhibit_time_on_the_bus():
         near = [g for g in gaps if abs(g - period) <= 0.3e-3]
         assert len(near) >= 0.95 * len(gaps), (hex(cob_id), sorted(gaps))
         assert statistics.fmean(near) == pytest.approx(period, abs=0.03e-3), hex(cob_id)
+
+
+def test_a_batch_read_behind_a_plain_send_keeps_its_spacing():
+    """ci30/ci34 at load 8: TPDO2 (inhibit 1.5 ms) 0.38-0.75 ms apart on the hub. A busy hub
+    reads a drive's heartbeat (a plain send: it arrives now) and its next TPDO batch (stated
+    over the last 10 ms) in one go. The batch keeps the drive's order, so it starts after the
+    heartbeat, and it must keep its stated spacing from there: its frames moved past the
+    present were all put on the present, and the hub held them apart only for SPACING_HOLD_S."""
+    with Hub(port=0, bitrate=1_000_000) as hub:
+        rx = can.Bus(
+            interface="socketcand", host="127.0.0.1", port=hub.port, channel="vcan0",
+            tcp_tune=True,
+        )
+        tx = _raw_client(hub.port)
+        try:
+            time.sleep(0.2)
+            now = time.monotonic()
+            stated = [now - 0.0105 + 1.5e-3 * k for k in range(8)]
+            burst = format_send(0x701, b"\x05")
+            burst += b"".join(format_sendat(t, 0x281, bytes(8)) for t in stated)
+            tx.sendall(burst)
+            got = recv_frames(rx, 9)
+            assert [m.arbitration_id for m in got] == [0x701] + [0x281] * 8
+            t = [m.timestamp for m in got[1:]]
+            gaps = [round((b - a) * 1e3, 4) for a, b in itertools.pairwise(t)]
+            assert min(gaps) >= 1.5 - TOL_MS, f"TPDO2 gaps (ms): {gaps}"
+            # and no more than the stated spacing plus the frames' differing bit stuffing
+            assert max(gaps) <= 1.5 + 0.025, f"TPDO2 gaps (ms): {gaps}"
+        finally:
+            tx.close()
+            rx.shutdown()
