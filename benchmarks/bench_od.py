@@ -32,7 +32,9 @@ def main(argv: list[str] | None = None) -> None:
     ).parse_args(argv)
     stat = EDS_PATH.stat()
     parse = _best(
-        lambda: _load_cached.__wrapped__(EDS_PATH.resolve(), 1, stat.st_mtime_ns, stat.st_size),
+        lambda: _load_cached.__wrapped__(
+            EDS_PATH.resolve(), 1, stat.st_ino, stat.st_mtime_ns, stat.st_size
+        ),
         number=3,
     )
     view = load_od()
