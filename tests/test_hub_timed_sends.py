@@ -432,32 +432,78 @@ def test_batched_drive_keeps_an_inhibit_time_on_the_bus():
         assert statistics.fmean(near) == pytest.approx(period, abs=0.03e-3), hex(cob_id)
 
 
-def test_a_batch_read_behind_a_plain_send_keeps_its_spacing():
-    """ci30/ci34 at load 8: TPDO2 (inhibit 1.5 ms) 0.38-0.75 ms apart on the hub. A busy hub
-    reads a drive's heartbeat (a plain send: it arrives now) and its next TPDO batch (stated
-    over the last 10 ms) in one go. The batch keeps the drive's order, so it starts after the
-    heartbeat, and it must keep its stated spacing from there: its frames moved past the
-    present were all put on the present, and the hub held them apart only for SPACING_HOLD_S."""
-    with Hub(port=0, bitrate=1_000_000) as hub:
-        rx = can.Bus(
-            interface="socketcand", host="127.0.0.1", port=hub.port, channel="vcan0",
-            tcp_tune=True,
-        )
-        tx = _raw_client(hub.port)
+def test_a_frame_sent_now_is_stated_with_its_time_on_a_sendat_hub():
+    """ci30/ci34/ci36 at load 8-9: TPDO2 (inhibit 1.5 ms) 0.25-0.9 ms apart on the hub. A frame
+    the drive sends now (heartbeat, SDO answer, EMCY) went as a plain send, which takes the
+    time the hub reads it: later, on a busy hub, than the TPDO batch stated before it, whose
+    frames then had to follow it and were squeezed. On a hub that takes sendat, every frame
+    carries the time it was sent."""
+    import threading
+
+    srv = socket.socket()
+    srv.bind(("127.0.0.1", 0))
+    srv.listen(1)
+    seen: list[bytes] = []
+
+    def serve() -> None:
+        conn, _ = srv.accept()
+        conn.sendall(b"< hi >")
+        buf = b""
+        for reply in (b"< ok >", b"< features sendat >", b"< ok >", None):
+            while b">" not in buf:
+                buf += conn.recv(4096)
+            element, _, buf = buf.partition(b">")
+            seen.append(element + b">")
+            if reply is not None:
+                conn.sendall(reply)
+        conn.close()
+
+    th = threading.Thread(target=serve, daemon=True)
+    th.start()
+    try:
+        bus = HubBus(channel="vcan0", host="127.0.0.1", port=srv.getsockname()[1])
         try:
-            time.sleep(0.2)
-            now = time.monotonic()
-            stated = [now - 0.0105 + 1.5e-3 * k for k in range(8)]
-            burst = format_send(0x701, b"\x05")
-            burst += b"".join(format_sendat(t, 0x281, bytes(8)) for t in stated)
-            tx.sendall(burst)
-            got = recv_frames(rx, 9)
-            assert [m.arbitration_id for m in got] == [0x701] + [0x281] * 8
-            t = [m.timestamp for m in got[1:]]
-            gaps = [round((b - a) * 1e3, 4) for a, b in itertools.pairwise(t)]
-            assert min(gaps) >= 1.5 - TOL_MS, f"TPDO2 gaps (ms): {gaps}"
-            # and no more than the stated spacing plus the frames' differing bit stuffing
-            assert max(gaps) <= 1.5 + 0.025, f"TPDO2 gaps (ms): {gaps}"
+            assert bus.timed_sends
+            t0 = time.time()
+            assert bus.send_many([(0x701, b"\x05")]) == 1  # no time given: sent now
+            t1 = time.time()
+            th.join(5)
         finally:
-            tx.close()
-            rx.shutdown()
+            bus.shutdown()
+        words = seen[-1].split()
+        assert words[1] == b"sendat", seen[-1]
+        assert t0 - 1e-3 <= float(words[2]) <= t1 + 1e-3, (seen[-1], t0, t1)
+    finally:
+        srv.close()
+
+
+class _StallingClock:
+    """``time`` whose clocks both jump ahead by ``stall_s`` at the ``at``-th reading (of either):
+    the thread was preempted there."""
+
+    def __init__(self, at: int, stall_s: float) -> None:
+        self.at, self.stall_s, self.readings, self.offset = at, stall_s, 0, 0.0
+
+    def _read(self, clock) -> float:
+        self.readings += 1
+        if self.readings == self.at:
+            self.offset = self.stall_s
+        return clock() + self.offset
+
+    def monotonic(self) -> float:
+        return self._read(time.monotonic)
+
+    def time(self) -> float:
+        return self._read(time.time)
+
+
+@pytest.mark.parametrize("at", range(1, 7))
+def test_the_wall_clock_offset_ignores_a_stall_between_its_readings(at, monkeypatch):
+    """Read as ``time.time() - time.monotonic()``, a thread preempted between the two got an
+    offset off by the preemption for its process's life (the hub's and each drive's): a drive's
+    sendat times then looked up to 5 ms in the future and its frames were squeezed together."""
+    from virtual_drive import hub_protocol
+
+    truth = time.time() - time.monotonic()  # (idle here: a few µs)
+    monkeypatch.setattr(hub_protocol, "time", _StallingClock(at, 0.005))
+    assert hub_protocol.wall_offset() == pytest.approx(truth, abs=1e-4)

@@ -50,6 +50,7 @@ from virtual_drive.hub_protocol import (
     parse_sendrtr_fields,
     scan_sendats,
     scan_sends,
+    wall_offset,
 )
 
 __all__ = ["DEFAULT_PORT", "Hub", "HubStats"]
@@ -170,7 +171,7 @@ class Hub:
         self._clients: dict[socket.socket, Client] = {}
         self._buses: dict[str, Bus] = {}
         self._mono0 = time.monotonic()
-        self._wall0 = time.time()
+        self._wall0 = self._mono0 + wall_offset()  # (not time.time(): see wall_offset)
         self._failure: BaseException | None = None
         # counters (written by the hub thread only)
         self._n_clients_total = 0
@@ -434,6 +435,11 @@ class Hub:
         if not chunk:  # peer closed; an unfinished element is discarded
             self._close(client)
             return
+        # the time the bytes were read, not the iteration's: this thread may have waited for
+        # the GIL in between, and a sender's sendat times, stated before it sent, then looked
+        # like the future (put on the bus at once, their spacing squeezed: TPDO2 below its
+        # inhibit time at load 8)
+        now = time.monotonic()
         if _QUICKACK is not None:
             # ACK at once: a client without tcp_tune (Nagle on) then sends its next small
             # segment without waiting ~40 ms for our delayed ACK

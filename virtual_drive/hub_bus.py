@@ -251,11 +251,10 @@ class Bus:
     ) -> None:
         """Queue ``sendat`` frames ``(unix_time, id, data, is_extended)``: each arrives at its
         stated time, but never before a frame of this client still waiting for the bus (its
-        order is kept) and never more than ``max_backdate_s`` ago; one stated after ``now``
-        arrives ``now`` (see :mod:`virtual_drive.hub_protocol`). A batch that must start later
-        than stated moves as a whole, keeping its spacing, also past ``now``. A frame of the
-        client that is already on the bus does not hold it back: it starts when the bus is
-        free, as a CAN controller's other transmit mailbox would."""
+        order is kept), never more than ``max_backdate_s`` ago and never after ``now`` (see
+        :mod:`virtual_drive.hub_protocol`). A frame of the client that is already on the bus
+        does not hold it back: it starts when the bus is free, as a CAN controller's other
+        transmit mailbox would."""
         queue = client.queue
         lo = now - max_backdate_s
         if queue and queue[-1][0] > lo:
@@ -270,11 +269,8 @@ class Bus:
             arrival = stated + shift
             if arrival < lo:
                 arrival = lo
-            elif stated > now:  # stated in the future: on the bus now (after its order's lo)
-                arrival = now if now > lo else lo
-            # (a frame the batch's shift moved past the present keeps its place in the batch:
-            # put on the present with the rest, it kept its spacing for SPACING_HOLD_S only;
-            # ci30/ci34 at load 8: a heartbeat read with a TPDO batch, TPDO2 0.38 ms apart)
+            elif arrival > now:
+                arrival = now
             lo = arrival
             timed.append((arrival, can_id, data, ext, stated))
         self._queue(client, timed)

@@ -33,6 +33,8 @@ from typing import Any
 
 import can
 
+from virtual_drive.hub_protocol import wall_offset
+
 __all__ = ["HubBus", "HubConnection", "HubPort", "format_send", "format_sendat"]
 
 logger = logging.getLogger(__name__)
@@ -50,8 +52,9 @@ def format_send(cob_id: int, data: bytes, is_extended: bool = False) -> bytes:
     return b"< send %08X 0 >" % cob_id if is_extended else b"< send %03X 0 >" % cob_id
 
 
-#: time.time() − time.monotonic() when this module was loaded (sendat times are Unix times)
-_WALL_OFFSET = time.time() - time.monotonic()
+#: time.time() − time.monotonic() when this module was loaded (sendat times are Unix times; not
+#: two plain readings: see wall_offset)
+_WALL_OFFSET = wall_offset()
 
 
 def _sendat_head(at: float) -> bytes:
@@ -222,6 +225,10 @@ class HubBus(can.BusABC):
                 msg.arbitration_id
             )
             line = b"< sendrtr %s %d >" % (ident, msg.dlc)
+        elif self.timed_sends:  # with the time it was sent: see send_many
+            line = _sendat_head(time.monotonic()) + _sendat_tail(
+                msg.arbitration_id, bytes(msg.data), msg.is_extended_id
+            )
         else:
             line = format_send(msg.arbitration_id, bytes(msg.data), msg.is_extended_id)
         with self._send_lock:
@@ -234,10 +241,19 @@ class HubBus(can.BusABC):
             TPDO due time of a drive that runs its ticks in batches); when the server takes it
             (:attr:`timed_sends`) they are held as ``< sendat >`` elements until
             :meth:`flush` (the end of the drive's tick: one write per tick), else ``at`` is
-            ignored and they are sent now.
+            ignored and they are sent now. Frames sent now go to such a server as ``sendat``
+            with the time they were sent: a plain send takes the time the server reads it,
+            later, on a busy host, than a batch stated before it, whose frames then had to
+            follow it and were squeezed together (TPDO2 below its inhibit time at load 8).
         """
-        if at is not None and self.timed_sends:
-            self._held.append((at, frames))  # (formatted in flush: one pass per tick)
+        if self.timed_sends:
+            if at is not None:
+                self._held.append((at, frames))  # (formatted in flush: one pass per tick)
+                return len(frames)
+            if frames:
+                data = format_sendat_batch(time.monotonic(), list(frames))
+                with self._send_lock:
+                    self._sock.sendall(data)
             return len(frames)
         lines = [
             b"< send %03X %X %s >" % (cob_id, len(data), data.hex(" ").encode())
@@ -470,7 +486,13 @@ class HubConnection:
         """Frames ``(cob_id, data, extended)`` port ``src`` sends (due at ``at``, monotonic s):
         to the server (held for :meth:`flush` on the batching thread) and to the sibling
         ports that want them."""
-        if at is not None and self._bus.timed_sends:
+        if self._bus.timed_sends:
+            # every frame with its time, those sent now too (heartbeat, SDO answer, EMCY): a
+            # plain send takes the time the hub reads it, later than the batch stated before
+            # it, whose frames then had to follow it and were squeezed (TPDO2 below its
+            # inhibit time at load 8)
+            if at is None:
+                at = time.monotonic()
             head = _sendat_head(at)
             lines = [head + _sendat_tail(cob_id, data, ext) for cob_id, data, ext in frames]
         else:
