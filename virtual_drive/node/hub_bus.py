@@ -33,83 +33,23 @@ from typing import Any
 
 import can
 
-from virtual_drive.hub_protocol import wall_offset
+from virtual_drive.node.hub_elements import (
+    WALL_OFFSET,
+    format_held,
+    format_send,
+    format_sendat,
+    format_sendat_batch,
+    sendat_head,
+    sendat_tail,
+)
 
 __all__ = ["HubBus", "HubConnection", "HubPort", "format_send", "format_sendat"]
 
 logger = logging.getLogger(__name__)
 
 _QUICKACK = getattr(socket, "TCP_QUICKACK", None)
+_FIRST = operator.itemgetter(0)
 _MAX_PARTIAL = 4096  #: bytes of an unfinished element kept before the buffer is discarded
-
-
-def format_send(cob_id: int, data: bytes, is_extended: bool = False) -> bytes:
-    """``< send <id> <len> <b0> ... >`` as bytes (ids: 3 hex digits standard, 8 extended)."""
-    if data:
-        if is_extended:
-            return b"< send %08X %X %s >" % (cob_id, len(data), data.hex(" ").encode())
-        return b"< send %03X %X %s >" % (cob_id, len(data), data.hex(" ").encode())
-    return b"< send %08X 0 >" % cob_id if is_extended else b"< send %03X 0 >" % cob_id
-
-
-#: time.time() − time.monotonic() when this module was loaded (sendat times are Unix times; not
-#: two plain readings: see wall_offset)
-_WALL_OFFSET = wall_offset()
-
-
-def _sendat_head(at: float) -> bytes:
-    """``b"< sendat <secs>.<usecs> "`` for frames ready at ``at`` (``time.monotonic()`` s)."""
-    usecs = round((at + _WALL_OFFSET) * 1e6)
-    return b"< sendat %d.%06d " % (usecs // 1_000_000, usecs % 1_000_000)
-
-
-def _sendat_tail(cob_id: int, data: bytes, is_extended: bool = False) -> bytes:
-    """``b"<id> <len> <b0> ... >"``: the rest of a ``sendat`` element (no data: ``"<id> 0  >"``,
-    as python-can writes an empty ``send``)."""
-    ident = b"%08X" % cob_id if is_extended else b"%03X" % cob_id
-    return b"%s %X %s >" % (ident, len(data), data.hex(" ").encode())
-
-
-def format_sendat_batch(at: float, frames: list[tuple[int, bytes]]) -> bytes:
-    """The ``< sendat >`` elements of standard frames ``(cob_id, data)`` ready at ``at``
-    (``time.monotonic()`` s), one time stamp for all, as one bytes."""
-    head = _sendat_head(at)
-    return b"".join([head + _sendat_tail(cob_id, data) for cob_id, data in frames])
-
-
-_first = operator.itemgetter(0)
-
-
-def _format_held(
-    held: list[tuple[float, Sequence[tuple[int, bytes]]]], prefixes: dict[tuple[int, int], bytes]
-) -> bytes:
-    """:func:`format_sendat_batch` of every batch in ``held`` as one bytes (the flush of a
-    tick), in the order of their times (the hub keeps a sender's order, so a batch stated
-    earlier but held later, e.g. a heartbeat and the next tick's TPDOs, must not come after),
-    with ``b"<id> <len> "`` kept per (id, len) in ``prefixes``: a drive sends the same few
-    TPDOs every tick, so this is the time stamp, the data's hex and four joins a frame."""
-    out: list[bytes] = []
-    add = out.append
-    if len(held) > 1:
-        held = sorted(held, key=_first)
-    for at, frames in held:
-        head = _sendat_head(at)
-        for cob_id, data in frames:
-            key = (cob_id, len(data))
-            prefix = prefixes.get(key)
-            if prefix is None:
-                prefix = prefixes[key] = b"%03X %X " % key
-            add(head)
-            add(prefix)
-            add(data.hex(" ").encode() if data else b"")
-            add(b" >")
-    return b"".join(out)
-
-
-def format_sendat(at: float, cob_id: int, data: bytes, is_extended: bool = False) -> bytes:
-    """``< sendat <secs>.<usecs> <id> <len> <b0> ... >`` for a frame ready at ``at``
-    (``time.monotonic()`` seconds) — the loopback hub's element (:mod:`hub_protocol`)."""
-    return _sendat_head(at) + _sendat_tail(cob_id, data, is_extended)
 
 
 class HubBus(can.BusABC):
@@ -226,7 +166,7 @@ class HubBus(can.BusABC):
             )
             line = b"< sendrtr %s %d >" % (ident, msg.dlc)
         elif self.timed_sends:  # with the time it was sent: see send_many
-            line = _sendat_head(time.monotonic()) + _sendat_tail(
+            line = sendat_head(time.monotonic()) + sendat_tail(
                 msg.arbitration_id, bytes(msg.data), msg.is_extended_id
             )
         else:
@@ -276,7 +216,7 @@ class HubBus(can.BusABC):
         """Write the frames held by :meth:`send_many` (``at`` given) in one ``sendall``."""
         if self._held:
             held, self._held = self._held, []
-            data = _format_held(held, self._prefixes)
+            data = format_held(held, self._prefixes)
             with self._send_lock:
                 self._sock.sendall(data)
 
@@ -471,7 +411,7 @@ class HubConnection:
         if self._held:
             held, self._held = self._held, []
             if len(held) > 1:
-                held.sort(key=_first)
+                held.sort(key=_FIRST)
             data = b"".join([b"".join(lines) for _, lines in held])
             try:
                 self._bus.send_lines(data)
@@ -493,8 +433,8 @@ class HubConnection:
             # inhibit time at load 8)
             if at is None:
                 at = time.monotonic()
-            head = _sendat_head(at)
-            lines = [head + _sendat_tail(cob_id, data, ext) for cob_id, data, ext in frames]
+            head = sendat_head(at)
+            lines = [head + sendat_tail(cob_id, data, ext) for cob_id, data, ext in frames]
         else:
             lines = [format_send(cob_id, data, ext) for cob_id, data, ext in frames]
         if threading.get_ident() == self._batch_ident:
@@ -503,7 +443,7 @@ class HubConnection:
             self._bus.send_lines(b"".join(lines))
         ports = self._ports
         if len(ports) > 1:  # local delivery: the other nodes of this process see them too
-            stamp = time.time() if at is None else at + _WALL_OFFSET
+            stamp = time.time() if at is None else at + WALL_OFFSET
             for p in ports:
                 if p is src:
                     continue
