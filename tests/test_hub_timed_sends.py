@@ -16,6 +16,7 @@ import math
 import socket
 import statistics
 import struct
+import threading
 import time
 from collections.abc import Iterator
 
@@ -234,6 +235,36 @@ def test_a_tick_that_read_the_clock_before_a_read_caught_up_runs_nothing_twice()
         assert drive.sim.time > t_sim
 
 
+def _scripted_server(
+    replies: tuple[bytes | None, ...], linger_s: float = 0.0
+) -> tuple[socket.socket, list[bytes], threading.Thread]:
+    """A one-client socketcand server on 127.0.0.1 that greets, then answers each element the
+    client sends with the next of ``replies`` (None: reads it, answers nothing) and closes
+    ``linger_s`` s after the last: (its listening socket, the elements it read, its thread)."""
+    srv = socket.socket()
+    srv.bind(("127.0.0.1", 0))
+    srv.listen(1)
+    seen: list[bytes] = []
+
+    def serve() -> None:
+        conn, _ = srv.accept()
+        conn.sendall(b"< hi >")
+        buf = b""
+        for reply in replies:
+            while b">" not in buf:
+                buf += conn.recv(4096)
+            element, _, buf = buf.partition(b">")
+            seen.append(element + b">")
+            if reply is not None:
+                conn.sendall(reply)
+        time.sleep(linger_s)
+        conn.close()
+
+    th = threading.Thread(target=serve, daemon=True)
+    th.start()
+    return srv, seen, th
+
+
 def test_vdhub_client_uses_sendat_only_where_the_server_takes_it():
     with Hub(port=0) as hub:
         bus = HubBus(channel="vcan0", host="127.0.0.1", port=hub.port)
@@ -242,28 +273,7 @@ def test_vdhub_client_uses_sendat_only_where_the_server_takes_it():
         finally:
             bus.shutdown()
     # a server that answers '< features >' with an error (a socketcand daemon does)
-    srv = socket.socket()
-    srv.bind(("127.0.0.1", 0))
-    srv.listen(1)
-    import threading
-
-    seen: list[bytes] = []
-
-    def serve() -> None:
-        conn, _ = srv.accept()
-        conn.sendall(b"< hi >")
-        buf = b""
-        for reply in (b"< ok >", b"< error unknown command >", b"< ok >"):
-            while b">" not in buf:
-                buf += conn.recv(4096)
-            element, _, buf = buf.partition(b">")
-            seen.append(element + b">")
-            conn.sendall(reply)
-        time.sleep(0.5)
-        conn.close()
-
-    th = threading.Thread(target=serve, daemon=True)
-    th.start()
+    srv, seen, th = _scripted_server((b"< ok >", b"< error unknown command >", b"< ok >"), 0.5)
     try:
         bus = HubBus(channel="vcan0", host="127.0.0.1", port=srv.getsockname()[1])
         try:
@@ -438,28 +448,7 @@ def test_a_frame_sent_now_is_stated_with_its_time_on_a_sendat_hub():
     time the hub reads it: later, on a busy hub, than the TPDO batch stated before it, whose
     frames then had to follow it and were squeezed. On a hub that takes sendat, every frame
     carries the time it was sent."""
-    import threading
-
-    srv = socket.socket()
-    srv.bind(("127.0.0.1", 0))
-    srv.listen(1)
-    seen: list[bytes] = []
-
-    def serve() -> None:
-        conn, _ = srv.accept()
-        conn.sendall(b"< hi >")
-        buf = b""
-        for reply in (b"< ok >", b"< features sendat >", b"< ok >", None):
-            while b">" not in buf:
-                buf += conn.recv(4096)
-            element, _, buf = buf.partition(b">")
-            seen.append(element + b">")
-            if reply is not None:
-                conn.sendall(reply)
-        conn.close()
-
-    th = threading.Thread(target=serve, daemon=True)
-    th.start()
+    srv, seen, th = _scripted_server((b"< ok >", b"< features sendat >", b"< ok >", None))
     try:
         bus = HubBus(channel="vcan0", host="127.0.0.1", port=srv.getsockname()[1])
         try:
