@@ -124,3 +124,39 @@ def test_a_stall_anywhere_in_a_call_to_a_gone_node_sends_one_request(parts, monk
         requests = [m for m in iter(lambda: sniff.recv(0), None) if m.arbitration_id == 0x604]
         assert len(requests) == 1, f"stall of {stall_s} s at clock reading {at}: " \
             f"{len(requests)} requests"  # fmt: skip
+
+
+@pytest.mark.parametrize(("value", "expected"), [(None, 2.0), ("5", 5.0), ("1.5", 1.5)])
+def test_the_host_consumer_floor_comes_from_the_environment(value, expected):
+    """``DRIVE_LINK_CONSUMER_MIN_S`` sets the shortest time drive_link waits for a silent node
+    (the SocketCAN lane sets 5 for User-Mode Linux); unset, 2 s."""
+    import os
+    import subprocess
+    import sys
+
+    from drive_link.link.supervision import CONSUMER_MIN_ENV
+
+    env = {k: v for k, v in os.environ.items() if k != CONSUMER_MIN_ENV}
+    if value is not None:
+        env[CONSUMER_MIN_ENV] = value
+    code = "from drive_link.link.supervision import CONSUMER_MIN_S as c; print(c)"
+    out = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=60
+    )
+    assert out.returncode == 0 and float(out.stdout) == expected, out
+
+
+@pytest.mark.parametrize("value", ["x", "0.5", "nan", "-3"])
+def test_a_bad_host_consumer_floor_is_refused_saying_why(value):
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "DRIVE_LINK_CONSUMER_MIN_S": value}
+    code = "import drive_link.link.supervision"
+    out = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=60
+    )
+    assert out.returncode != 0
+    want = f"DRIVE_LINK_CONSUMER_MIN_S must be a number of seconds >= 1, got '{value}'"
+    assert want in out.stderr, out.stderr

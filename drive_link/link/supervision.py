@@ -31,6 +31,8 @@ from __future__ import annotations
 
 import contextlib
 import datetime as _dt
+import math
+import os
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -78,11 +80,31 @@ BOOT_UP = 0x00
 #: s a node may stay silent after a reset this session sent (a CiA 402 drive first brakes the
 #: motor; the virtual drive for at most 5 s) before a call counts it as gone
 RESET_SILENCE_S = 6.0
+#: environment variable that sets :data:`CONSUMER_MIN_S` (s, at least 1; unset: 2)
+CONSUMER_MIN_ENV = "DRIVE_LINK_CONSUMER_MIN_S"
+
+
+def _consumer_min_s() -> float:
+    text = os.environ.get(CONSUMER_MIN_ENV, "").strip()
+    if not text:
+        return 2.0
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value >= 1.0):
+        raise ValueError(f"{CONSUMER_MIN_ENV} must be a number of seconds >= 1, got {text!r}")
+    return value
+
+
 #: shortest heartbeat consumer time (s) after which drive_link counts a node as gone. 1 s (the
 #: drive's floor for the host, drive.CONSUMER_MIN_MS) called a live virtual drive gone in a
 #: fresh-clone run at load 7-8 (1.2 s without a heartbeat on a 1 %-loss hub while the host was
-#: busy); a DSP drive does not share the host's CPU, but the host's own reader thread does
-CONSUMER_MIN_S = 2.0
+#: busy); a DSP drive does not share the host's CPU, but the host's own reader thread does.
+#: ``DRIVE_LINK_CONSUMER_MIN_S`` sets it for a host slower still: the SocketCAN lane's
+#: User-Mode Linux, where a drive at host load 8-9 fell silent for 2.0-2.3 s during a 64 KiB
+#: block upload (ci34, ci37, ci38), sets 5.
+CONSUMER_MIN_S = _consumer_min_s()
 STOPPED = 0x04
 OPERATIONAL = 0x05
 PRE_OPERATIONAL = 0x7F

@@ -61,6 +61,10 @@ kernels = _load("uml_kernels", HERE / "kernels.py")
 #: 38 µs per system call and moves about 800 frames/s, the default streams are 2,200 frames/s.
 #: Given to the job as BENCH_TPDO_EVENT_TIMERS_MS (the scenario bench and vcan_checks apply it).
 TPDO_EVENT_TIMERS_MS = (100, 50, 50, 100)
+#: drive_link's shortest heartbeat consumer time inside UML (s; DRIVE_LINK_CONSUMER_MIN_S,
+#: default 2): at host load 8-9 a drive there fell silent for 2.0-2.3 s during a 64 KiB block
+#: upload, and drive_link rightly called it gone (ci34, ci37, ci38)
+CONSUMER_MIN_S = 5.0
 #: Pacing period of virtual drives inside UML (``virtual-drive run --tick-ms``, given as
 #: VIRTUAL_DRIVE_TICK_MS): every ``time.monotonic()`` there is a real system call (50 µs), and a
 #: drive paced at 1 ms used 84 % of UML's CPU doing nothing (PRE-OPERATIONAL, no PDOs).
@@ -204,6 +208,7 @@ def _boot(
         "VIRTUAL_ENV": str(ROOT / ".venv"),
         "BENCH_TPDO_EVENT_TIMERS_MS": ",".join(map(str, TPDO_EVENT_TIMERS_MS)),
         "VIRTUAL_DRIVE_TICK_MS": str(TICK_MS),
+        "DRIVE_LINK_CONSUMER_MIN_S": str(CONSUMER_MIN_S),
         "PATH": f"{ROOT / '.venv' / 'bin'}:/usr/local/bin:/usr/bin:/bin:/usr/sbin:/sbin",
     }
     with tempfile.TemporaryDirectory(prefix="uml-job-") as tmp:
