@@ -57,6 +57,7 @@ from ._sdo import Progress, SdoChannel
 __all__ = [
     "ABORT_CONNECTION_OPTION",
     "CONSUMER_HEARTBEAT",
+    "CONSUMER_MIN_ENV",
     "CONSUMER_MIN_S",
     "NOT_JOURNALLED",
     "PRODUCER_HEARTBEAT",
@@ -66,6 +67,7 @@ __all__ = [
     "SupervisedSdoChannel",
     "SupervisionError",
     "Supervisor",
+    "consumer_min_s",
     "journalled",
     "pdo_group",
     "write_pdo_group",
@@ -80,14 +82,25 @@ BOOT_UP = 0x00
 #: s a node may stay silent after a reset this session sent (a CiA 402 drive first brakes the
 #: motor; the virtual drive for at most 5 s) before a call counts it as gone
 RESET_SILENCE_S = 6.0
-#: environment variable that sets :data:`CONSUMER_MIN_S` (s, at least 1; unset: 2)
+#: shortest heartbeat consumer time (s) after which drive_link counts a node as gone. 1 s (the
+#: drive's floor for the host, drive.CONSUMER_MIN_MS) called a live virtual drive gone in a
+#: fresh-clone run at load 7-8 (1.2 s without a heartbeat on a 1 %-loss hub while the host was
+#: busy); a DSP drive does not share the host's CPU, but the host's own reader thread does.
+#: :data:`CONSUMER_MIN_ENV` replaces it (:func:`consumer_min_s`).
+CONSUMER_MIN_S = 2.0
+#: environment variable that sets the shortest consumer time (s, at least 1) for a host slower
+#: still: the SocketCAN lane's User-Mode Linux, where a drive at host load 8-9 fell silent for
+#: 2.0-2.3 s during a 64 KiB block upload (ci34, ci37, ci38), sets 5
 CONSUMER_MIN_ENV = "DRIVE_LINK_CONSUMER_MIN_S"
 
 
-def _consumer_min_s() -> float:
+def consumer_min_s() -> float:
+    """The shortest heartbeat consumer time (s): :data:`CONSUMER_MIN_ENV` if set, else
+    :data:`CONSUMER_MIN_S`. Raises ValueError (one line) for a value that is not a number of
+    seconds of at least 1 (read when a session starts its supervision)."""
     text = os.environ.get(CONSUMER_MIN_ENV, "").strip()
     if not text:
-        return 2.0
+        return CONSUMER_MIN_S
     try:
         value = float(text)
     except ValueError:
@@ -95,16 +108,6 @@ def _consumer_min_s() -> float:
     if not (math.isfinite(value) and value >= 1.0):
         raise ValueError(f"{CONSUMER_MIN_ENV} must be a number of seconds >= 1, got {text!r}")
     return value
-
-
-#: shortest heartbeat consumer time (s) after which drive_link counts a node as gone. 1 s (the
-#: drive's floor for the host, drive.CONSUMER_MIN_MS) called a live virtual drive gone in a
-#: fresh-clone run at load 7-8 (1.2 s without a heartbeat on a 1 %-loss hub while the host was
-#: busy); a DSP drive does not share the host's CPU, but the host's own reader thread does.
-#: ``DRIVE_LINK_CONSUMER_MIN_S`` sets it for a host slower still: the SocketCAN lane's
-#: User-Mode Linux, where a drive at host load 8-9 fell silent for 2.0-2.3 s during a 64 KiB
-#: block upload (ci34, ci37, ci38), sets 5.
-CONSUMER_MIN_S = _consumer_min_s()
 STOPPED = 0x04
 OPERATIONAL = 0x05
 PRE_OPERATIONAL = 0x7F
@@ -218,6 +221,7 @@ class Supervisor:
         self._last_hb: float | None = None
         self._last_stamp = 0.0
         self._producer_ms = 0
+        self._consumer_min_s = consumer_min_s()  # (s; a bad environment value fails here)
         self._expect_preop_until = 0.0
         self._silence_until = 0.0  # a reset this session sent: silence is expected until then
         self._alive_at: float | None = None  # the node answered (attach): alive then
@@ -318,7 +322,7 @@ class Supervisor:
         """The host's heartbeat consumer time (s) for this node: 3 producer periods, at least
         :data:`CONSUMER_MIN_S` (CiA 301 leaves it to the consumer; a busy host or a starved
         virtual drive on it can hold a heartbeat back by a few hundred ms, seen at load 7)."""
-        return max(CONSUMER_MIN_S, 3 * self._producer_ms / 1000.0)
+        return max(self._consumer_min_s, 3 * self._producer_ms / 1000.0)
 
     def gone_reason(self) -> str:
         """One line: since when the node's heartbeat is missing."""

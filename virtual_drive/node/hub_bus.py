@@ -166,8 +166,8 @@ class HubBus(can.BusABC):
             )
             line = b"< sendrtr %s %d >" % (ident, msg.dlc)
         elif self.timed_sends:  # with the time it was sent: see send_many
-            line = sendat_head(time.monotonic()) + sendat_tail(
-                msg.arbitration_id, bytes(msg.data), msg.is_extended_id
+            line = format_sendat(
+                time.monotonic(), msg.arbitration_id, bytes(msg.data), msg.is_extended_id
             )
         else:
             line = format_send(msg.arbitration_id, bytes(msg.data), msg.is_extended_id)
@@ -191,7 +191,7 @@ class HubBus(can.BusABC):
                 self._held.append((at, frames))  # (formatted in flush: one pass per tick)
                 return len(frames)
             if frames:
-                data = format_sendat_batch(time.monotonic(), list(frames))
+                data = format_sendat_batch(time.monotonic(), frames)
                 with self._send_lock:
                     self._sock.sendall(data)
             return len(frames)

@@ -48,7 +48,7 @@ def sendat_tail(cob_id: int, data: bytes, is_extended: bool = False) -> bytes:
     return b"%s %X %s >" % (ident, len(data), data.hex(" ").encode())
 
 
-def format_sendat_batch(at: float, frames: list[tuple[int, bytes]]) -> bytes:
+def format_sendat_batch(at: float, frames: Sequence[tuple[int, bytes]]) -> bytes:
     """The ``< sendat >`` elements of standard frames ``(cob_id, data)`` ready at ``at``
     (``time.monotonic()`` s), one time stamp for all, as one bytes."""
     head = sendat_head(at)

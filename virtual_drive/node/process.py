@@ -18,8 +18,9 @@ __all__ = ["BLAS_ENV", "PARENT_ENV", "DriveProcess", "child_env", "spawn_virtual
 PARENT_ENV = "VIRTUAL_DRIVE_PARENT_PID"
 
 #: numpy's OpenBLAS starts one thread per core when numpy is imported, and they spin before they
-#: sleep: about 0.1 s of CPU at each start of a drive or hub process (measured on the 2-core
-#: host: 0.40 s of CPU from start to ready with the pool, 0.29 s without), which does no
+#: sleep: about 0.1 s of CPU at each start of a drive or hub process (2-core host, load 1.4:
+#: 0.395 CPU-s from start to ready with the pool, 0.265 without, ``python
+#: benchmarks/bench_start.py`` run plain and with the variable set), which does no
 #: linear algebra that a thread pool would speed up. Set for the processes started here unless
 #: the environment already says otherwise.
 BLAS_ENV = {"OPENBLAS_NUM_THREADS": "1"}
