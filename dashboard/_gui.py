@@ -110,16 +110,8 @@ class BenchGui:
 
     # ------------------------------------------------------------------ lifecycle
     def start(self) -> None:
-        # the Report tab's experiments (scipy: 1-6 s of CPU) are imported now, before any page
-        # connects: not in a page's first build (its plots waited) nor when a report starts
-        # (the status and the API answered slowly meanwhile)
-        import matplotlib
-
-        matplotlib.use("Agg", force=False)  # the report's figures: no display
-        import matplotlib.pyplot
-
-        import drive_link.workflows.report  # noqa: F401
-
+        # (the Report tab's experiments, scipy and matplotlib, are imported by the first
+        # report: dashboard._report_loader)
         install_send_lock()
         install_fast_cast()  # viser's per-assignment cast without rebuilding its type hints
         # viser has no authentication: the GUI stays on loopback even when the API is remote

@@ -42,7 +42,7 @@ def bench():
         node.sdo.RESPONSE_TIMEOUT = 5.0
         sniff = can.Bus(**hub.join_kwargs())
         try:
-            yield net, node, sniff
+            yield net, node, sniff, hub
         finally:
             net.send_message(0, bytes([0x81, 1]))  # reset node: the defaults for the next test
             sniff.shutdown()
@@ -65,7 +65,7 @@ def collect(sniff: can.BusABC, seconds: float) -> list[can.Message]:
 
 
 def test_inhibit_time_holds_on_the_bus(bench):
-    net, node, sniff = bench
+    net, node, sniff, hub = bench
     comm = node.sdo[0x1801]
     comm[1].raw = 0x80000281
     comm[3].raw = 15  # 1.5 ms
@@ -76,13 +76,24 @@ def test_inhibit_time_holds_on_the_bus(bench):
     time.sleep(0.3)
     drain(sniff)
     load = os.getloadavg()[0]
+    late0 = hub.stats.frames_late
     frames = collect(sniff, 2.0)
+    late = hub.stats.frames_late - late0
     net.send_message(0, bytes([0x80, 1]))
     t = [m.timestamp for m in frames if m.arbitration_id == 0x281]
     gaps = [b - a for a, b in itertools.pairwise(t)]
     short = [round(g * 1e3, 4) for g in gaps if g < 1.5e-3 - TOL_S]
     missed = node.sdo["tpdo_missed_events"][2].raw - missed0
     assert len(t) > 500, len(t)
+    if short and late:
+        # the hub (in this process) or the drive was kept from running for more than the
+        # hub's 5 ms spacing hold: frames reached the bus late, and the emulated bus shows the
+        # host's stall, not the drive's timing (which a frame reaching the hub on time keeps)
+        pytest.skip(
+            f"not judged: the host stalled the bus ({late} frames reached the hub more than "
+            f"5 ms after their stated time; load {load:.1f}): {len(short)} of {len(gaps)} "
+            f"gaps under 1.5 ms: {short[:10]}"
+        )
     assert not short, f"{len(short)} of {len(gaps)} gaps under 1.5 ms: {short[:10]} (load {load})"
     # frames the drive could not send on time are counted, never squeezed in: the bus shows
     # at most the 666.7 Hz the inhibit time allows
@@ -93,7 +104,7 @@ def test_inhibit_time_holds_on_the_bus(bench):
 def test_rpdo_is_in_the_od_before_the_sync_that_follows_it(bench):
     """RPDO1 (controlword, target_velocity) and a SYNC right behind it on the bus; TPDO4 maps
     0x60FF with transmission type 1: each SYNC's TPDO carries the target sent just before."""
-    net, node, sniff = bench
+    net, node, sniff, _ = bench
     comm, mapping = node.sdo[0x1803], node.sdo[0x1A03]
     comm[1].raw = 0x80000481
     mapping[0].raw = 0

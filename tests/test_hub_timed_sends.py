@@ -496,3 +496,30 @@ def test_the_wall_clock_offset_ignores_a_stall_between_its_readings(at, monkeypa
     truth = time.time() - time.monotonic()  # (idle here: a few µs)
     monkeypatch.setattr(hub_protocol, "time", _StallingClock(at, 0.005))
     assert hub_protocol.wall_offset() == pytest.approx(truth, abs=1e-4)
+
+
+def test_sendat_frames_that_reach_the_hub_late_are_counted():
+    """A ``sendat`` frame stated more than the spacing hold (5 ms) before it reached the hub is
+    counted (``HubStats.frames_late``): the evidence that the host stalled its sender or the
+    hub, after which a sender's spacing may show shortened on the emulated bus. Frames stated
+    within the hold, and plain sends, are not."""
+    from virtual_drive.hub_bus import SPACING_HOLD_S, Bus, Client, HubCounters
+    from virtual_drive.hub_faults import FaultInjection
+
+    a, b = socket.socketpair()
+    try:
+        counters = HubCounters()
+        bus = Bus("vcan0", 1_000_000, FaultInjection(), counters, 0.0, 0.0)  # monotonic stamps
+        client = Client(a, ("127.0.0.1", 0))
+        now = 1000.0
+        ages = (0.020, SPACING_HOLD_S + 1e-4, SPACING_HOLD_S - 1e-4, 0.001)
+        bus.enqueue_timed(
+            client, [(now - age, 0x281, bytes([k]), False) for k, age in enumerate(ages)], now, 0.05
+        )
+        assert counters.late == 2 and counters.received == 4
+        bus.enqueue_timed(client, [(now + 0.002 - 0.001, 0x282, b"", False)], now + 0.002, 0.05)
+        bus.enqueue(client, [(0x283, b"\x01", False)], now + 0.003)
+        assert counters.late == 2 and counters.received == 6
+    finally:
+        a.close()
+        b.close()

@@ -81,6 +81,10 @@ class HubStats:
     frames_forwarded: int  #: frames that completed on the bus and went to the other clients
     frames_dropped: int  #: frames lost by fault injection (drop_rate)
     frames_overrun: int  #: frame copies not queued because a client's output buffer was full
+    #: ``sendat`` frames that reached the hub more than 5 ms (``hub_bus.SPACING_HOLD_S``) after
+    #: their stated time: the host stalled their sender or the hub, and a sender's spacing
+    #: (a TPDO's inhibit time) may show shortened on the bus after it
+    frames_late: int
     frames_pending: int  #: frames received, not yet forwarded or dropped
     protocol_errors: int  #: bad elements answered with ``< error ... >``
     bus_busy_s: float  #: emulated bus time used by frames, s (all channels)
@@ -232,6 +236,7 @@ class Hub:
             frames_forwarded=frames.forwarded,
             frames_dropped=frames.dropped,
             frames_overrun=frames.overrun,
+            frames_late=frames.late,
             frames_pending=pending,
             protocol_errors=self._n_errors,
             bus_busy_s=frames.busy_s,

@@ -99,10 +99,14 @@ class Client:
 class HubCounters:
     """Frame counts of one hub, added to by all its buses (since the hub was made)."""
 
-    __slots__ = ("busy_s", "dropped", "forwarded", "overrun", "received")
+    __slots__ = ("busy_s", "dropped", "forwarded", "late", "overrun", "received")
 
     def __init__(self) -> None:
         self.received = 0  #: valid frames received from clients
+        #: ``sendat`` frames that reached the hub more than SPACING_HOLD_S after their stated
+        #: time (the host stalled their sender or the hub): past the hold, their spacing on the
+        #: bus is no longer the sender's
+        self.late = 0
         self.forwarded = 0  #: frames that completed on the bus and went to the other clients
         self.dropped = 0  #: frames lost by fault injection
         self.overrun = 0  #: frame copies not queued because a client's output buffer was full
@@ -260,6 +264,9 @@ class Bus:
         if queue and queue[-1][0] > lo:
             lo = queue[-1][0]
         mono_offset = self._mono_offset
+        if frames and now - (frames[0][0] + mono_offset) > SPACING_HOLD_S:  # (in stated order)
+            late = now - SPACING_HOLD_S - mono_offset
+            self._counters.late += sum(1 for f in frames if f[0] < late)
         timed = []
         # a batch stated before the backdate limit moves up as a whole, keeping its spacing
         # (one frame at the limit, the rest after it as stated), not all onto the limit

@@ -13,6 +13,7 @@ import weakref
 from typing import Any
 
 from dashboard._gui_page import Page
+from dashboard._report_loader import report_module
 from drive_link.workflows.report_ids import EXPERIMENT_IDS
 
 __all__ = ["REPORT_IDS", "ReportTab"]
@@ -20,7 +21,7 @@ __all__ = ["REPORT_IDS", "ReportTab"]
 REPORT_DEADLINE_S = 600.0  #: the whole report gives up (and puts the drive back) after this, s
 #: the experiments' ids in their order, from the light module: the tab is built without
 #: importing drive_link.workflows.report, whose scipy imports cost 2-6 s of CPU on a loaded host
-#: and held up the first page's plots (the GUI imports it when it starts: BenchGui.start)
+#: and held up the first page's plots (the first report imports it: dashboard._report_loader)
 REPORT_IDS = EXPERIMENT_IDS
 _LAST: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  #: bench → its last Report
 
@@ -49,8 +50,9 @@ class ReportTab:
         self.rep_dl.on_click(page.action(self._download_report, self.rep_md, needs_control=False))
 
     def _run_report(self, event: Any) -> str:
-        from drive_link.workflows.report import run_report
         from drive_link.workflows.steps import Hooks
+
+        run_report = report_module().run_report
 
         only = [k for k, cb in self.rep_checks.items() if cb.value]
         if not only:
