@@ -16,6 +16,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -141,19 +142,36 @@ def test_local_and_dask_give_identical_rows_and_survive_a_killed_worker(tmp_path
             watch.run(lambda: __import__("virtual_drive.sweep.runner") and None)
             names = {a: w["name"] for a, w in watch.scheduler_info()["workers"].items()}
             killed: dict[str, object] = {}
+            progress = {"done": 0}
+            finished = threading.Event()
 
             def hook(done: int, total: int, failures: int) -> None:
-                if killed or done < 100:
-                    return
-                busy = [a for a, keys in watch.processing().items() if keys]
-                if not busy:  # between two assignments: at the next result (waiting here
-                    return  # holds up the submission of the next tasks, so none come)
-                victim = names[busy[0]]
-                os.kill(workers[victim].pid, signal.SIGKILL)
-                killed.update(name=victim, done=done, busy=bool(busy))
+                progress["done"] = done
 
-            dask = run_sweep(spec, tmp_path / "dask", scheduler=address, progress=False,
-                             on_progress=hook, plots=False)  # fmt: skip
+            def killer() -> None:
+                # from its own thread, once 100 runs are done: the first worker the scheduler
+                # shows with a task in flight. (Asking from the progress hook waited on the
+                # client's thread, which holds up the next submissions: on an idle host every
+                # one of 400 asks found both workers between two tasks, ci47.)
+                while not finished.is_set() and not killed:
+                    if progress["done"] >= 100:
+                        busy = [a for a, keys in watch.processing().items() if keys]
+                        if busy:
+                            done = progress["done"]
+                            victim = names[busy[0]]
+                            os.kill(workers[victim].pid, signal.SIGKILL)
+                            killed.update(name=victim, done=done, busy=True)
+                            return
+                    time.sleep(0.005)
+
+            kill_thread = threading.Thread(target=killer, daemon=True)
+            kill_thread.start()
+            try:
+                dask = run_sweep(spec, tmp_path / "dask", scheduler=address, progress=False,
+                                 on_progress=hook, plots=False)  # fmt: skip
+            finally:
+                finished.set()
+                kill_thread.join(30)
             assert killed and killed["done"] < 500, killed  # the kill fell mid-sweep
             assert killed["busy"], "the killed worker had no task in flight"
             assert workers[str(killed["name"])].wait(10) == -signal.SIGKILL
